@@ -1,0 +1,95 @@
+//! Parsers for command-line values: every number must be finite, every size sensible.
+
+use glam::Vec3;
+
+/// Parses a finite number; `NaN`, `inf` and values beyond `f32` (like `1e39`) are refused.
+pub fn finite_f32(text: &str) -> Result<f32, String> {
+    let value: f32 = text.trim().parse().map_err(|_| format!("'{text}' is not a number"))?;
+    if value.is_finite() { Ok(value) } else { Err(format!("'{text}' is not a finite number")) }
+}
+
+/// Parses a finite number greater than zero.
+pub fn positive_f32(text: &str) -> Result<f32, String> {
+    let value = finite_f32(text)?;
+    if value > 0.0 { Ok(value) } else { Err(format!("{text} must be greater than 0")) }
+}
+
+/// Parses a field of view in degrees, strictly between 0 and 180.
+pub fn fov_deg(text: &str) -> Result<f32, String> {
+    let value = finite_f32(text)?;
+    if value > 0.0 && value < 180.0 {
+        Ok(value)
+    } else {
+        Err(format!("a field of view must be between 0° and 180° (exclusive), not {text}"))
+    }
+}
+
+/// Parses `X,Y,Z` into a vector of finite numbers.
+pub fn vec3(text: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let [x, y, z] = parts[..] else {
+        return Err(format!("expected three numbers X,Y,Z (like 0,-0.5,-0.7), not '{text}'"));
+    };
+    Ok(Vec3::new(finite_f32(x)?, finite_f32(y)?, finite_f32(z)?))
+}
+
+/// An image size in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size {
+    /// Width in pixels, at least 1.
+    pub width: u32,
+    /// Height in pixels, at least 1.
+    pub height: u32,
+}
+
+/// Parses `WIDTHxHEIGHT` (or `W×H`), both at least 1.
+pub fn size(text: &str) -> Result<Size, String> {
+    let Some((w, h)) = text.split_once(['x', 'X', '×']) else {
+        return Err(format!("expected WIDTHxHEIGHT (like 500x500), not '{text}'"));
+    };
+    let dimension = |name: &str, value: &str| -> Result<u32, String> {
+        let value = value.trim();
+        match value.parse::<i128>() {
+            Ok(n) if n < 1 => Err(format!("{name} must be at least 1 pixel, not {value}")),
+            Ok(n) => u32::try_from(n).map_err(|_| {
+                format!("{name} {value} is larger than the largest image ({})", u32::MAX)
+            }),
+            Err(_) => Err(format!("{name} '{value}' is not a whole number")),
+        }
+    };
+    Ok(Size { width: dimension("width", w)?, height: dimension("height", h)? })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_must_be_finite() {
+        assert_eq!(finite_f32("-2.5"), Ok(-2.5));
+        for bad in ["nan", "NaN", "inf", "-inf", "1e39", "abc", ""] {
+            assert!(finite_f32(bad).is_err(), "{bad}");
+        }
+        assert!(positive_f32("0").is_err());
+        assert!(fov_deg("180").is_err() && fov_deg("0").is_err() && fov_deg("90").is_ok());
+    }
+
+    #[test]
+    fn vectors_need_three_finite_numbers() {
+        assert_eq!(vec3("0,-0.5,-0.7"), Ok(Vec3::new(0.0, -0.5, -0.7)));
+        assert!(vec3("1,2").is_err());
+        assert!(vec3("1,2,3,4").is_err());
+        assert!(vec3("1,nan,3").unwrap_err().contains("'nan'"));
+    }
+
+    #[test]
+    fn sizes_are_positive_whole_numbers() {
+        assert_eq!(size("640x480"), Ok(Size { width: 640, height: 480 }));
+        assert_eq!(size("2×3"), Ok(Size { width: 2, height: 3 }));
+        assert!(size("0x10").unwrap_err().contains("at least 1"));
+        assert!(size("-5x10").unwrap_err().contains("at least 1"));
+        assert!(size("10x2.5").unwrap_err().contains("whole number"));
+        assert!(size("99999999999x1").unwrap_err().contains("larger"));
+        assert!(size("500").is_err());
+    }
+}

@@ -1,0 +1,39 @@
+//! `raylab`: render, view and benchmark scenes from the command line. A thin shell over the
+//! `raylab` library: parse the arguments, call the library, report.
+
+mod args;
+mod render_cmd;
+mod system;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// A fast, correct CPU ray tracer: the classic Cornell-box lab, done right.
+#[derive(Parser, Debug)]
+#[command(name = "raylab", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene to an image file (the lab's Cornell box by default).
+    Render(render_cmd::RenderArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render_cmd::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            // One line: the context chain joined by ": ".
+            eprintln!("raylab: error: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

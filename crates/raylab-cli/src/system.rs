@@ -1,0 +1,31 @@
+//! What the machine has: memory, cores.
+
+/// Bytes of memory available to a new allocation, as the kernel estimates it (`MemAvailable`
+/// in `/proc/meminfo`), or `None` where that is not known.
+pub fn available_memory_bytes() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
+    parse_meminfo(&meminfo, "MemAvailable:")
+}
+
+fn parse_meminfo(meminfo: &str, key: &str) -> Option<u64> {
+    let line = meminfo.lines().find(|line| line.starts_with(key))?;
+    let kib: u64 = line[key.len()..].trim().trim_end_matches("kB").trim().parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// The number of threads the machine runs at once.
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_mem_available() {
+        let text = "MemTotal:       24000000 kB\nMemAvailable:   20000000 kB\n";
+        assert_eq!(parse_meminfo(text, "MemAvailable:"), Some(20_000_000 * 1024));
+        assert_eq!(parse_meminfo(text, "SwapTotal:"), None);
+    }
+}

@@ -1,0 +1,34 @@
+//! The lab frame: the Cornell box at 500×500 with shadows and ambient light, as `raylab render`
+//! draws it by default, on 1 and 2 threads.
+//!
+//! `cargo bench -p raylab --bench lab_frame`
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use raylab::{BruteForce, Camera, Lab, Scene, Stage, render};
+
+fn lab_frame(c: &mut Criterion) {
+    let scene = Scene::built_in("cornell").expect("built in");
+    let accel = BruteForce::new(&scene.triangles);
+    let camera = Camera::lab(500, 500);
+    let mut group = c.benchmark_group("lab_frame_500x500");
+    group.sample_size(30);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("threads");
+        for stage in [Stage::Flat, Stage::Ambient] {
+            let integrator = Lab::new(&scene, &accel, stage);
+            group.bench_with_input(
+                BenchmarkId::new(format!("brute_force_{stage}"), format!("{threads}_threads")),
+                &threads,
+                |b, _| {
+                    b.iter(|| {
+                        pool.install(|| render(&camera, &integrator, &|_| {}).expect("render"))
+                    })
+                },
+            );
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, lab_frame);
+criterion_main!(benches);

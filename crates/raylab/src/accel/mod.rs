@@ -1,0 +1,42 @@
+//! Ray queries over a whole scene: the one seam between geometry and integrators.
+//!
+//! Integrators only ever ask two questions, both through [`Accelerator`]:
+//! [`closest_hit`](Accelerator::closest_hit) (what does this ray see?) and
+//! [`occluded`](Accelerator::occluded) (is anything in the way?). [`BruteForce`] answers them by
+//! testing every triangle, which is exact and fast enough for the lab's 30 triangles; a BVH
+//! answers them the same way, only faster.
+
+mod brute_force;
+
+pub use brute_force::BruteForce;
+
+/// The closest intersection of a ray with a scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Index of the triangle hit. Between hits at exactly equal `t`, the lowest index wins, so
+    /// every accelerator gives the same answer.
+    pub triangle: u32,
+    /// Barycentric weight of the triangle's `v1`.
+    pub b1: f32,
+    /// Barycentric weight of the triangle's `v2`.
+    pub b2: f32,
+}
+
+impl Hit {
+    /// Barycentric weight of the triangle's `v0`.
+    #[inline]
+    pub fn b0(&self) -> f32 {
+        1.0 - self.b1 - self.b2
+    }
+}
+
+/// Answers ray queries against a fixed set of triangles.
+pub trait Accelerator: Sync {
+    /// The nearest hit with `0 < t < ray.t_max`, if any.
+    fn closest_hit(&self, ray: &crate::Ray) -> Option<Hit>;
+
+    /// Whether anything is hit with `0 < t < ray.t_max` (any hit; stops at the first).
+    fn occluded(&self, ray: &crate::Ray) -> bool;
+}

@@ -1,0 +1,181 @@
+//! The lab's pinhole camera.
+//!
+//! Axes as in the lab: x right, y **down**, z forward. A camera has a position, a yaw (rotation
+//! about the vertical axis) and a focal length in pixels. Pixel `(x, y)` of a `W×H` image casts
+//! the ray with direction `R(yaw)·(x + ½ − W/2, y + ½ − H/2, f)`, where
+//! `R(y) = [[cos y, 0, sin y], [0, 1, 0], [−sin y, 0, cos y]]` (lab §"Moving the camera").
+//!
+//! The field of view follows from the focal length by `2·atan(W / 2f)`: with the lab's `f = W`
+//! that is 53.13°, not the 90° that `tan` arithmetic suggests.
+
+use std::fmt;
+
+use glam::{Mat3, Vec2, Vec3};
+
+use crate::ray::Ray;
+
+/// A pinhole camera with the lab's conventions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Position of the pinhole.
+    pub position: Vec3,
+    /// Rotation about the vertical (y) axis, in radians; positive turns toward +x.
+    pub yaw: f32,
+    /// Focal length in pixels: the distance from the pinhole to the image plane.
+    pub focal_length_px: f32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl Camera {
+    /// The lab's camera for a `width×height` image: at (0, 0, −3), yaw 0, and `f = width` (500 px
+    /// for the lab's 500×500), which frames the Cornell box.
+    pub fn lab(width: u32, height: u32) -> Self {
+        Camera {
+            position: Vec3::new(0.0, 0.0, -3.0),
+            yaw: 0.0,
+            focal_length_px: width as f32,
+            width,
+            height,
+        }
+    }
+
+    /// The focal length in pixels that gives a horizontal field of view of `fov_deg` for an image
+    /// `width` pixels wide: `f = W / (2·tan(fov/2))`.
+    pub fn focal_length_for_fov(width: u32, fov_deg: f32) -> f32 {
+        width as f32 / (2.0 * (fov_deg.to_radians() / 2.0).tan())
+    }
+
+    /// Horizontal field of view in degrees: `2·atan(W / 2f)`.
+    pub fn fov_x_deg(&self) -> f32 {
+        2.0 * (self.width as f32 / (2.0 * self.focal_length_px)).atan().to_degrees()
+    }
+
+    /// Vertical field of view in degrees: `2·atan(H / 2f)`.
+    pub fn fov_y_deg(&self) -> f32 {
+        2.0 * (self.height as f32 / (2.0 * self.focal_length_px)).atan().to_degrees()
+    }
+
+    /// The lab's `R(yaw)`, mapping camera space to world space.
+    pub fn rotation(&self) -> Mat3 {
+        let (sin, cos) = self.yaw.sin_cos();
+        // Columns of [[cos, 0, sin], [0, 1, 0], [−sin, 0, cos]].
+        Mat3::from_cols(Vec3::new(cos, 0.0, -sin), Vec3::Y, Vec3::new(sin, 0.0, cos))
+    }
+
+    /// The unit vector the camera looks along.
+    pub fn forward(&self) -> Vec3 {
+        self.rotation() * Vec3::Z
+    }
+
+    /// The unit vector to the camera's right in the image.
+    pub fn right(&self) -> Vec3 {
+        self.rotation() * Vec3::X
+    }
+
+    /// The ray through the film position `(x, y)` in pixels, where `(0, 0)` is the top-left
+    /// corner of the image and `(W, H)` the bottom-right one. The direction has unit length.
+    #[inline]
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let local = Vec3::new(
+            x - self.width as f32 / 2.0,
+            y - self.height as f32 / 2.0,
+            self.focal_length_px,
+        );
+        Ray::new(self.position, (self.rotation() * local).normalize())
+    }
+
+    /// The ray through the centre of pixel `(x, y)`.
+    #[inline]
+    pub fn pixel_ray(&self, x: u32, y: u32) -> Ray {
+        self.ray(x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// Where `point` appears on the film, in pixels (the inverse of [`ray`](Self::ray)), or `None`
+    /// if it is not in front of the camera.
+    pub fn project(&self, point: Vec3) -> Option<Vec2> {
+        let local = self.rotation().transpose() * (point - self.position);
+        if local.z <= 0.0 {
+            return None;
+        }
+        let scale = self.focal_length_px / local.z;
+        Some(Vec2::new(
+            local.x * scale + self.width as f32 / 2.0,
+            local.y * scale + self.height as f32 / 2.0,
+        ))
+    }
+}
+
+impl fmt::Display for Camera {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.position;
+        write!(
+            f,
+            "camera at ({}, {}, {}), yaw {}°, focal length {} px: field of view {:.2}° × {:.2}°",
+            p.x,
+            p.y,
+            p.z,
+            self.yaw.to_degrees(),
+            self.focal_length_px,
+            self.fov_x_deg(),
+            self.fov_y_deg()
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_lab_camera_has_a_53_degree_field_of_view() {
+        let camera = Camera::lab(500, 500);
+        assert!((camera.fov_x_deg() - 53.130_1).abs() < 1e-3, "{}", camera.fov_x_deg());
+        assert_eq!(camera.fov_x_deg(), camera.fov_y_deg());
+        let ninety = Camera { focal_length_px: 250.0, ..camera };
+        assert!((ninety.fov_x_deg() - 90.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn fov_and_focal_length_round_trip() {
+        for fov in [10.0f32, 39.3, 53.13, 90.0, 120.0] {
+            let f = Camera::focal_length_for_fov(640, fov);
+            let camera = Camera { focal_length_px: f, ..Camera::lab(640, 480) };
+            assert!((camera.fov_x_deg() - fov).abs() < 1e-3, "{fov}");
+        }
+    }
+
+    #[test]
+    fn pixel_rays_follow_the_lab_formula() {
+        let camera = Camera { yaw: 0.3, ..Camera::lab(500, 500) };
+        let (x, y) = (17u32, 401u32);
+        let d = Vec3::new(x as f32 + 0.5 - 250.0, y as f32 + 0.5 - 250.0, 500.0);
+        let (s, c) = 0.3f32.sin_cos();
+        // R(y)·d written out row by row.
+        let expected = Vec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z).normalize();
+        let ray = camera.pixel_ray(x, y);
+        assert!((ray.direction - expected).length() < 1e-6);
+        assert_eq!(ray.origin, Vec3::new(0.0, 0.0, -3.0));
+    }
+
+    #[test]
+    fn the_centre_pixel_ray_looks_forward_and_yaw_turns_toward_x() {
+        let camera = Camera::lab(2, 2);
+        assert_eq!(camera.ray(1.0, 1.0).direction, Vec3::Z);
+        let turned = Camera { yaw: std::f32::consts::FRAC_PI_2, ..camera };
+        assert!((turned.forward() - Vec3::X).length() < 1e-6);
+        assert!((turned.right() + Vec3::Z).length() < 1e-6);
+    }
+
+    #[test]
+    fn project_inverts_ray() {
+        let camera =
+            Camera { yaw: -0.7, position: Vec3::new(0.3, -0.2, -2.0), ..Camera::lab(320, 200) };
+        let ray = camera.ray(123.25, 77.5);
+        let film = camera.project(ray.at(3.0)).unwrap();
+        assert!((film - Vec2::new(123.25, 77.5)).length() < 1e-3, "{film}");
+        assert!(camera.project(camera.position - camera.forward()).is_none());
+    }
+}

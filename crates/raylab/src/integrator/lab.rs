@@ -1,0 +1,154 @@
+//! `lab`: the lab's light model (KTH DH2323 Lab 2, §"Illumination").
+//!
+//! A point light gives a surface the power per area `D = P·max(r̂·n̂, 0) / (4πr²)` (eq. 27),
+//! zero when a shadow ray toward the light is blocked; a constant `N` stands in for indirect
+//! light; the colour is `R = ρ ∗ (D + N)` (eq. 30). Shown as the lab shows it: each channel
+//! clamped to `[0, 1]`, no gamma (see [`Film::to_rgb8_clamped`](crate::Film::to_rgb8_clamped)).
+//!
+//! [`Stage`] replays the lab step by step for learners, from flat colours to the full model.
+//! Shadow rays leave the surface with a rounding-error-aware offset (see [`crate::ray`]) rather
+//! than a magic epsilon, so there is no shadow acne at any scene scale.
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec3;
+
+use super::Integrator;
+use crate::accel::Accelerator;
+use crate::ray::Ray;
+use crate::scene::Scene;
+
+/// One step of the lab, each adding one idea to the previous.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Stage {
+    /// The colour ρ of the closest triangle, black where nothing is hit.
+    Flat,
+    /// The light's power per area `D` alone (eq. 27), no colour and no shadows.
+    Direct,
+    /// Reflected light `ρ ∗ D`, no shadows.
+    Reflected,
+    /// `ρ ∗ D` with shadow rays.
+    Shadows,
+    /// The full model `ρ ∗ (D + N)` with shadows (eq. 30).
+    #[default]
+    Ambient,
+}
+
+impl Stage {
+    /// Every stage, in the lab's order.
+    pub const ALL: [Stage; 5] =
+        [Stage::Flat, Stage::Direct, Stage::Reflected, Stage::Shadows, Stage::Ambient];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Flat => "flat",
+            Stage::Direct => "direct",
+            Stage::Reflected => "reflected",
+            Stage::Shadows => "shadows",
+            Stage::Ambient => "ambient",
+        }
+    }
+
+    /// What the stage shows, in a few words.
+    pub fn description(self) -> &'static str {
+        match self {
+            Stage::Flat => "flat triangle colour ρ",
+            Stage::Direct => "direct light D only (eq. 27)",
+            Stage::Reflected => "reflected light ρ∗D",
+            Stage::Shadows => "ρ∗D with shadows",
+            Stage::Ambient => "ρ∗(D+N) with shadows and ambient (eq. 30)",
+        }
+    }
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The stage name was not one of [`Stage::ALL`].
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[error("unknown stage '{0}': expected one of flat, direct, reflected, shadows, ambient (or 1–5)")]
+pub struct UnknownStage(pub String);
+
+impl FromStr for Stage {
+    type Err = UnknownStage;
+
+    /// A stage by name or by its number in the lab's order, 1 to 5.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Stage::ALL
+            .into_iter()
+            .enumerate()
+            .find(|(i, stage)| s == stage.name() || s == (i + 1).to_string())
+            .map(|(_, stage)| stage)
+            .ok_or_else(|| UnknownStage(s.to_string()))
+    }
+}
+
+/// The lab's integrator over a scene and an accelerator built from its triangles.
+#[derive(Clone, Copy, Debug)]
+pub struct Lab<'a, A> {
+    scene: &'a Scene,
+    accel: &'a A,
+    stage: Stage,
+    /// The constant indirect light `N` of eq. (30).
+    pub ambient: Vec3,
+}
+
+impl<'a, A: Accelerator> Lab<'a, A> {
+    /// The lab's model at `stage`, with the lab's ambient light `N = 0.5`.
+    pub fn new(scene: &'a Scene, accel: &'a A, stage: Stage) -> Self {
+        Lab { scene, accel, stage, ambient: Vec3::splat(0.5) }
+    }
+}
+
+impl<A: Accelerator> Integrator for Lab<'_, A> {
+    fn radiance(&self, ray: &Ray) -> Vec3 {
+        let Some(hit) = self.accel.closest_hit(ray) else {
+            return Vec3::ZERO;
+        };
+        let triangle = &self.scene.triangles[hit.triangle as usize];
+        let albedo = triangle.albedo;
+        if self.stage == Stage::Flat {
+            return albedo;
+        }
+
+        let point = triangle.surface_point(hit.b0(), hit.b1, hit.b2);
+        let light = &self.scene.light;
+        // Lab eq. (27): D = P max(r̂·n̂, 0) / (4πr²).
+        let mut direct = light.direct(point.p, point.normal);
+        let shadows = matches!(self.stage, Stage::Shadows | Stage::Ambient);
+        if shadows
+            && direct != Vec3::ZERO
+            && self.accel.occluded(&point.spawn_ray_to(light.position))
+        {
+            direct = Vec3::ZERO;
+        }
+        match self.stage {
+            Stage::Flat => unreachable!("returned above"),
+            Stage::Direct => direct,
+            Stage::Reflected | Stage::Shadows => albedo * direct,
+            // Lab eq. (30): R = ρ ∗ (D + N).
+            Stage::Ambient => albedo * (direct + self.ambient),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stages_parse_by_name_and_number() {
+        for (i, stage) in Stage::ALL.into_iter().enumerate() {
+            assert_eq!(stage.name().parse::<Stage>(), Ok(stage));
+            assert_eq!((i + 1).to_string().parse::<Stage>(), Ok(stage));
+        }
+        assert!("6".parse::<Stage>().is_err());
+        assert!("Flat".parse::<Stage>().is_err());
+        assert_eq!(Stage::default(), Stage::Ambient);
+    }
+}

@@ -1,0 +1,53 @@
+//! The lab's point light.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+
+/// An isotropic point light of power `P` (watts per channel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    /// Where the light is.
+    pub position: Vec3,
+    /// Power `P` per colour channel.
+    pub power: Vec3,
+}
+
+impl PointLight {
+    /// The lab's light: at (0, −0.5, −0.7), power 14 in every channel.
+    pub fn lab() -> Self {
+        PointLight { position: Vec3::new(0.0, -0.5, -0.7), power: Vec3::splat(14.0) }
+    }
+
+    /// Power per unit area arriving at `point` on a surface with unit normal `normal`, ignoring
+    /// occlusion. Lab eq. (27): `D = P·max(r̂·n̂, 0) / (4πr²)`.
+    #[inline]
+    pub fn direct(&self, point: Vec3, normal: Vec3) -> Vec3 {
+        let to_light = self.position - point;
+        let r2 = to_light.length_squared();
+        if r2 == 0.0 {
+            return Vec3::ZERO;
+        }
+        let cos = (to_light.dot(normal) / r2.sqrt()).max(0.0);
+        self.power * cos / (4.0 * PI * r2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn direct_light_falls_off_with_the_square_of_distance_and_the_cosine() {
+        let light = PointLight { position: Vec3::new(0.0, 2.0, 0.0), power: Vec3::splat(4.0 * PI) };
+        // r = 2, head on: D = 4π / (4π·4) = 1/4.
+        assert!((light.direct(Vec3::ZERO, Vec3::Y) - Vec3::splat(0.25)).length() < 1e-6);
+        // Tilted by 60°: half of it.
+        let n = Vec3::new(3f32.sqrt() / 2.0, 0.5, 0.0);
+        assert!((light.direct(Vec3::ZERO, n) - Vec3::splat(0.125)).length() < 1e-6);
+        // Facing away: nothing.
+        assert_eq!(light.direct(Vec3::ZERO, -Vec3::Y), Vec3::ZERO);
+        // At the light itself: nothing rather than infinity.
+        assert_eq!(light.direct(light.position, Vec3::Y), Vec3::ZERO);
+    }
+}

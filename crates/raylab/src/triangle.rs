@@ -1,0 +1,295 @@
+//! Triangles and the watertight ray/triangle test.
+//!
+//! The test is Woop, Benthin & Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013,
+//! with the conservative `t > 0` bound of PBR 4th ed. §6.8.4. It transforms the triangle into a
+//! space where the ray is the +z axis from the origin, then evaluates three 2D edge functions.
+//! Because an edge shared by two triangles gives the same edge function (with opposite sign) to
+//! both, and because edges are *inclusive* (a value of exactly 0 counts as inside), no ray can slip
+//! between two triangles that share an edge or a vertex: no black seams along a quad's diagonal.
+//!
+//! The edge functions are plain `a·b − c·d` on purpose: a fused multiply-add would round the two
+//! orderings of a shared edge differently and reopen the crack.
+
+use glam::Vec3;
+
+use crate::float::gamma;
+use crate::ray::{Ray, SurfacePoint};
+
+/// A triangle of the lab's scene: three vertices, a normal and a diffuse colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    /// First vertex.
+    pub v0: Vec3,
+    /// Second vertex.
+    pub v1: Vec3,
+    /// Third vertex.
+    pub v2: Vec3,
+    /// Unit normal, `normalize((v2 − v0) × (v1 − v0))` as in the lab.
+    pub normal: Vec3,
+    /// Diffuse reflectance ρ per channel (the lab's `color`).
+    pub albedo: Vec3,
+}
+
+impl Triangle {
+    /// A triangle with the lab's normal `normalize((v2 − v0) × (v1 − v0))`.
+    ///
+    /// A zero-area triangle gets a zero normal (it is never hit).
+    pub fn new(v0: Vec3, v1: Vec3, v2: Vec3, albedo: Vec3) -> Self {
+        let normal = (v2 - v0).cross(v1 - v0).normalize_or_zero();
+        Triangle { v0, v1, v2, normal, albedo }
+    }
+
+    /// The point with barycentric coordinates `(b0, b1, b2)` and its rounding-error bound
+    /// (PBR 4th ed. §6.8.5: interpolating the vertices errs by at most `γ₇ Σ|bᵢ·pᵢ|`).
+    pub fn surface_point(&self, b0: f32, b1: f32, b2: f32) -> SurfacePoint {
+        let (a, b, c) = (b0 * self.v0, b1 * self.v1, b2 * self.v2);
+        SurfacePoint {
+            p: a + b + c,
+            error: gamma(7) * (a.abs() + b.abs() + c.abs()),
+            normal: self.normal,
+        }
+    }
+}
+
+/// Where a ray meets a triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Barycentric weight of `v0`.
+    pub b0: f32,
+    /// Barycentric weight of `v1`.
+    pub b1: f32,
+    /// Barycentric weight of `v2`.
+    pub b2: f32,
+}
+
+/// The per-ray part of the watertight test: which axis the ray is mostly along, and the shear that
+/// maps the ray onto +z. Computed once per ray and reused for every triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightRay {
+    origin: Vec3,
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    shear_x: f32,
+    shear_y: f32,
+    shear_z: f32,
+}
+
+impl WatertightRay {
+    /// Prepares `ray` for triangle tests.
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.direction;
+        let abs = d.abs();
+        // The dominant axis becomes z; ties go to the lowest axis, so any ray gets one answer.
+        let kz = if abs.x >= abs.y && abs.x >= abs.z {
+            0
+        } else if abs.y >= abs.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Swapping x and y keeps the triangles' winding when the ray points along −z.
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let shear_z = 1.0 / d[kz];
+        WatertightRay {
+            origin: ray.origin,
+            kx,
+            ky,
+            kz,
+            shear_x: d[kx] * shear_z,
+            shear_y: d[ky] * shear_z,
+            shear_z,
+        }
+    }
+
+    /// Intersects the ray with triangle `(v0, v1, v2)`, counting hits on edges and vertices,
+    /// for `0 < t < t_max`. Both sides of the triangle are hit.
+    #[inline]
+    pub fn intersect(&self, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f32) -> Option<TriangleHit> {
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        // Translate to the ray's origin, then shear so the ray runs along +z.
+        let a = v0 - self.origin;
+        let b = v1 - self.origin;
+        let c = v2 - self.origin;
+        let ax = a[kx] - self.shear_x * a[kz];
+        let ay = a[ky] - self.shear_y * a[kz];
+        let bx = b[kx] - self.shear_x * b[kz];
+        let by = b[ky] - self.shear_y * b[kz];
+        let cx = c[kx] - self.shear_x * c[kz];
+        let cy = c[ky] - self.shear_y * c[kz];
+
+        // Edge functions: twice the signed areas of the sub-triangles seen from the ray.
+        let mut e0 = bx * cy - by * cx;
+        let mut e1 = cx * ay - cy * ax;
+        let mut e2 = ax * by - ay * bx;
+        // A zero in single precision may be a rounding artefact: decide it exactly. Products of
+        // two f32 are exact in f64, so the sign below is the true sign.
+        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+            let (ax, ay, bx, by, cx, cy) =
+                (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
+            e0 = (bx * cy - by * cx) as f32;
+            e1 = (cx * ay - cy * ax) as f32;
+            e2 = (ax * by - ay * bx) as f32;
+        }
+        // Inclusive edges: only a strict sign disagreement means outside.
+        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+            return None;
+        }
+        let det = e0 + e1 + e2;
+        if det == 0.0 || det.is_nan() {
+            return None; // Edge-on or degenerate triangle, or a NaN ray.
+        }
+
+        // Scaled distance along the ray, compared against the range without dividing.
+        let az = self.shear_z * a[kz];
+        let bz = self.shear_z * b[kz];
+        let cz = self.shear_z * c[kz];
+        let t_scaled = e0 * az + e1 * bz + e2 * cz;
+        if det < 0.0 && (t_scaled >= 0.0 || t_scaled <= t_max * det) {
+            return None;
+        }
+        if det > 0.0 && (t_scaled <= 0.0 || t_scaled >= t_max * det) {
+            return None;
+        }
+
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        if t.is_nan() || t >= t_max {
+            return None; // `t_max · det` may have rounded; decide on t itself.
+        }
+
+        // Reject hits whose t is not conservatively greater than zero (PBR 4th ed. §6.8.4):
+        // together with the offset of spawned rays this rules out self-intersection.
+        let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+        let delta_z = gamma(3) * max_zt;
+        let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+        let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+        let delta_x = gamma(5) * (max_xt + max_zt);
+        let delta_y = gamma(5) * (max_yt + max_zt);
+        let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+        let delta_t =
+            3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+        if t <= delta_t {
+            return None;
+        }
+
+        Some(TriangleHit { t, b0: e0 * inv_det, b1: e1 * inv_det, b2: e2 * inv_det })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hit(origin: Vec3, direction: Vec3, tri: [Vec3; 3]) -> Option<TriangleHit> {
+        WatertightRay::new(&Ray::new(origin, direction)).intersect(
+            tri[0],
+            tri[1],
+            tri[2],
+            f32::INFINITY,
+        )
+    }
+
+    const UNIT: [Vec3; 3] = [Vec3::ZERO, Vec3::X, Vec3::Y];
+
+    #[test]
+    fn hits_the_interior_with_correct_t_and_barycentrics() {
+        let h = hit(Vec3::new(0.25, 0.5, -2.0), Vec3::Z, UNIT).unwrap();
+        assert!((h.t - 2.0).abs() < 1e-6);
+        assert!((h.b1 - 0.25).abs() < 1e-6 && (h.b2 - 0.5).abs() < 1e-6);
+        assert!((h.b0 + h.b1 + h.b2 - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn both_sides_are_hit() {
+        assert!(hit(Vec3::new(0.2, 0.2, -1.0), Vec3::Z, UNIT).is_some());
+        assert!(hit(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z, UNIT).is_some());
+    }
+
+    #[test]
+    fn misses_outside_and_behind() {
+        assert!(hit(Vec3::new(0.6, 0.6, -1.0), Vec3::Z, UNIT).is_none());
+        assert!(hit(Vec3::new(0.2, 0.2, 1.0), Vec3::Z, UNIT).is_none());
+    }
+
+    #[test]
+    fn edges_and_vertices_are_inclusive() {
+        for target in [Vec3::new(0.5, 0.5, 0.0), Vec3::new(0.5, 0.0, 0.0), Vec3::ZERO, Vec3::X] {
+            // Dyadic coordinates: the ray passes exactly through the edge or vertex. (Rays that
+            // only nearly do are the business of the crack tests, with two triangles.)
+            let origin = Vec3::new(0.125, 0.375, -1.0);
+            assert!(hit(origin, target - origin, UNIT).is_some(), "missed {target}");
+        }
+    }
+
+    #[test]
+    fn t_max_is_exclusive() {
+        let origin = Vec3::new(0.2, 0.2, -1.0);
+        let tri = WatertightRay::new(&Ray::new(origin, Vec3::Z));
+        assert!(tri.intersect(UNIT[0], UNIT[1], UNIT[2], 1.0).is_none());
+        assert!(tri.intersect(UNIT[0], UNIT[1], UNIT[2], 1.0001).is_some());
+    }
+
+    #[test]
+    fn negative_zero_direction_components_hit() {
+        for direction in
+            [Vec3::new(-0.0, -0.0, 1.0), Vec3::new(0.0, -0.0, 1.0), Vec3::new(-0.0, 0.0, -1.0)]
+        {
+            let origin = Vec3::new(0.2, 0.2, -direction.z);
+            assert!(hit(origin, direction, UNIT).is_some(), "{direction:?}");
+        }
+    }
+
+    #[test]
+    fn degenerate_triangles_are_never_hit() {
+        let line = [Vec3::ZERO, Vec3::X, Vec3::X * 2.0];
+        let point = [Vec3::ONE; 3];
+        for tri in [line, point] {
+            let origin = Vec3::new(1.0, 0.0, -1.0);
+            assert!(hit(origin, Vec3::Z, tri).is_none());
+            assert!(hit(Vec3::ONE - Vec3::Z, Vec3::Z, tri).is_none());
+        }
+    }
+
+    #[test]
+    fn zero_direction_and_nan_never_hit_or_panic() {
+        let origin = Vec3::new(0.2, 0.2, -1.0);
+        assert!(hit(origin, Vec3::ZERO, UNIT).is_none());
+        assert!(hit(origin, Vec3::new(f32::NAN, 0.0, 1.0), UNIT).is_none());
+        assert!(hit(Vec3::NAN, Vec3::Z, UNIT).is_none());
+    }
+
+    #[test]
+    fn the_lab_normal_follows_the_lab_winding() {
+        let tri = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE);
+        // (v2 − v0) × (v1 − v0) = Y × X = −Z.
+        assert_eq!(tri.normal, -Vec3::Z);
+    }
+
+    #[test]
+    fn surface_point_error_bounds_the_true_point() {
+        let tri = Triangle::new(
+            Vec3::new(1000.1, 0.3, 7.0),
+            Vec3::new(1001.7, 2.9, 7.5),
+            Vec3::new(999.2, 1.1, 8.25),
+            Vec3::ONE,
+        );
+        let (b0, b1, b2) = (0.2f32, 0.3f32, 0.5f32);
+        let sp = tri.surface_point(b0, b1, b2);
+        let exact = [tri.v0, tri.v1, tri.v2]
+            .iter()
+            .zip([b0, b1, b2])
+            .map(|(v, b)| v.as_dvec3() * b as f64)
+            .fold(glam::DVec3::ZERO, |acc, v| acc + v);
+        let diff = (sp.p.as_dvec3() - exact).abs();
+        assert!(diff.cmple(sp.error.as_dvec3()).all(), "{diff} > {}", sp.error);
+    }
+}
