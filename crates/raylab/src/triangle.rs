@@ -171,8 +171,12 @@ impl WatertightRay {
         let delta_z = gamma(3) * max_zt;
         let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
         let max_yt = ay.abs().max(by.abs()).max(cy.abs());
-        let delta_x = gamma(5) * (max_xt + max_zt);
-        let delta_y = gamma(5) * (max_yt + max_zt);
+        // The error of `a[kx] − shear_x·a[kz]` is relative to both terms. PBR bounds the second
+        // by the sheared z, which holds only for unit directions; bounding it directly keeps
+        // the test exact for directions of any length (e.g. 10⁻⁶ at a tiny scene's scale).
+        let max_unsheared_z = a[kz].abs().max(b[kz].abs()).max(c[kz].abs());
+        let delta_x = gamma(5) * (max_xt + self.shear_x.abs() * max_unsheared_z);
+        let delta_y = gamma(5) * (max_yt + self.shear_y.abs() * max_unsheared_z);
         let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
         let delta_t =
