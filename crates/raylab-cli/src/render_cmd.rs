@@ -22,7 +22,7 @@ const MAX_THREADS: usize = 1024;
 const PROGRESS_AFTER: Duration = Duration::from_millis(500);
 
 #[derive(Args, Debug)]
-#[command(after_long_help = STAGES_HELP)]
+#[command(after_long_help = STAGES_HELP, allow_negative_numbers = true)]
 pub struct RenderArgs {
     /// The scene: `cornell`, the lab's Cornell box (30 triangles, y down).
     #[arg(default_value = "cornell")]

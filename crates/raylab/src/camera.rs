@@ -77,20 +77,29 @@ impl Camera {
 
     /// The ray through the film position `(x, y)` in pixels, where `(0, 0)` is the top-left
     /// corner of the image and `(W, H)` the bottom-right one. The direction has unit length.
+    ///
+    /// For many rays, make a [`RayGenerator`] once with [`rays`](Self::rays).
     #[inline]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let local = Vec3::new(
-            x - self.width as f32 / 2.0,
-            y - self.height as f32 / 2.0,
-            self.focal_length_px,
-        );
-        Ray::new(self.position, (self.rotation() * local).normalize())
+        self.rays().ray(x, y)
     }
 
     /// The ray through the centre of pixel `(x, y)`.
     #[inline]
     pub fn pixel_ray(&self, x: u32, y: u32) -> Ray {
-        self.ray(x as f32 + 0.5, y as f32 + 0.5)
+        self.rays().pixel_ray(x, y)
+    }
+
+    /// Generates this camera's rays with the rotation computed once.
+    #[inline]
+    pub fn rays(&self) -> RayGenerator {
+        RayGenerator {
+            position: self.position,
+            rotation: self.rotation(),
+            half_width: self.width as f32 / 2.0,
+            half_height: self.height as f32 / 2.0,
+            focal_length_px: self.focal_length_px,
+        }
     }
 
     /// Where `point` appears on the film, in pixels (the inverse of [`ray`](Self::ray)), or `None`
@@ -122,6 +131,32 @@ impl fmt::Display for Camera {
             self.fov_x_deg(),
             self.fov_y_deg()
         )
+    }
+}
+
+/// A [`Camera`]'s rays, with the rotation `R(yaw)` computed once.
+#[derive(Clone, Copy, Debug)]
+pub struct RayGenerator {
+    position: Vec3,
+    rotation: Mat3,
+    half_width: f32,
+    half_height: f32,
+    focal_length_px: f32,
+}
+
+impl RayGenerator {
+    /// The ray through the film position `(x, y)` in pixels (see [`Camera::ray`]).
+    #[inline]
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        // d = R(yaw)·(x − W/2, y − H/2, f), normalized.
+        let local = Vec3::new(x - self.half_width, y - self.half_height, self.focal_length_px);
+        Ray::new(self.position, (self.rotation * local).normalize())
+    }
+
+    /// The ray through the centre of pixel `(x, y)`.
+    #[inline]
+    pub fn pixel_ray(&self, x: u32, y: u32) -> Ray {
+        self.ray(x as f32 + 0.5, y as f32 + 0.5)
     }
 }
 

@@ -38,7 +38,7 @@ pub mod scene;
 pub mod triangle;
 
 pub use accel::{Accelerator, BruteForce, Hit};
-pub use camera::Camera;
+pub use camera::{Camera, RayGenerator};
 pub use film::{Film, FilmError};
 pub use integrator::{Integrator, Lab, Stage};
 pub use light::PointLight;

@@ -25,11 +25,12 @@ pub fn render(
 ) -> Result<Film, FilmError> {
     let mut film = Film::new(camera.width, camera.height)?;
     let width = camera.width as usize;
+    let rays = camera.rays();
     film.pixels_mut().par_chunks_mut(width * BAND_ROWS).enumerate().for_each(|(band, pixels)| {
         let first_row = band * BAND_ROWS;
         for (i, pixel) in pixels.iter_mut().enumerate() {
             let (x, y) = (i % width, first_row + i / width);
-            *pixel = integrator.radiance(&camera.pixel_ray(x as u32, y as u32));
+            *pixel = integrator.radiance(&rays.pixel_ray(x as u32, y as u32));
         }
         progress((pixels.len() / width) as u32);
     });

@@ -64,6 +64,44 @@ pub struct TriangleHit {
     pub b2: f32,
 }
 
+/// Triangles per [`TriangleBlock`]: the width of the batched pre-test.
+pub const LANES: usize = 8;
+
+/// Up to [`LANES`] triangles stored coordinate by coordinate, so that one ray can be tested
+/// against all of them with straight-line, vectorizable code ([`WatertightRay::block_candidates`]).
+/// Unused lanes hold NaN vertices, which are never hit.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleBlock {
+    /// `vertices[j][axis][lane]`: coordinate `axis` of vertex `j` of the triangle in `lane`.
+    vertices: [[[f32; LANES]; 3]; 3],
+}
+
+impl TriangleBlock {
+    /// Packs triangles, in order, into blocks; the last block is padded.
+    pub fn pack(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> Vec<TriangleBlock> {
+        let mut blocks = Vec::new();
+        for (i, triangle) in triangles.into_iter().enumerate() {
+            let lane = i % LANES;
+            if lane == 0 {
+                blocks.push(TriangleBlock { vertices: [[[f32::NAN; LANES]; 3]; 3] });
+            }
+            let block = blocks.last_mut().expect("pushed above");
+            for (j, vertex) in triangle.iter().enumerate() {
+                for axis in 0..3 {
+                    block.vertices[j][axis][lane] = vertex[axis];
+                }
+            }
+        }
+        blocks
+    }
+
+    /// The vertices of the triangle in `lane`.
+    #[inline]
+    pub fn triangle(&self, lane: usize) -> [Vec3; 3] {
+        self.vertices.map(|v| Vec3::new(v[0][lane], v[1][lane], v[2][lane]))
+    }
+}
+
 /// The per-ray part of the watertight test: which axis the ray is mostly along, and the shear that
 /// maps the ray onto +z. Computed once per ray and reused for every triangle.
 #[derive(Clone, Copy, Debug)]
@@ -186,6 +224,47 @@ impl WatertightRay {
         }
 
         Some(TriangleHit { t, b0: e0 * inv_det, b1: e1 * inv_det, b2: e2 * inv_det })
+    }
+}
+
+impl WatertightRay {
+    /// A bit mask of the triangles in `block` that [`intersect`](Self::intersect) may hit for
+    /// `t < t_max`: the same arithmetic, lane by lane, without the final conservative `t` bound.
+    ///
+    /// It never leaves out a triangle that `intersect` hits, because every value it compares is
+    /// computed by the same operations in the same order; lanes whose edge functions round to
+    /// exactly zero are passed on for `intersect` to decide in double precision. Written as
+    /// straight-line code over fixed-size arrays so that the compiler vectorizes it; `intersect`
+    /// is its scalar twin, and the tests check that the two agree.
+    #[inline]
+    pub fn block_candidates(&self, block: &TriangleBlock, t_max: f32) -> u32 {
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let (ox, oy, oz) = (self.origin[kx], self.origin[ky], self.origin[kz]);
+        let (sx, sy, sz) = (self.shear_x, self.shear_y, self.shear_z);
+        // Permute the axes once per block, so that the lane loop indexes only by lane.
+        let [p0, p1, p2] = block.vertices.map(|v| [v[kx], v[ky], v[kz]]);
+        let mut pass = [false; LANES];
+        for lane in 0..LANES {
+            let (a_kx, a_ky, a_kz) = (p0[0][lane] - ox, p0[1][lane] - oy, p0[2][lane] - oz);
+            let (b_kx, b_ky, b_kz) = (p1[0][lane] - ox, p1[1][lane] - oy, p1[2][lane] - oz);
+            let (c_kx, c_ky, c_kz) = (p2[0][lane] - ox, p2[1][lane] - oy, p2[2][lane] - oz);
+            let (ax, ay) = (a_kx - sx * a_kz, a_ky - sy * a_kz);
+            let (bx, by) = (b_kx - sx * b_kz, b_ky - sy * b_kz);
+            let (cx, cy) = (c_kx - sx * c_kz, c_ky - sy * c_kz);
+            let e0 = bx * cy - by * cx;
+            let e1 = cx * ay - cy * ax;
+            let e2 = ax * by - ay * bx;
+            let any_zero = (e0 == 0.0) | (e1 == 0.0) | (e2 == 0.0);
+            let inside = ((e0 >= 0.0) & (e1 >= 0.0) & (e2 >= 0.0))
+                | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
+            let det = e0 + e1 + e2;
+            let t_scaled = e0 * (sz * a_kz) + e1 * (sz * b_kz) + e2 * (sz * c_kz);
+            let t_limit = t_max * det;
+            let in_range = ((det > 0.0) & (t_scaled > 0.0) & (t_scaled < t_limit))
+                | ((det < 0.0) & (t_scaled < 0.0) & (t_scaled > t_limit));
+            pass[lane] = any_zero | (inside & in_range);
+        }
+        pass.iter().enumerate().fold(0, |mask, (lane, &p)| mask | (p as u32) << lane)
     }
 }
 

@@ -300,3 +300,49 @@ proptest! {
         prop_assert!(BruteForce::new(&pair).closest_hit(&ray).is_some());
     }
 }
+
+/// The plain scalar loop that [`BruteForce`] must agree with exactly.
+fn scalar_closest_hit(triangles: &[Triangle], ray: &Ray) -> Option<raylab::Hit> {
+    let setup = raylab::triangle::WatertightRay::new(ray);
+    let mut closest = None;
+    let mut t_max = ray.t_max;
+    for (i, t) in triangles.iter().enumerate() {
+        if let Some(h) = setup.intersect(t.v0, t.v1, t.v2, t_max) {
+            t_max = h.t;
+            closest = Some(raylab::Hit { t: h.t, triangle: i as u32, b1: h.b1, b2: h.b2 });
+        }
+    }
+    closest
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1000))]
+
+    /// The batched pre-test of [`BruteForce`] never drops a hit that the scalar test finds, and
+    /// adds none: the answers are identical, bit for bit, also for rays aimed exactly at edges
+    /// and vertices and for degenerate triangles.
+    #[test]
+    fn batched_and_scalar_tests_agree(
+        vertices in proptest::collection::vec(finite_vec3(4.0), 3..60),
+        origin in finite_vec3(8.0),
+        aim in 0usize..1000, s in 0.0f32..=1.0, t_max in prop_oneof![Just(f32::INFINITY), 0.1f32..3.0],
+    ) {
+        let mut triangles: Vec<Triangle> = vertices.chunks_exact(3).map(|v| triangle(v[0], v[1], v[2])).collect();
+        // A degenerate triangle among them.
+        triangles.push(triangle(vertices[0], vertices[1], vertices[0]));
+        let target_triangle = triangles[aim % triangles.len()];
+        // Aim at a vertex, an edge or the inside, exactly.
+        let target = match aim % 3 {
+            0 => target_triangle.v0,
+            1 => target_triangle.v0.lerp(target_triangle.v1, s),
+            _ => target_triangle.v0.lerp(target_triangle.v1, s).lerp(target_triangle.v2, 0.5),
+        };
+        prop_assume!(target != origin);
+        let ray = Ray::segment(origin, target - origin, t_max);
+        let accel = BruteForce::new(&triangles);
+        let expected = scalar_closest_hit(&triangles, &ray);
+        prop_assert_eq!(accel.closest_hit(&ray), expected);
+        prop_assert_eq!(accel.occluded(&ray), expected.is_some());
+        prop_assert_eq!(accel.triangles().count(), triangles.len());
+    }
+}
