@@ -163,7 +163,7 @@ impl Progress {
         let bar = ProgressBar::with_draw_target(Some(rows as u64), ProgressDrawTarget::hidden());
         bar.set_style(
             ProgressStyle::with_template(
-                "{bar:40} {percent:>3}% rows, {elapsed} elapsed, ~{eta} left",
+                "{bar:40} {pos}/{len} rows, {elapsed} elapsed, ~{eta} left",
             )
             .expect("the template is valid"),
         );

@@ -14,58 +14,50 @@ fn awkward_frame(p: Vec3) -> Vec3 {
     Mat3::from_euler(glam::EulerRot::YXZ, 0.3, -0.7, 0.11) * p + Vec3::new(0.1, -3.3, 7.7)
 }
 
-/// An `n×n` grid of quads over `[0,1]²` in the plane z = 0, each split along a diagonal
-/// (alternating diagonals), then moved into the awkward frame. Returns triangles and vertices.
-fn tessellated_quad(n: usize) -> (Vec<Triangle>, Vec<Vec3>) {
-    let vertex = |i: usize, j: usize| {
-        awkward_frame(Vec3::new(i as f32 / n as f32, j as f32 / n as f32, 0.0))
-    };
-    let mut triangles = Vec::new();
-    let mut vertices = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            vertices.push(vertex(i, j));
-        }
-    }
+/// Appends an `n×n` grid of quads with corners `point(i, j)`, each split along a diagonal (the
+/// same one everywhere, or alternating), to `triangles`, and its grid points to `vertices`.
+fn grid(
+    n: usize,
+    point: impl Fn(usize, usize) -> Vec3,
+    alternate_diagonals: bool,
+    triangles: &mut Vec<Triangle>,
+    vertices: &mut Vec<Vec3>,
+) {
+    vertices.extend((0..=n).flat_map(|j| (0..=n).map(move |i| (i, j))).map(|(i, j)| point(i, j)));
     for j in 0..n {
         for i in 0..n {
-            let (a, b, c, d) =
-                (vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1), vertex(i, j + 1));
-            if (i + j) % 2 == 0 {
-                triangles.extend([triangle(a, b, c), triangle(a, c, d)]);
-            } else {
+            let (a, b, c, d) = (point(i, j), point(i + 1, j), point(i + 1, j + 1), point(i, j + 1));
+            if alternate_diagonals && (i + j) % 2 == 1 {
                 triangles.extend([triangle(a, b, d), triangle(b, c, d)]);
+            } else {
+                triangles.extend([triangle(a, b, c), triangle(a, c, d)]);
             }
         }
     }
+}
+
+/// An `n×n` grid of quads over `[0,1]²` in the plane z = 0, split along alternating diagonals,
+/// then moved into the awkward frame. Returns triangles and vertices.
+fn tessellated_quad(n: usize) -> (Vec<Triangle>, Vec<Vec3>) {
+    let (mut triangles, mut vertices) = (Vec::new(), Vec::new());
+    let point = |i: usize, j: usize| {
+        awkward_frame(Vec3::new(i as f32 / n as f32, j as f32 / n as f32, 0.0))
+    };
+    grid(n, point, true, &mut triangles, &mut vertices);
     (triangles, vertices)
 }
 
 /// A closed, subdivided cube: 6 faces of `n×n` quads, all sharing edges and vertices exactly.
 fn closed_cube(n: usize) -> (Vec<Triangle>, Vec<Vec3>) {
-    let mut triangles = Vec::new();
-    let mut vertices = Vec::new();
+    let (mut triangles, mut vertices) = (Vec::new(), Vec::new());
     let axes =
         [(Vec3::X, Vec3::Y, Vec3::Z), (Vec3::Y, Vec3::Z, Vec3::X), (Vec3::Z, Vec3::X, Vec3::Y)];
     for (u, v, w) in axes {
         for side in [-1.0f32, 1.0] {
             // Grid points computed from integers so that shared edges get identical vertices.
-            let point = |i: usize, j: usize| {
-                let s = |k: usize| 2.0 * k as f32 / n as f32 - 1.0;
-                awkward_frame(u * s(i) + v * s(j) + w * side)
-            };
-            for j in 0..=n {
-                for i in 0..=n {
-                    vertices.push(point(i, j));
-                }
-            }
-            for j in 0..n {
-                for i in 0..n {
-                    let (a, b, c, d) =
-                        (point(i, j), point(i + 1, j), point(i + 1, j + 1), point(i, j + 1));
-                    triangles.extend([triangle(a, b, c), triangle(a, c, d)]);
-                }
-            }
+            let s = |k: usize| 2.0 * k as f32 / n as f32 - 1.0;
+            let point = |i: usize, j: usize| awkward_frame(u * s(i) + v * s(j) + w * side);
+            grid(n, point, false, &mut triangles, &mut vertices);
         }
     }
     (triangles, vertices)

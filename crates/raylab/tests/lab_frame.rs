@@ -5,6 +5,7 @@ use std::f32::consts::PI;
 use std::path::Path;
 
 use glam::Vec3;
+use image::RgbImage;
 use raylab::image_compare::{compare_rgb8, save_failure_images};
 use raylab::{BruteForce, Camera, Film, Integrator, Lab, Ray, Scene, Stage, image_io, render};
 
@@ -24,6 +25,16 @@ fn radiance_at(scene: &Scene, stage: Stage, point: Vec3, camera_position: Vec3) 
 fn render_scene(scene: &Scene, camera: &Camera, stage: Stage) -> Film {
     let accel = BruteForce::new(&scene.triangles);
     render(camera, &Lab::new(scene, &accel, stage), &|_| {}).unwrap()
+}
+
+/// Fails, leaving the actual, expected and diff images in a temporary folder, if more than
+/// `max_pixels` pixels differ by more than one level in some channel.
+fn assert_images_close(name: &str, actual: &RgbImage, expected: &RgbImage, max_pixels: usize) {
+    let diff = compare_rgb8(actual, expected, 1).expect("images of the same size");
+    if diff.pixels_over_tolerance > max_pixels {
+        let folder = save_failure_images(name, actual, expected).unwrap();
+        panic!("{name}: {diff:?}; actual, expected and diff images are in {}", folder.display());
+    }
 }
 
 const CAMERA: Vec3 = Vec3::new(0.0, 0.0, -3.0);
@@ -139,16 +150,7 @@ fn no_shadow_acne_at_any_scene_scale() {
         // may move an edge or a shadow boundary by a pixel, no more.
         let scaled_camera = Camera { position: camera.position * scale, ..camera };
         let image = render_scene(&scene, &scaled_camera, Stage::Shadows).to_rgb8_clamped().unwrap();
-        let diff = compare_rgb8(&image, &reference_image, 1).unwrap();
-        if diff.fraction_over_tolerance() > 0.002 {
-            let folder =
-                save_failure_images(&format!("acne-scale-{scale}"), &image, &reference_image)
-                    .unwrap();
-            panic!(
-                "scale {scale}: {diff:?}; actual, expected and diff images are in {}",
-                folder.display()
-            );
-        }
+        assert_images_close(&format!("acne-scale-{scale}"), &image, &reference_image, 20);
     }
 }
 
@@ -183,15 +185,6 @@ fn golden_lab_frames() {
         let expected = image_io::load_rgb8(&golden_path).unwrap();
         let actual =
             render_scene(&cornell(), &Camera::lab(100, 100), stage).to_rgb8_clamped().unwrap();
-        let diff = compare_rgb8(&actual, &expected, 1).unwrap();
-        if diff.pixels_over_tolerance > 2 {
-            let folder =
-                save_failure_images(&format!("golden-lab-100-{stage}"), &actual, &expected)
-                    .unwrap();
-            panic!(
-                "stage {stage}: the lab frame differs from the golden image: {diff:?}; actual, expected and diff images are in {}",
-                folder.display()
-            );
-        }
+        assert_images_close(&format!("golden-lab-100-{stage}"), &actual, &expected, 2);
     }
 }
