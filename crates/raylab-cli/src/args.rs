@@ -14,6 +14,12 @@ pub fn positive_f32(text: &str) -> Result<f32, String> {
     if value > 0.0 { Ok(value) } else { Err(format!("{text} must be greater than 0")) }
 }
 
+/// Parses a finite number that is zero or more.
+pub fn non_negative_f32(text: &str) -> Result<f32, String> {
+    let value = finite_f32(text)?;
+    if value >= 0.0 { Ok(value) } else { Err(format!("{text} must not be negative")) }
+}
+
 /// Parses a field of view in degrees, strictly between 0 and 180.
 pub fn fov_deg(text: &str) -> Result<f32, String> {
     let value = finite_f32(text)?;
@@ -71,6 +77,7 @@ mod tests {
             assert!(finite_f32(bad).is_err(), "{bad}");
         }
         assert!(positive_f32("0").is_err());
+        assert!(non_negative_f32("-1").is_err() && non_negative_f32("0") == Ok(0.0));
         assert!(fov_deg("180").is_err() && fov_deg("0").is_err() && fov_deg("90").is_ok());
     }
 

@@ -24,7 +24,23 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) => {
+            use clap::error::ErrorKind;
+            if matches!(error.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
+                || error.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            {
+                error.exit();
+            }
+            // One line, like every other error: clap's first line names the problem.
+            let rendered = error.to_string();
+            let first = rendered.lines().next().unwrap_or("invalid arguments");
+            let first = first.strip_prefix("error: ").unwrap_or(first);
+            eprintln!("raylab: error: {first} (see raylab --help)");
+            return ExitCode::from(2);
+        }
+    };
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
     };

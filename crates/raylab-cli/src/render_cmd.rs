@@ -1,6 +1,6 @@
 //! `raylab render`: one frame to an image file.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -58,7 +58,7 @@ pub struct RenderArgs {
     light: Option<Vec3>,
 
     /// Point-light power P per channel [default: the lab's 14].
-    #[arg(long, value_name = "WATTS", value_parser = args::finite_f32)]
+    #[arg(long, value_name = "WATTS", value_parser = args::non_negative_f32)]
     light_power: Option<f32>,
 
     /// How much of the lab's light model to show (see below).
@@ -87,9 +87,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene.light.position = position;
     }
     if let Some(power) = args.light_power {
-        if power < 0.0 {
-            bail!("--light-power must not be negative, not {power}");
-        }
         scene.light.power = Vec3::splat(power);
     }
     scene.validate()?;
@@ -100,6 +97,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         (None, Some(fov)) => Camera::focal_length_for_fov(width, fov),
         (None, None) => Camera::lab(width, height).focal_length_px,
     };
+    if !focal_length_px.is_finite() {
+        bail!("--fov {} is too small: the focal length would be infinite", args.fov.unwrap_or(0.0));
+    }
     let camera = Camera {
         position: args.camera,
         yaw: args.yaw.to_radians(),
@@ -138,16 +138,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     progress.finish();
 
     image_io::save_rgb8(&args.output, &film.to_rgb8_clamped()?)?;
-    println!(
-        "{}: {width}×{height}, {} stage {}, {:.1} ms on {threads} thread{}",
+    let report = format!(
+        "{}: {width}×{height}, {} stage {}, {:.1} ms on {threads} thread{}\n{camera}\n",
         args.output.display(),
         scene.name,
         args.stage,
         elapsed.as_secs_f64() * 1e3,
         if threads == 1 { "" } else { "s" },
     );
-    println!("{camera}");
-    Ok(())
+    // The image is written; a closed or full standard output is not worth a failure, but it
+    // must not be a panic either (`println!` would panic).
+    match std::io::stdout().lock().write_all(report.as_bytes()) {
+        Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(error).context("cannot print the report to standard output")
+        }
+        _ => Ok(()),
+    }
 }
 
 /// A progress bar that appears only on a terminal and only once a render has taken a while.

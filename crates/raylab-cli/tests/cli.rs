@@ -116,7 +116,7 @@ fn bad_input_is_a_one_line_error_and_leaves_no_file() {
         (&["--size", "-5x5"], "at least 1"),
         (&["--size", "10x-5"], "at least 1"),
         (&["--size", "500"], "WIDTHxHEIGHT"),
-        (&["--size", "100000x100000"], "memory"),
+        (&["--size", "1000000x1000000"], "memory"),
         (&["--size", "4294967295x4294967295"], "memory"),
         (&["--camera", "nan,0,0"], "not a finite number"),
         (&["--camera", "0,0"], "three numbers"),
@@ -127,6 +127,8 @@ fn bad_input_is_a_one_line_error_and_leaves_no_file() {
         (&["--fov", "30", "--focal", "100"], "cannot be used with"),
         (&["--light", "0,NaN,0"], "not a finite number"),
         (&["--light-power", "-1"], "must not be negative"),
+        (&["--fov", "1e-40"], "too small"),
+        (&["--bogus"], "unexpected argument"),
         (&["-o", "out.jpg"], "unknown image format '.jpg'"),
         (&["-o", "out"], "no extension"),
         (&["-o", "missing/out.png"], "folder 'missing' does not exist"),
@@ -144,6 +146,7 @@ fn bad_input_is_a_one_line_error_and_leaves_no_file() {
         let stderr = text(&out.stderr);
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: not one line: {stderr}");
         let first_line = stderr.lines().next().unwrap_or("");
         assert!(first_line.contains("error:"), "{args:?}: {stderr}");
         assert!(
@@ -155,10 +158,31 @@ fn bad_input_is_a_one_line_error_and_leaves_no_file() {
 }
 
 #[test]
-fn a_failed_render_keeps_the_previous_image() {
+fn a_full_or_closed_standard_output_is_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = std::fs::File::create("/dev/full");
+    if let Ok(full) = full {
+        let out = Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(["render", "--size", "8x8"])
+            .current_dir(dir.path())
+            .stdout(full)
+            .output()
+            .unwrap();
+        let stderr = text(&out.stderr);
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(stderr.starts_with("raylab: error: cannot print"), "{stderr}");
+        assert_eq!(out.status.code(), Some(1));
+        // The image itself was written whole.
+        assert_eq!(image::open(dir.path().join("render.png")).unwrap().width(), 8);
+    }
+}
+
+#[test]
+fn a_rejected_render_keeps_the_previous_image() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("render.png"), b"the previous picture").unwrap();
     let out = raylab(dir.path(), &["render", "--size", "0x0"]);
     assert!(!out.status.success());
     assert_eq!(std::fs::read(dir.path().join("render.png")).unwrap(), b"the previous picture");
+    assert_eq!(files_in(dir.path()), ["render.png"]);
 }

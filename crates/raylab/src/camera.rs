@@ -123,11 +123,11 @@ impl fmt::Display for Camera {
         write!(
             f,
             "camera at ({}, {}, {}), yaw {}°, focal length {} px: field of view {:.2}° × {:.2}°",
-            p.x,
-            p.y,
-            p.z,
-            self.yaw.to_degrees(),
-            self.focal_length_px,
+            tidy(p.x),
+            tidy(p.y),
+            tidy(p.z),
+            tidy(self.yaw.to_degrees()),
+            tidy(self.focal_length_px),
             self.fov_x_deg(),
             self.fov_y_deg()
         )
@@ -150,6 +150,8 @@ impl RayGenerator {
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         // d = R(yaw)·(x − W/2, y − H/2, f), normalized.
         let local = Vec3::new(x - self.half_width, y - self.half_height, self.focal_length_px);
+        // Scale before normalizing, so that huge focal lengths do not overflow |d|².
+        let local = local / local.abs().max_element();
         Ray::new(self.position, (self.rotation * local).normalize())
     }
 
@@ -160,9 +162,32 @@ impl RayGenerator {
     }
 }
 
+/// A number for people: at most four decimals, no trailing zeros (`30.000002` → `30`).
+fn tidy(value: f32) -> String {
+    let text = format!("{value:.4}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" { "0".to_string() } else { text.to_string() }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn display_is_tidy() {
+        let camera = Camera { yaw: 30f32.to_radians(), ..Camera::lab(500, 500) };
+        assert_eq!(
+            camera.to_string(),
+            "camera at (0, 0, -3), yaw 30°, focal length 500 px: field of view 53.13° × 53.13°"
+        );
+    }
+
+    #[test]
+    fn huge_focal_lengths_still_give_unit_directions() {
+        let camera = Camera { focal_length_px: 1e30, ..Camera::lab(500, 500) };
+        let d = camera.pixel_ray(0, 0).direction;
+        assert!((d.length() - 1.0).abs() < 1e-6 && d.z > 0.999, "{d}");
+    }
 
     #[test]
     fn the_lab_camera_has_a_53_degree_field_of_view() {

@@ -43,7 +43,7 @@ pub fn compare_rgb8(
         max = max.max(pixel_max);
         over += (pixel_max > tolerance) as usize;
     }
-    let pixels = (actual.width() * actual.height()) as usize;
+    let pixels = actual.pixels().len();
     Some(ImageDifference {
         max_channel_diff: max,
         mean_abs_diff: sum as f64 / (3 * pixels.max(1)) as f64,

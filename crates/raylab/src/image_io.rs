@@ -2,8 +2,9 @@
 //!
 //! The format comes from the file's extension: `.png` (8-bit RGB) or `.ppm` (binary P6, which any
 //! image viewer and the lab's own tools read). Files are written to a temporary file in the same
-//! folder and renamed into place, so a failed or interrupted write never leaves a partial image
-//! behind, and never destroys the previous one.
+//! folder, synced and renamed into place, so a failed write never leaves a partial image behind
+//! and never destroys the previous one. (Only a kill in the moment of writing can leave a hidden
+//! `.NAME.*.tmp` file; the image itself is always whole or absent.)
 
 use std::fs;
 use std::io::{self, BufWriter, Write};
@@ -102,7 +103,9 @@ fn temporary_file_beside(path: &Path) -> Result<tempfile::NamedTempFile, ImageIo
         });
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let prefix = format!(".{name}.");
+    // Keep the temporary name within the file system's limit even for very long names.
+    let short: String = name.chars().take(64).collect();
+    let prefix = format!(".{short}.");
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
@@ -142,7 +145,10 @@ pub fn check_writable(path: &Path) -> Result<ImageFormat, ImageIoError> {
 /// Writes `image` to `path` in the format its extension names, atomically: the file appears
 /// complete or not at all.
 pub fn save_rgb8(path: &Path, image: &RgbImage) -> Result<(), ImageIoError> {
-    let format = check_writable(path)?;
+    let format = ImageFormat::from_path(path)?;
+    if path.is_dir() {
+        return Err(ImageIoError::IsAFolder { path: path.to_path_buf() });
+    }
     let temporary = temporary_file_beside(path)?;
     let write_error =
         |source: io::Error| ImageIoError::Io { action: "write", path: path.to_path_buf(), source };
@@ -169,6 +175,8 @@ pub fn save_rgb8(path: &Path, image: &RgbImage) -> Result<(), ImageIoError> {
         }
         out.flush().map_err(write_error)?;
     }
+    // On disk before the rename, so that even a crash cannot leave a renamed, empty file.
+    temporary.as_file().sync_all().map_err(write_error)?;
     temporary.persist(path).map_err(|e| write_error(e.error))?;
     Ok(())
 }
@@ -229,6 +237,14 @@ mod tests {
         let folder = dir.path().join("f.png");
         fs::create_dir(&folder).unwrap();
         assert!(matches!(check_writable(&folder), Err(ImageIoError::IsAFolder { .. })));
+    }
+
+    #[test]
+    fn very_long_file_names_can_be_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(format!("{}.png", "n".repeat(250)));
+        save_rgb8(&path, &test_image()).unwrap();
+        assert_eq!(load_rgb8(&path).unwrap(), test_image());
     }
 
     #[test]

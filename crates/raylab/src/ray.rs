@@ -113,7 +113,7 @@ mod tests {
     }
 
     #[test]
-    fn zero_error_still_moves_one_float() {
+    fn offset_is_zero_without_error_and_tiny_with_tiny_error() {
         let point = SurfacePoint { p: Vec3::ZERO, error: Vec3::ZERO, normal: Vec3::Z };
         // With no error the offset is zero and nothing is rounded: the point stays put.
         assert_eq!(offset_ray_origin(&point, Vec3::Z), Vec3::ZERO);

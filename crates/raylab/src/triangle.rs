@@ -33,7 +33,7 @@ pub struct Triangle {
 impl Triangle {
     /// A triangle with the lab's normal `normalize((v2 − v0) × (v1 − v0))`.
     ///
-    /// A zero-area triangle gets a zero normal (it is never hit).
+    /// A zero-area triangle gets a zero normal; [`WatertightRay::intersect`] never hits it.
     pub fn new(v0: Vec3, v1: Vec3, v2: Vec3, albedo: Vec3) -> Self {
         let normal = (v2 - v0).cross(v1 - v0).normalize_or_zero();
         Triangle { v0, v1, v2, normal, albedo }
@@ -102,6 +102,13 @@ impl TriangleBlock {
     }
 }
 
+/// `px·qy − py·qx` in double precision, where the products are exact.
+#[inline(never)]
+#[cold]
+fn edge_function_f64(px: f32, py: f32, qx: f32, qy: f32) -> f32 {
+    (px as f64 * qy as f64 - py as f64 * qx as f64) as f32
+}
+
 /// The per-ray part of the watertight test: which axis the ray is mostly along, and the shear that
 /// maps the ray onto +z. Computed once per ray and reused for every triangle.
 #[derive(Clone, Copy, Debug)]
@@ -168,16 +175,26 @@ impl WatertightRay {
         let mut e1 = cx * ay - cy * ax;
         let mut e2 = ax * by - ay * bx;
         // A zero in single precision may be a rounding artefact: decide it exactly. Products of
-        // two f32 are exact in f64, so the sign below is the true sign.
-        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-            let (ax, ay, bx, by, cx, cy) =
-                (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
-            e0 = (bx * cy - by * cx) as f32;
-            e1 = (cx * ay - cy * ax) as f32;
-            e2 = (ax * by - ay * bx) as f32;
+        // two f32 are exact in f64, so the sign below is the true sign. Only the edges that are
+        // zero are redone (Woop et al. redo all three): then every edge function is the same
+        // function of its two vertices in both triangles that share it, whatever their other
+        // edges, so the two can never disagree about which side of the edge the ray passes.
+        if e0 == 0.0 {
+            e0 = edge_function_f64(bx, by, cx, cy);
+        }
+        if e1 == 0.0 {
+            e1 = edge_function_f64(cx, cy, ax, ay);
+        }
+        if e2 == 0.0 {
+            e2 = edge_function_f64(ax, ay, bx, by);
         }
         // Inclusive edges: only a strict sign disagreement means outside.
         if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+            return None;
+        }
+        // A zero-area triangle is never hit (as in PBR 4th ed.; comparing the cross product itself
+        // rather than its squared length, which underflows for tiny triangles).
+        if (v2 - v0).cross(v1 - v0) == Vec3::ZERO {
             return None;
         }
         let det = e0 + e1 + e2;
@@ -210,8 +227,9 @@ impl WatertightRay {
         let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
         let max_yt = ay.abs().max(by.abs()).max(cy.abs());
         // The error of `a[kx] − shear_x·a[kz]` is relative to both terms. PBR bounds the second
-        // by the sheared z, which holds only for unit directions; bounding it directly keeps
-        // the test exact for directions of any length (e.g. 10⁻⁶ at a tiny scene's scale).
+        // by the sheared z, which is too loose for short directions (it rejects real hits, e.g.
+        // of a 10⁻⁶-sized scene's rays) and too tight for long ones; bounding it directly keeps
+        // the bound conservative and tight for directions of any length.
         let max_unsheared_z = a[kz].abs().max(b[kz].abs()).max(c[kz].abs());
         let delta_x = gamma(5) * (max_xt + self.shear_x.abs() * max_unsheared_z);
         let delta_y = gamma(5) * (max_yt + self.shear_y.abs() * max_unsheared_z);

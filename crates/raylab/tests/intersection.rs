@@ -338,3 +338,32 @@ proptest! {
         prop_assert_eq!(accel.triangles().count(), triangles.len());
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1000))]
+
+    /// The pre-test itself: every triangle that the scalar test hits within `t_max` has its bit
+    /// set, for several `t_max` (so a wrongly dropped farther triangle cannot hide behind a
+    /// nearer one).
+    #[test]
+    fn the_pre_test_keeps_every_triangle_the_scalar_test_hits(
+        vertices in proptest::collection::vec(finite_vec3(4.0), 24..25),
+        origin in finite_vec3(8.0),
+        aim in 0usize..8, s in 0.0f32..=1.0,
+    ) {
+        let triangles: Vec<[Vec3; 3]> = vertices.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
+        let [v0, v1, _] = triangles[aim];
+        let target = if aim % 2 == 0 { v0 } else { v0.lerp(v1, s) };
+        prop_assume!(target != origin);
+        let ray = raylab::triangle::WatertightRay::new(&Ray::new(origin, target - origin));
+        let block = &raylab::triangle::TriangleBlock::pack(triangles.iter().copied())[0];
+        for t_max in [f32::INFINITY, 2.0, 1.0, 0.5] {
+            let mask = ray.block_candidates(block, t_max);
+            for (lane, [a, b, c]) in triangles.iter().enumerate() {
+                if ray.intersect(*a, *b, *c, t_max).is_some() {
+                    prop_assert!(mask & (1 << lane) != 0, "lane {} dropped at t_max {}", lane, t_max);
+                }
+            }
+        }
+    }
+}

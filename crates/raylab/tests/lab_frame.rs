@@ -85,6 +85,24 @@ fn the_rendered_frame_shows_the_known_answers_at_their_pixels() {
 }
 
 #[test]
+fn a_wall_seen_from_behind_is_not_lit_through_itself() {
+    // From outside the room, behind the back wall (z = 1), looking at it: the light is on the
+    // wall's other side, so only the ambient term remains.
+    let scene = cornell();
+    let behind = Vec3::new(0.0, 0.0, 3.0);
+    let back_wall = Vec3::new(0.1, 0.2, 1.0);
+    assert_eq!(radiance_at(&scene, Stage::Shadows, back_wall, behind), Vec3::ZERO);
+    assert_eq!(radiance_at(&scene, Stage::Direct, back_wall, behind), Vec3::ZERO);
+    let ambient = radiance_at(&scene, Stage::Ambient, back_wall, behind);
+    assert!((ambient - Vec3::splat(0.75 * 0.5)).abs().max_element() < 1e-6, "{ambient}");
+    // A light moved behind the wall lights that side, and the room's inside stays dark there.
+    let mut outside_light = scene.clone();
+    outside_light.light.position = Vec3::new(0.0, 0.0, 2.0);
+    assert!(radiance_at(&outside_light, Stage::Shadows, back_wall, behind).y > 0.1);
+    assert_eq!(radiance_at(&outside_light, Stage::Shadows, back_wall, CAMERA), Vec3::ZERO);
+}
+
+#[test]
 fn closest_hit_not_first_hit() {
     // Straight ahead, the ray meets the back wall (triangles 8–9, early in the list) and, nearer,
     // the tall blue block (triangles 20–29): the pixel must be blue.
@@ -128,8 +146,9 @@ fn flat_stage_shows_only_triangle_colours_or_black() {
         assert!(palette.contains(&pixel.0), "pixel {:?} is not a triangle colour", pixel.0);
         seen.insert(pixel.0);
     }
-    // From the lab's camera the room fills the view: every colour but black is seen.
+    // From the lab's camera the room fills the view: every colour is seen, and no black.
     assert_eq!(seen.len(), 7, "{seen:?}");
+    assert!(!seen.contains(&[0, 0, 0]));
 }
 
 #[test]
@@ -174,17 +193,34 @@ fn the_picture_is_the_same_for_any_thread_count() {
 /// independent float64 implementation of the lab (`tools/reference_lab.py`, Möller–Trumbore in
 /// numpy, no code shared) rendered.
 ///
-/// The two agree on every pixel but two: pixels (4, 4) and (95, 95), whose rays pass exactly
-/// through the room's corner edges (ceiling–left wall and floor–right wall), where both walls are
-/// at the same distance and the float32 and float64 rounding of t picks a different wall.
+/// Every pixel must match within one level, except on the image's diagonals: their rays lie in
+/// the planes through the room's corner edges, where two walls meet at exactly the same distance
+/// and float32 and float64 rounding may pick different walls (either is right). A few of those
+/// (at most 8 of 200) may differ.
 #[test]
 fn golden_lab_frames() {
+    const SIZE: u32 = 100;
+    let on_a_diagonal = |x: u32, y: u32| x == y || x + y == SIZE - 1;
     for stage in Stage::ALL {
         let golden_path =
             Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/lab_100_{stage}.png"));
         let expected = image_io::load_rgb8(&golden_path).unwrap();
         let actual =
-            render_scene(&cornell(), &Camera::lab(100, 100), stage).to_rgb8_clamped().unwrap();
-        assert_images_close(&format!("golden-lab-100-{stage}"), &actual, &expected, 2);
+            render_scene(&cornell(), &Camera::lab(SIZE, SIZE), stage).to_rgb8_clamped().unwrap();
+        let mut ties = 0;
+        let mut expected_off_diagonals = expected.clone();
+        for (x, y, pixel) in expected_off_diagonals.enumerate_pixels_mut() {
+            if on_a_diagonal(x, y) && pixel != actual.get_pixel(x, y) {
+                ties += 1;
+                *pixel = *actual.get_pixel(x, y);
+            }
+        }
+        assert!(ties <= 8, "stage {stage}: {ties} pixels on the diagonals differ");
+        assert_images_close(
+            &format!("golden-lab-100-{stage}"),
+            &actual,
+            &expected_off_diagonals,
+            0,
+        );
     }
 }

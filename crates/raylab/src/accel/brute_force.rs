@@ -30,54 +30,41 @@ impl BruteForce {
     }
 }
 
-/// Calls `visit(index, hit)` for each triangle that `t_max()` still admits, in index order.
-#[inline]
-fn for_each_hit(
-    blocks: &[TriangleBlock],
-    ray: &WatertightRay,
-    mut t_max: impl FnMut() -> f32,
-    mut visit: impl FnMut(u32, crate::triangle::TriangleHit) -> bool,
-) {
-    for (b, block) in blocks.iter().enumerate() {
-        let mut candidates = ray.block_candidates(block, t_max());
-        while candidates != 0 {
-            let lane = candidates.trailing_zeros() as usize;
-            candidates &= candidates - 1;
-            let [v0, v1, v2] = block.triangle(lane);
-            if let Some(hit) = ray.intersect(v0, v1, v2, t_max()) {
-                if visit((b * LANES + lane) as u32, hit) {
-                    return;
-                }
-            }
-        }
-    }
-}
-
 impl Accelerator for BruteForce {
     fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         let setup = WatertightRay::new(ray);
-        let closest = std::cell::Cell::new(None::<Hit>);
-        let t_max = || closest.get().map_or(ray.t_max, |h| h.t);
-        // Only strictly nearer hits replace the current one: ties keep the lowest index.
-        for_each_hit(&self.blocks, &setup, t_max, |triangle, h| {
-            closest.set(Some(Hit { t: h.t, triangle, b1: h.b1, b2: h.b2 }));
-            false
-        });
-        closest.get()
+        let mut closest: Option<Hit> = None;
+        let mut t_max = ray.t_max;
+        for (b, block) in self.blocks.iter().enumerate() {
+            let mut candidates = setup.block_candidates(block, t_max);
+            while candidates != 0 {
+                let lane = candidates.trailing_zeros() as usize;
+                candidates &= candidates - 1;
+                let [v0, v1, v2] = block.triangle(lane);
+                // Only strictly nearer hits pass `t < t_max`: ties keep the lowest index.
+                if let Some(h) = setup.intersect(v0, v1, v2, t_max) {
+                    t_max = h.t;
+                    let triangle = (b * LANES + lane) as u32;
+                    closest = Some(Hit { t: h.t, triangle, b1: h.b1, b2: h.b2 });
+                }
+            }
+        }
+        closest
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
         let setup = WatertightRay::new(ray);
-        let mut occluded = false;
-        for_each_hit(
-            &self.blocks,
-            &setup,
-            || ray.t_max,
-            |_, _| {
-                occluded = true;
-                true
-            },
-        );
-        occluded
+        self.blocks.iter().any(|block| {
+            let mut candidates = setup.block_candidates(block, ray.t_max);
+            while candidates != 0 {
+                let lane = candidates.trailing_zeros() as usize;
+                candidates &= candidates - 1;
+                let [v0, v1, v2] = block.triangle(lane);
+                if setup.intersect(v0, v1, v2, ray.t_max).is_some() {
+                    return true;
+                }
+            }
+            false
+        })
     }
 }

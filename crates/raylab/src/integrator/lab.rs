@@ -6,7 +6,8 @@
 //! clamped to `[0, 1]`, no gamma (see [`Film::to_rgb8_clamped`](crate::Film::to_rgb8_clamped)).
 //!
 //! [`Stage`] replays the lab step by step for learners, from flat colours to the full model.
-//! Shadow rays leave the surface with a rounding-error-aware offset (see [`crate::ray`]) rather
+//! Surfaces are two-sided: the normal is turned toward the viewer, so a wall seen from behind is
+//! lit only by a light on that side. Shadow rays leave the surface with a rounding-error-aware offset (see [`crate::ray`]) rather
 //! than a magic epsilon, so there is no shadow acne at any scene scale.
 
 use std::fmt;
@@ -116,7 +117,13 @@ impl<A: Accelerator> Integrator for Lab<'_, A> {
             return albedo;
         }
 
-        let point = triangle.surface_point(hit.b0(), hit.b1, hit.b2);
+        let mut point = triangle.surface_point(hit.b0(), hit.b1, hit.b2);
+        // Triangles are hit from both sides: light the side the ray sees. (With the lab's
+        // one-sided normal, a wall seen from behind would be lit through itself by a light on
+        // its front.) From the lab's camera every visible face is a front face.
+        if point.normal.dot(ray.direction) > 0.0 {
+            point.normal = -point.normal;
+        }
         let light = &self.scene.light;
         // Lab eq. (27): D = P max(r̂·n̂, 0) / (4πr²).
         let mut direct = light.direct(point.p, point.normal);
