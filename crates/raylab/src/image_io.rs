@@ -121,13 +121,19 @@ fn temporary_file_beside(path: &Path) -> Result<tempfile::NamedTempFile, ImageIo
     })
 }
 
-/// Checks, before any work is done, that an image can be written to `path`: a known extension,
-/// an existing folder that accepts new files, and not a folder or read-only file in the way.
-pub fn check_writable(path: &Path) -> Result<ImageFormat, ImageIoError> {
+/// The format to write `path` in, refusing a path that names a folder.
+fn output_format(path: &Path) -> Result<ImageFormat, ImageIoError> {
     let format = ImageFormat::from_path(path)?;
     if path.is_dir() {
         return Err(ImageIoError::IsAFolder { path: path.to_path_buf() });
     }
+    Ok(format)
+}
+
+/// Checks, before any work is done, that an image can be written to `path`: a known extension,
+/// an existing folder that accepts new files, and not a folder or read-only file in the way.
+pub fn check_writable(path: &Path) -> Result<ImageFormat, ImageIoError> {
+    let format = output_format(path)?;
     if let Ok(meta) = fs::metadata(path) {
         if meta.permissions().readonly() {
             return Err(ImageIoError::Io {
@@ -145,10 +151,7 @@ pub fn check_writable(path: &Path) -> Result<ImageFormat, ImageIoError> {
 /// Writes `image` to `path` in the format its extension names, atomically: the file appears
 /// complete or not at all.
 pub fn save_rgb8(path: &Path, image: &RgbImage) -> Result<(), ImageIoError> {
-    let format = ImageFormat::from_path(path)?;
-    if path.is_dir() {
-        return Err(ImageIoError::IsAFolder { path: path.to_path_buf() });
-    }
+    let format = output_format(path)?;
     let temporary = temporary_file_beside(path)?;
     let write_error =
         |source: io::Error| ImageIoError::Io { action: "write", path: path.to_path_buf(), source };
