@@ -11,7 +11,7 @@ pub const MACHINE_EPSILON: f32 = f32::EPSILON * 0.5;
 /// Bound on the relative error of `n` successive floating-point operations:
 /// `γ(n) = n·ε / (1 − n·ε)` (PBR 4th ed., eq. 6.16).
 #[inline]
-pub fn gamma(n: u32) -> f32 {
+pub const fn gamma(n: u32) -> f32 {
     let n_eps = n as f32 * MACHINE_EPSILON;
     n_eps / (1.0 - n_eps)
 }

@@ -25,6 +25,7 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod bvh;
 pub mod camera;
 pub mod film;
 pub mod float;
@@ -39,6 +40,7 @@ pub mod scene;
 pub mod triangle;
 
 pub use accel::{Accelerator, BruteForce, Hit};
+pub use bvh::{BuildSettings, Bvh};
 pub use camera::{Camera, RayGenerator};
 pub use film::{Film, FilmError};
 pub use integrator::{Integrator, Lab, Stage};

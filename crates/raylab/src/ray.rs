@@ -12,15 +12,19 @@ use glam::Vec3;
 
 use crate::float::{next_float_down, next_float_up};
 
-/// A ray `origin + t·direction` for `t` in `(0, t_max)`.
+/// A ray `origin + t·direction` for `t` in `[t_min, t_max)`, and always `t > 0`.
 ///
-/// `direction` need not be normalized; `t` is measured in multiples of it.
+/// `direction` need not be normalized; `t` is measured in multiples of it. Rays made here start at
+/// `t_min = 0` (the intersection test keeps `t` conservatively above zero); a positive `t_min` is
+/// for callers that bring their own epsilon, such as the ray-set benchmark's files.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     /// Where the ray starts.
     pub origin: Vec3,
     /// Where it goes; any non-zero length.
     pub direction: Vec3,
+    /// Hits at `t < t_min` are ignored.
+    pub t_min: f32,
     /// Hits at `t >= t_max` are ignored.
     pub t_max: f32,
 }
@@ -29,13 +33,13 @@ impl Ray {
     /// An unbounded ray.
     #[inline]
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
-        Ray { origin, direction, t_max: f32::INFINITY }
+        Ray { origin, direction, t_min: 0.0, t_max: f32::INFINITY }
     }
 
     /// A ray limited to `t < t_max`.
     #[inline]
     pub fn segment(origin: Vec3, direction: Vec3, t_max: f32) -> Self {
-        Ray { origin, direction, t_max }
+        Ray { origin, direction, t_min: 0.0, t_max }
     }
 
     /// The point at parameter `t`.

@@ -67,32 +67,41 @@ pub struct TriangleHit {
 /// Triangles per [`TriangleBlock`]: the width of the batched pre-test.
 pub const LANES: usize = 8;
 
-/// Up to [`LANES`] triangles stored coordinate by coordinate, so that one ray can be tested
-/// against all of them with straight-line, vectorizable code ([`WatertightRay::block_candidates`]).
+/// Up to `N` triangles stored coordinate by coordinate, so that one ray can be tested against all
+/// of them with straight-line, vectorizable code ([`WatertightRay::block_candidates`]).
 /// Unused lanes hold NaN vertices, which are never hit.
 #[derive(Clone, Copy, Debug)]
-pub struct TriangleBlock {
+#[repr(C, align(16))]
+pub struct TriangleBlock<const N: usize = LANES> {
     /// `vertices[j][axis][lane]`: coordinate `axis` of vertex `j` of the triangle in `lane`.
-    vertices: [[[f32; LANES]; 3]; 3],
+    vertices: [[[f32; N]; 3]; 3],
 }
 
-impl TriangleBlock {
+impl<const N: usize> TriangleBlock<N> {
+    /// A block with every lane unused.
+    pub const EMPTY: Self = TriangleBlock { vertices: [[[f32::NAN; N]; 3]; 3] };
+
     /// Packs triangles, in order, into blocks; the last block is padded.
-    pub fn pack(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> Vec<TriangleBlock> {
+    pub fn pack(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> Vec<Self> {
         let mut blocks = Vec::new();
         for (i, triangle) in triangles.into_iter().enumerate() {
-            let lane = i % LANES;
+            let lane = i % N;
             if lane == 0 {
-                blocks.push(TriangleBlock { vertices: [[[f32::NAN; LANES]; 3]; 3] });
+                blocks.push(Self::EMPTY);
             }
-            let block = blocks.last_mut().expect("pushed above");
-            for (j, vertex) in triangle.iter().enumerate() {
-                for axis in 0..3 {
-                    block.vertices[j][axis][lane] = vertex[axis];
-                }
-            }
+            blocks.last_mut().expect("pushed above").set(lane, triangle);
         }
         blocks
+    }
+
+    /// Puts a triangle in `lane`.
+    #[inline]
+    pub fn set(&mut self, lane: usize, triangle: [Vec3; 3]) {
+        for (j, vertex) in triangle.iter().enumerate() {
+            for axis in 0..3 {
+                self.vertices[j][axis][lane] = vertex[axis];
+            }
+        }
     }
 
     /// The vertices of the triangle in `lane`.
@@ -101,6 +110,10 @@ impl TriangleBlock {
         self.vertices.map(|v| Vec3::new(v[0][lane], v[1][lane], v[2][lane]))
     }
 }
+
+/// Widens `t_max · det` by more than the relative rounding of that product and of
+/// `t = t_scaled · (1/det)` (a few units in the last place).
+const T_LIMIT_SLACK: f32 = 1.0 + 8.0 * f32::EPSILON;
 
 /// `px·qy − py·qx` in double precision, where the products are exact.
 #[inline(never)]
@@ -114,6 +127,7 @@ fn edge_function_f64(px: f32, py: f32, qx: f32, qy: f32) -> f32 {
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
     origin: Vec3,
+    t_min: f32,
     kx: usize,
     ky: usize,
     kz: usize,
@@ -145,6 +159,7 @@ impl WatertightRay {
         let shear_z = 1.0 / d[kz];
         WatertightRay {
             origin: ray.origin,
+            t_min: ray.t_min,
             kx,
             ky,
             kz,
@@ -155,7 +170,7 @@ impl WatertightRay {
     }
 
     /// Intersects the ray with triangle `(v0, v1, v2)`, counting hits on edges and vertices,
-    /// for `0 < t < t_max`. Both sides of the triangle are hit.
+    /// for `0 < t < t_max` and `t >= ray.t_min`. Both sides of the triangle are hit.
     #[inline]
     pub fn intersect(&self, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f32) -> Option<TriangleHit> {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
@@ -202,15 +217,20 @@ impl WatertightRay {
             return None; // Edge-on or degenerate triangle, or a NaN ray.
         }
 
-        // Scaled distance along the ray, compared against the range without dividing.
+        // Scaled distance along the ray, compared against the range without dividing. The
+        // comparison with `t_max` is widened past the rounding of `t_max · det` and of the division
+        // below, so that it only ever rejects hits that the exact `t >= t_max` test further down
+        // would reject too: then whether a hit counts depends on its own `t` alone, never on which
+        // triangle tightened `t_max` first (so every accelerator and every order agree).
         let az = self.shear_z * a[kz];
         let bz = self.shear_z * b[kz];
         let cz = self.shear_z * c[kz];
         let t_scaled = e0 * az + e1 * bz + e2 * cz;
-        if det < 0.0 && (t_scaled >= 0.0 || t_scaled <= t_max * det) {
+        let t_limit = t_max * det * T_LIMIT_SLACK;
+        if det < 0.0 && (t_scaled >= 0.0 || t_scaled <= t_limit) {
             return None;
         }
-        if det > 0.0 && (t_scaled <= 0.0 || t_scaled >= t_max * det) {
+        if det > 0.0 && (t_scaled <= 0.0 || t_scaled >= t_limit) {
             return None;
         }
 
@@ -237,7 +257,7 @@ impl WatertightRay {
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
         let delta_t =
             3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t {
+        if t <= delta_t || t < self.t_min {
             return None;
         }
 
@@ -255,17 +275,21 @@ impl WatertightRay {
     /// straight-line code over fixed-size arrays so that the compiler vectorizes it; `intersect`
     /// is its scalar twin, and the tests check that the two agree.
     #[inline]
-    pub fn block_candidates(&self, block: &TriangleBlock, t_max: f32) -> u32 {
+    pub fn block_candidates<const N: usize>(&self, block: &TriangleBlock<N>, t_max: f32) -> u32 {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         let (ox, oy, oz) = (self.origin[kx], self.origin[ky], self.origin[kz]);
         let (sx, sy, sz) = (self.shear_x, self.shear_y, self.shear_z);
-        // Permute the axes once per block, so that the lane loop indexes only by lane.
-        let [p0, p1, p2] = block.vertices.map(|v| [v[kx], v[ky], v[kz]]);
-        let mut pass = [false; LANES];
-        for lane in 0..LANES {
-            let (a_kx, a_ky, a_kz) = (p0[0][lane] - ox, p0[1][lane] - oy, p0[2][lane] - oz);
-            let (b_kx, b_ky, b_kz) = (p1[0][lane] - ox, p1[1][lane] - oy, p1[2][lane] - oz);
-            let (c_kx, c_ky, c_kz) = (p2[0][lane] - ox, p2[1][lane] - oy, p2[2][lane] - oz);
+        // Pick the permuted axes by reference once per block, so that the lane loop indexes only
+        // by lane.
+        let [p0, p1, p2] = &block.vertices;
+        let (p0x, p0y, p0z) = (&p0[kx], &p0[ky], &p0[kz]);
+        let (p1x, p1y, p1z) = (&p1[kx], &p1[ky], &p1[kz]);
+        let (p2x, p2y, p2z) = (&p2[kx], &p2[ky], &p2[kz]);
+        let mut pass = [false; N];
+        for lane in 0..N {
+            let (a_kx, a_ky, a_kz) = (p0x[lane] - ox, p0y[lane] - oy, p0z[lane] - oz);
+            let (b_kx, b_ky, b_kz) = (p1x[lane] - ox, p1y[lane] - oy, p1z[lane] - oz);
+            let (c_kx, c_ky, c_kz) = (p2x[lane] - ox, p2y[lane] - oy, p2z[lane] - oz);
             let (ax, ay) = (a_kx - sx * a_kz, a_ky - sy * a_kz);
             let (bx, by) = (b_kx - sx * b_kz, b_ky - sy * b_kz);
             let (cx, cy) = (c_kx - sx * c_kz, c_ky - sy * c_kz);
@@ -277,7 +301,7 @@ impl WatertightRay {
                 | ((e0 <= 0.0) & (e1 <= 0.0) & (e2 <= 0.0));
             let det = e0 + e1 + e2;
             let t_scaled = e0 * (sz * a_kz) + e1 * (sz * b_kz) + e2 * (sz * c_kz);
-            let t_limit = t_max * det;
+            let t_limit = t_max * det * T_LIMIT_SLACK;
             let in_range = ((det > 0.0) & (t_scaled > 0.0) & (t_scaled < t_limit))
                 | ((det < 0.0) & (t_scaled < 0.0) & (t_scaled > t_limit));
             pass[lane] = any_zero | (inside & in_range);

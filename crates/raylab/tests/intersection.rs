@@ -1,9 +1,26 @@
 //! The bugs students hit in the lab, as tests: holes along triangle diagonals, cracks between
-//! triangles, the first hit instead of the closest, and −0.0 direction components.
+//! triangles, the first hit instead of the closest, and −0.0 direction components. Every test runs
+//! on every accelerator: brute force, and the BVH with every build preset and instruction set.
 
 use glam::{Mat3, Vec3};
 use proptest::prelude::*;
+use raylab::bvh::{BuildSettings, Bvh, Isa};
 use raylab::{Accelerator, BruteForce, Ray, Triangle};
+
+/// Brute force, and the BVH with every build preset and every instruction set this CPU has.
+fn accelerators(triangles: &[Triangle]) -> Vec<(String, Box<dyn Accelerator>)> {
+    let vertices: Vec<[Vec3; 3]> = triangles.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
+    let mut all: Vec<(String, Box<dyn Accelerator>)> =
+        vec![("brute force".into(), Box::new(BruteForce::new(triangles)))];
+    for (preset, settings) in BuildSettings::PRESETS {
+        for isa in Isa::ALL {
+            if let Some(bvh) = Bvh::build(&vertices, &settings).with_isa(isa) {
+                all.push((format!("bvh {preset} {}", isa.name()), Box::new(bvh)));
+            }
+        }
+    }
+    all
+}
 
 fn triangle(v0: Vec3, v1: Vec3, v2: Vec3) -> Triangle {
     Triangle::new(v0, v1, v2, Vec3::ONE)
@@ -83,39 +100,37 @@ fn a_ray_through_the_shared_diagonal_of_two_triangles_hits() {
         Vec3::new(1.0, 1.0, 1.0),
         Vec3::new(-1.0, 1.0, 1.0),
     );
-    let accel = BruteForce::new(&[triangle(a, b, c), triangle(a, c, d)]);
     let camera = Vec3::new(0.0, 0.0, -3.0);
-    let mut misses = Vec::new();
-    for i in 1..10_000 {
-        // Points on the diagonal (most not representable), seen from the camera and from a
-        // few other origins. (Its ends are the quad's outer corners, which rays may miss.)
-        let s = i as f32 / 10_000.0;
-        let target = a.lerp(c, s);
-        for origin in [camera, Vec3::new(0.37, -0.21, -1.3), Vec3::new(-2.0, 1.5, 0.2)] {
-            if accel.closest_hit(&Ray::new(origin, target - origin)).is_none() {
-                misses.push((origin, target));
+    for (name, accel) in accelerators(&[triangle(a, b, c), triangle(a, c, d)]) {
+        let mut misses = Vec::new();
+        for i in 1..10_000 {
+            // Points on the diagonal (most not representable), seen from the camera and from a
+            // few other origins. (Its ends are the quad's outer corners, which rays may miss.)
+            let s = i as f32 / 10_000.0;
+            let target = a.lerp(c, s);
+            for origin in [camera, Vec3::new(0.37, -0.21, -1.3), Vec3::new(-2.0, 1.5, 0.2)] {
+                if accel.closest_hit(&Ray::new(origin, target - origin)).is_none() {
+                    misses.push((origin, target));
+                }
             }
         }
+        assert!(
+            misses.is_empty(),
+            "{name}: {} rays slipped through the diagonal, e.g. {:?}",
+            misses.len(),
+            misses[0]
+        );
     }
-    assert!(
-        misses.is_empty(),
-        "{} rays slipped through the diagonal, e.g. {:?}",
-        misses.len(),
-        misses[0]
-    );
 }
 
 #[test]
 fn no_cracks_in_a_finely_tessellated_quad() {
     let (triangles, vertices) = tessellated_quad(24);
-    let accel = BruteForce::new(&triangles);
     let origins = [
         awkward_frame(Vec3::new(0.5, 0.5, -2.0)),
         awkward_frame(Vec3::new(-0.3, 1.2, 0.7)),
         awkward_frame(Vec3::new(0.45, 0.55, -1e-3)),
     ];
-    let mut rays = 0;
-    let mut misses = 0;
     // A dense grid of targets that do not line up with the tessellation...
     let grid = 300;
     let mut targets: Vec<Vec3> = (1..grid)
@@ -142,37 +157,42 @@ fn no_cracks_in_a_finely_tessellated_quad() {
             * (p - Vec3::new(0.1, -3.3, 7.7));
         local.x > 1e-3 && local.y > 1e-3 && local.x < 1.0 - 1e-3 && local.y < 1.0 - 1e-3
     };
-    for origin in origins {
-        for target in targets.iter().filter(|p| inside(**p)) {
-            rays += 1;
-            if accel.closest_hit(&Ray::new(origin, *target - origin)).is_none() {
-                misses += 1;
+    let targets: Vec<Vec3> = targets.into_iter().filter(|p| inside(*p)).collect();
+    for (name, accel) in accelerators(&triangles) {
+        let (mut rays, mut misses) = (0, 0);
+        for origin in origins {
+            for target in &targets {
+                rays += 1;
+                if accel.closest_hit(&Ray::new(origin, *target - origin)).is_none() {
+                    misses += 1;
+                }
+                assert!(accel.occluded(&Ray::new(origin, *target - origin)), "{name}");
             }
-            assert!(accel.occluded(&Ray::new(origin, *target - origin)));
         }
+        assert!(rays > 200_000, "{rays}");
+        assert_eq!(misses, 0, "{name}: {misses} of {rays} rays went through cracks");
     }
-    assert!(rays > 200_000, "{rays}");
-    assert_eq!(misses, 0, "{misses} of {rays} rays went through cracks");
 }
 
 #[test]
 fn no_ray_escapes_a_closed_mesh() {
     let (triangles, vertices) = closed_cube(12);
-    let accel = BruteForce::new(&triangles);
-    let mut escaped = 0;
-    let mut rays = 0;
-    for origin in [Vec3::ZERO, Vec3::new(0.3, -0.6, 0.2), Vec3::new(-0.99, 0.99, 0.5)] {
-        let origin = awkward_frame(origin);
-        let directions = sphere_directions(20_000).chain(vertices.iter().map(|v| *v - origin));
-        for direction in directions {
-            rays += 1;
-            let ray = Ray::new(origin, direction);
-            if accel.closest_hit(&ray).is_none() || !accel.occluded(&ray) {
-                escaped += 1;
+    for (name, accel) in accelerators(&triangles) {
+        let mut escaped = 0;
+        let mut rays = 0;
+        for origin in [Vec3::ZERO, Vec3::new(0.3, -0.6, 0.2), Vec3::new(-0.99, 0.99, 0.5)] {
+            let origin = awkward_frame(origin);
+            let directions = sphere_directions(20_000).chain(vertices.iter().map(|v| *v - origin));
+            for direction in directions {
+                rays += 1;
+                let ray = Ray::new(origin, direction);
+                if accel.closest_hit(&ray).is_none() || !accel.occluded(&ray) {
+                    escaped += 1;
+                }
             }
         }
+        assert_eq!(escaped, 0, "{name}: {escaped} of {rays} rays escaped the closed cube");
     }
-    assert_eq!(escaped, 0, "{escaped} of {rays} rays escaped the closed cube");
 }
 
 #[test]
@@ -187,16 +207,20 @@ fn the_nearer_of_two_overlapping_triangles_wins_in_either_order() {
         triangle(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 2.0), Vec3::new(0.0, 1.0, 1.0));
     let ray = Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z);
     for (order, nearest) in [([near, far], 0), ([far, near], 1)] {
-        let hit = BruteForce::new(&order).closest_hit(&ray).unwrap();
-        assert_eq!(hit.triangle, nearest);
-        assert!((hit.t - 2.0).abs() < 1e-6);
+        for (name, accel) in accelerators(&order) {
+            let hit = accel.closest_hit(&ray).unwrap();
+            assert_eq!(hit.triangle, nearest, "{name}");
+            assert!((hit.t - 2.0).abs() < 1e-6);
+        }
     }
     for (origin_x, expect_tilted) in [(-0.5f32, true), (0.5, false)] {
         let ray = Ray::new(Vec3::new(origin_x, -0.5, -1.0), Vec3::Z);
         for scene in [[near, tilted], [tilted, near]] {
-            let hit = BruteForce::new(&scene).closest_hit(&ray).unwrap();
-            let hit_tilted = scene[hit.triangle as usize] == tilted;
-            assert_eq!(hit_tilted, expect_tilted, "ray at x = {origin_x}");
+            for (name, accel) in accelerators(&scene) {
+                let hit = accel.closest_hit(&ray).unwrap();
+                let hit_tilted = scene[hit.triangle as usize] == tilted;
+                assert_eq!(hit_tilted, expect_tilted, "{name}: ray at x = {origin_x}");
+            }
         }
     }
 }
@@ -205,9 +229,11 @@ fn the_nearer_of_two_overlapping_triangles_wins_in_either_order() {
 fn equal_distances_go_to_the_lowest_index() {
     let tri =
         triangle(Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(0.0, 1.0, 1.0));
-    let accel = BruteForce::new(&[tri, tri, tri]);
-    let hit = accel.closest_hit(&Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z)).unwrap();
-    assert_eq!(hit.triangle, 0);
+    // Many copies, so that the BVH spreads them over several leaves and nodes.
+    for (name, accel) in accelerators(&[tri; 100]) {
+        let hit = accel.closest_hit(&Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z)).unwrap();
+        assert_eq!(hit.triangle, 0, "{name}");
+    }
 }
 
 #[test]
@@ -216,15 +242,23 @@ fn negative_zero_direction_components_hit() {
         triangle(Vec3::new(-1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, 1.0)),
         triangle(Vec3::new(-1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, 1.0), Vec3::new(-1.0, 1.0, 1.0)),
     ];
-    let accel = BruteForce::new(&floor);
-    for direction in
-        [Vec3::new(-0.0, 1.0, -0.0), Vec3::new(0.0, 1.0, -0.0), Vec3::new(-0.0, 1.0, 0.0)]
-    {
-        for origin in [Vec3::new(0.25, 0.0, 0.25), Vec3::ZERO, Vec3::new(-0.5, -7.0, 0.5)] {
-            let ray = Ray::new(origin, direction);
-            let hit = accel.closest_hit(&ray);
-            assert!(hit.is_some(), "{origin} {direction:?}");
-            assert!(accel.occluded(&ray));
+    for (name, accel) in accelerators(&floor) {
+        for direction in
+            [Vec3::new(-0.0, 1.0, -0.0), Vec3::new(0.0, 1.0, -0.0), Vec3::new(-0.0, 1.0, 0.0)]
+        {
+            // Also from the floor's edges and corner, where the ray runs in a box's face plane.
+            for origin in [
+                Vec3::new(0.25, 0.0, 0.25),
+                Vec3::ZERO,
+                Vec3::new(-0.5, -7.0, 0.5),
+                Vec3::new(-1.0, 0.0, 0.3),
+                Vec3::new(1.0, 0.0, 1.0),
+            ] {
+                let ray = Ray::new(origin, direction);
+                let hit = accel.closest_hit(&ray);
+                assert!(hit.is_some(), "{name}: {origin} {direction:?}");
+                assert!(accel.occluded(&ray));
+            }
         }
     }
 }
@@ -233,12 +267,19 @@ fn negative_zero_direction_components_hit() {
 fn closest_hit_respects_t_max_and_occluded_agrees() {
     let wall =
         triangle(Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(0.0, 1.0, 1.0));
-    let accel = BruteForce::new(&[wall]);
     let origin = Vec3::new(0.0, 0.0, -1.0);
-    assert!(accel.closest_hit(&Ray::segment(origin, Vec3::Z, 1.99)).is_none());
-    assert!(!accel.occluded(&Ray::segment(origin, Vec3::Z, 1.99)));
-    assert!(accel.closest_hit(&Ray::segment(origin, Vec3::Z, 2.01)).is_some());
-    assert!(accel.occluded(&Ray::segment(origin, Vec3::Z, 2.01)));
+    for (name, accel) in accelerators(&[wall]) {
+        assert!(accel.closest_hit(&Ray::segment(origin, Vec3::Z, 1.99)).is_none(), "{name}");
+        assert!(!accel.occluded(&Ray::segment(origin, Vec3::Z, 1.99)));
+        assert!(accel.closest_hit(&Ray::segment(origin, Vec3::Z, 2.01)).is_some());
+        assert!(accel.occluded(&Ray::segment(origin, Vec3::Z, 2.01)));
+        // t_min excludes nearer hits.
+        let mut ray = Ray::new(origin, Vec3::Z);
+        ray.t_min = 2.5;
+        assert!(accel.closest_hit(&ray).is_none() && !accel.occluded(&ray), "{name}");
+        ray.t_min = 1.5;
+        assert_eq!(accel.closest_hit(&ray).map(|h| h.t), Some(2.0), "{name}");
+    }
 }
 
 fn finite_vec3(range: f32) -> impl Strategy<Value = Vec3> {
@@ -331,11 +372,12 @@ proptest! {
         };
         prop_assume!(target != origin);
         let ray = Ray::segment(origin, target - origin, t_max);
-        let accel = BruteForce::new(&triangles);
         let expected = scalar_closest_hit(&triangles, &ray);
-        prop_assert_eq!(accel.closest_hit(&ray), expected);
-        prop_assert_eq!(accel.occluded(&ray), expected.is_some());
-        prop_assert_eq!(accel.triangles().count(), triangles.len());
+        for (name, accel) in accelerators(&triangles) {
+            prop_assert_eq!(accel.closest_hit(&ray), expected, "{}", name);
+            prop_assert_eq!(accel.occluded(&ray), expected.is_some(), "{}", name);
+        }
+        prop_assert_eq!(BruteForce::new(&triangles).triangles().count(), triangles.len());
     }
 }
 
@@ -356,13 +398,42 @@ proptest! {
         let target = if aim % 2 == 0 { v0 } else { v0.lerp(v1, s) };
         prop_assume!(target != origin);
         let ray = raylab::triangle::WatertightRay::new(&Ray::new(origin, target - origin));
-        let block = &raylab::triangle::TriangleBlock::pack(triangles.iter().copied())[0];
+        let block = &raylab::triangle::TriangleBlock::<8>::pack(triangles.iter().copied())[0];
         for t_max in [f32::INFINITY, 2.0, 1.0, 0.5] {
             let mask = ray.block_candidates(block, t_max);
             for (lane, [a, b, c]) in triangles.iter().enumerate() {
                 if ray.intersect(*a, *b, *c, t_max).is_some() {
                     prop_assert!(mask & (1 << lane) != 0, "lane {} dropped at t_max {}", lane, t_max);
                 }
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// Whether a hit counts depends on its own `t` alone: with `t_max` just above, at, or just
+    /// below the hit's `t`, the test accepts exactly when `t < t_max`. (Otherwise the closest hit
+    /// would depend on which triangle tightened `t_max` first, and accelerators could disagree.)
+    #[test]
+    fn t_max_decides_on_t_alone(
+        v0 in finite_vec3(300.0), v1 in finite_vec3(300.0), v2 in finite_vec3(300.0),
+        origin in finite_vec3(300.0), s in 0.0f32..1.0, r in 0.0f32..1.0,
+    ) {
+        let target = v0.lerp(v1, s).lerp(v2, r);
+        prop_assume!(target != origin);
+        let ray = raylab::triangle::WatertightRay::new(&Ray::new(origin, target - origin));
+        let Some(hit) = ray.intersect(v0, v1, v2, f32::INFINITY) else { return Ok(()) };
+        let block = &raylab::triangle::TriangleBlock::<4>::pack([[v0, v1, v2]])[0];
+        let up = raylab::float::next_float_up(hit.t);
+        let down = raylab::float::next_float_down(hit.t);
+        for t_max in [up, raylab::float::next_float_up(up), hit.t, down] {
+            let accepted = ray.intersect(v0, v1, v2, t_max);
+            prop_assert_eq!(accepted.is_some(), hit.t < t_max, "t {} t_max {}", hit.t, t_max);
+            if let Some(h) = accepted {
+                prop_assert_eq!(h, hit);
+                prop_assert!(ray.block_candidates(block, t_max) & 1 == 1);
             }
         }
     }

@@ -1,0 +1,192 @@
+//! Axis-aligned bounding boxes and the robust ray/box slab test.
+
+use glam::Vec3;
+
+use crate::float::gamma;
+use crate::ray::Ray;
+
+/// An axis-aligned box `[min, max]`. The empty box has `min = +∞`, `max = −∞`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    /// Lowest corner.
+    pub min: Vec3,
+    /// Highest corner.
+    pub max: Vec3,
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Bounds::EMPTY
+    }
+}
+
+impl Bounds {
+    /// Contains nothing; the identity of [`union`](Self::union).
+    pub const EMPTY: Bounds = Bounds { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
+
+    /// The box around a triangle.
+    #[inline]
+    pub fn of_triangle([a, b, c]: [Vec3; 3]) -> Bounds {
+        Bounds { min: a.min(b).min(c), max: a.max(b).max(c) }
+    }
+
+    /// The smallest box containing both.
+    #[inline]
+    pub fn union(self, other: Bounds) -> Bounds {
+        Bounds { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// The smallest box containing this one and `p`.
+    #[inline]
+    pub fn grow(self, p: Vec3) -> Bounds {
+        Bounds { min: self.min.min(p), max: self.max.max(p) }
+    }
+
+    /// Whether the box contains nothing.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    /// The centre.
+    #[inline]
+    pub fn centroid(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    /// Half the surface area (the SAH only ever compares areas); zero for an empty box.
+    #[inline]
+    pub fn half_area(&self) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let d = self.max - self.min;
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
+    /// The axis along which the box is longest (ties to the lowest axis).
+    #[inline]
+    pub fn longest_axis(&self) -> usize {
+        let d = self.max - self.min;
+        if d.x >= d.y && d.x >= d.z {
+            0
+        } else if d.y >= d.z {
+            1
+        } else {
+            2
+        }
+    }
+}
+
+/// The per-ray part of the slab test, computed once per ray.
+///
+/// The test is conservative, so a bounding box never loses a hit on a triangle inside it (a BVH
+/// must not open the cracks the watertight triangle test closes):
+/// - the far distance is scaled up by `1 + 2γ₃`, which covers the rounding of `(b − o)·(1/d)` in
+///   both distances (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013);
+/// - a direction component of ±0 gives `1/d = ±∞`, and a plane through the origin then gives
+///   `0·∞ = NaN`. That axis must not constrain the ray (it runs inside the plane), so every
+///   `min`/`max` below ignores a NaN operand, as IEEE `minNum`/`maxNum` and x86's `minps`/`maxps`
+///   (NaN in the first operand) do.
+#[derive(Clone, Copy, Debug)]
+pub struct RayBoxTest {
+    /// The ray's origin.
+    pub origin: Vec3,
+    /// `1 / direction`, per axis (±∞ for a zero component).
+    pub inv_direction: Vec3,
+    /// Per axis, whether the direction is negative (then the box's `max` plane is met first).
+    pub negative: [bool; 3],
+    /// The ray's `t_min`, clamped to be at least 0.
+    pub t_min: f32,
+}
+
+/// The factor on far distances that makes the slab test conservative.
+pub const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
+
+impl RayBoxTest {
+    /// Prepares `ray`.
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.direction;
+        RayBoxTest {
+            origin: ray.origin,
+            inv_direction: d.recip(),
+            negative: [d.x.is_sign_negative(), d.y.is_sign_negative(), d.z.is_sign_negative()],
+            t_min: ray.t_min.max(0.0),
+        }
+    }
+
+    /// The entry distance of the ray into `bounds` if it meets the box within `[t_min, t_max]`.
+    ///
+    /// This is the scalar twin of the SIMD node kernels: they compute the same values in the same
+    /// order of operations.
+    #[inline]
+    pub fn enter(&self, bounds: &Bounds, t_max: f32) -> Option<f32> {
+        let mut near = self.t_min;
+        let mut far = t_max;
+        for axis in 0..3 {
+            let (near_plane, far_plane) = if self.negative[axis] {
+                (bounds.max[axis], bounds.min[axis])
+            } else {
+                (bounds.min[axis], bounds.max[axis])
+            };
+            let inv = self.inv_direction[axis];
+            let o = self.origin[axis];
+            // `f32::max`/`min` return the other operand when one is NaN.
+            near = ((near_plane - o) * inv).max(near);
+            far = (((far_plane - o) * inv) * FAR_SCALE).min(far);
+        }
+        (near <= far).then_some(near)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box() -> Bounds {
+        Bounds { min: Vec3::ZERO, max: Vec3::ONE }
+    }
+
+    #[test]
+    fn enters_at_the_near_face_from_any_direction() {
+        let b = unit_box();
+        let from_left = RayBoxTest::new(&Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X));
+        assert_eq!(from_left.enter(&b, f32::INFINITY), Some(1.0));
+        let from_right = RayBoxTest::new(&Ray::new(Vec3::new(3.0, 0.5, 0.5), -Vec3::X));
+        assert_eq!(from_right.enter(&b, f32::INFINITY), Some(2.0));
+        assert_eq!(from_right.enter(&b, 1.5), None);
+        let inside = RayBoxTest::new(&Ray::new(Vec3::splat(0.5), Vec3::Y));
+        assert_eq!(inside.enter(&b, f32::INFINITY), Some(0.0));
+        let behind = RayBoxTest::new(&Ray::new(Vec3::new(2.0, 0.5, 0.5), Vec3::X));
+        assert_eq!(behind.enter(&b, f32::INFINITY), None);
+    }
+
+    #[test]
+    fn axis_parallel_rays_in_a_face_plane_hit_with_either_signed_zero() {
+        let b = unit_box();
+        // The ray runs inside the plane x = 0, which is the box's face: 0·∞ = NaN must not reject.
+        for dx in [0.0, -0.0] {
+            for dy in [0.0, -0.0] {
+                let ray = Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::new(dx, dy, 1.0));
+                assert_eq!(RayBoxTest::new(&ray).enter(&b, f32::INFINITY), Some(1.0), "{dx} {dy}");
+                let outside = Ray::new(Vec3::new(-1e-30, 0.5, -1.0), Vec3::new(dx, dy, 1.0));
+                assert_eq!(RayBoxTest::new(&outside).enter(&b, f32::INFINITY), None);
+            }
+        }
+    }
+
+    #[test]
+    fn flat_boxes_are_hit() {
+        let flat = Bounds { min: Vec3::new(0.0, 0.0, 1.0), max: Vec3::new(1.0, 1.0, 1.0) };
+        let ray = Ray::new(Vec3::new(0.5, 0.5, 0.0), Vec3::Z);
+        assert_eq!(RayBoxTest::new(&ray).enter(&flat, f32::INFINITY), Some(1.0));
+    }
+
+    #[test]
+    fn the_empty_box_is_never_hit() {
+        let ray = Ray::new(Vec3::ZERO, Vec3::ONE);
+        assert_eq!(RayBoxTest::new(&ray).enter(&Bounds::EMPTY, f32::INFINITY), None);
+        assert_eq!(Bounds::EMPTY.half_area(), 0.0);
+    }
+}

@@ -1,0 +1,175 @@
+//! Ray/box tests of one ray against the eight children of a [`WideNode`].
+//!
+//! Each kernel computes, for every child, the same values as [`RayBoxTest::enter`] (the scalar
+//! twin) in the same order of operations: per axis `tn = (near plane − o)·(1/d)` folded into
+//! `near = max(tn, near)`, and `tf = ((far plane − o)·(1/d))·(1 + 2γ₃)` into `far = min(tf, far)`,
+//! then `near <= far`. x86's `maxps`/`minps` return their second operand when the first is NaN,
+//! which is how the scalar `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face
+//! plane): the tests in `bvh/mod.rs` check that all kernels agree bit for bit.
+
+use super::bounds::{FAR_SCALE, RayBoxTest};
+use super::wide::{WIDTH, WideNode};
+
+/// Which children a ray enters, and where.
+pub(crate) trait NodeKernel {
+    /// The ray, prepared for this kernel once per ray.
+    type Ray: Copy;
+
+    /// Prepares a ray.
+    fn prepare(ray: &RayBoxTest) -> Self::Ray;
+
+    /// The mask of children entered within `[t_min, t_limit]` (bit `k` for child `k`), and each
+    /// child's entry distance (meaningful only where the bit is set).
+    ///
+    /// # Safety
+    /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
+    unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// Plane rows of the near and far planes per axis: the box's min for a positive direction.
+#[inline(always)]
+fn plane_rows(ray: &RayBoxTest) -> ([usize; 3], [usize; 3]) {
+    let near = [0, 1, 2].map(|axis| if ray.negative[axis] { 3 + axis } else { axis });
+    let far = [0, 1, 2].map(|axis| if ray.negative[axis] { axis } else { 3 + axis });
+    (near, far)
+}
+
+/// The scalar twin: [`RayBoxTest::enter`] per child.
+pub(crate) struct Scalar;
+
+impl NodeKernel for Scalar {
+    type Ray = RayBoxTest;
+
+    #[inline(always)]
+    fn prepare(ray: &RayBoxTest) -> RayBoxTest {
+        *ray
+    }
+
+    #[inline(always)]
+    unsafe fn enter(node: &WideNode, ray: &RayBoxTest, t_limit: f32) -> (u32, [f32; WIDTH]) {
+        let mut mask = 0;
+        let mut near = [0.0; WIDTH];
+        for (k, slot) in near.iter_mut().enumerate() {
+            if let Some(t) = ray.enter(&node.bounds(k), t_limit) {
+                mask |= 1 << k;
+                *slot = t;
+            }
+        }
+        (mask, near)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::{Avx2, Sse};
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::*;
+
+    use super::*;
+
+    /// Eight children with two 4-wide SSE halves: every x86-64 CPU has SSE2.
+    pub(crate) struct Sse;
+
+    /// A ray broadcast into vector registers.
+    #[derive(Clone, Copy)]
+    pub(crate) struct Broadcast<V> {
+        origin: [V; 3],
+        inv: [V; 3],
+        t_min: V,
+        near_rows: [usize; 3],
+        far_rows: [usize; 3],
+    }
+
+    impl NodeKernel for Sse {
+        type Ray = Broadcast<__m128>;
+
+        #[inline(always)]
+        fn prepare(ray: &RayBoxTest) -> Self::Ray {
+            let (near_rows, far_rows) = plane_rows(ray);
+            // SAFETY: SSE2 is part of x86-64.
+            unsafe {
+                Broadcast {
+                    origin: [0, 1, 2].map(|a| _mm_set1_ps(ray.origin[a])),
+                    inv: [0, 1, 2].map(|a| _mm_set1_ps(ray.inv_direction[a])),
+                    t_min: _mm_set1_ps(ray.t_min),
+                    near_rows,
+                    far_rows,
+                }
+            }
+        }
+
+        #[inline(always)]
+        unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
+            // SAFETY: SSE2 is part of x86-64; every load reads 4 floats inside a row of 8 of
+            // `node`, which is 32-byte aligned, so offsets 0 and 4 are 16-byte aligned.
+            unsafe {
+                let scale = _mm_set1_ps(FAR_SCALE);
+                let limit = _mm_set1_ps(t_limit);
+                let mut out = [0.0f32; WIDTH];
+                let mut mask = 0u32;
+                for half in 0..2 {
+                    let mut near = ray.t_min;
+                    let mut far = limit;
+                    for axis in 0..3 {
+                        let np = _mm_load_ps(node.planes[ray.near_rows[axis]][4 * half..].as_ptr());
+                        let fp = _mm_load_ps(node.planes[ray.far_rows[axis]][4 * half..].as_ptr());
+                        let tn = _mm_mul_ps(_mm_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
+                        near = _mm_max_ps(tn, near);
+                        let tf = _mm_mul_ps(_mm_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
+                        far = _mm_min_ps(_mm_mul_ps(tf, scale), far);
+                    }
+                    let hit = _mm_cmple_ps(near, far);
+                    mask |= (_mm_movemask_ps(hit) as u32) << (4 * half);
+                    _mm_storeu_ps(out[4 * half..].as_mut_ptr(), near);
+                }
+                (mask, out)
+            }
+        }
+    }
+
+    /// All eight children in one AVX2 register.
+    pub(crate) struct Avx2;
+
+    impl NodeKernel for Avx2 {
+        type Ray = Broadcast<__m256>;
+
+        #[inline(always)]
+        fn prepare(ray: &RayBoxTest) -> Self::Ray {
+            let (near_rows, far_rows) = plane_rows(ray);
+            // SAFETY: only called from traversal compiled with AVX2 enabled, after detection.
+            unsafe {
+                Broadcast {
+                    origin: [0, 1, 2].map(|a| _mm256_set1_ps(ray.origin[a])),
+                    inv: [0, 1, 2].map(|a| _mm256_set1_ps(ray.inv_direction[a])),
+                    t_min: _mm256_set1_ps(ray.t_min),
+                    near_rows,
+                    far_rows,
+                }
+            }
+        }
+
+        #[inline(always)]
+        unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
+            // SAFETY: the caller checked AVX2 support; every load reads one 32-byte aligned row
+            // of 8 floats of `node`.
+            unsafe {
+                let scale = _mm256_set1_ps(FAR_SCALE);
+                let mut near = ray.t_min;
+                let mut far = _mm256_set1_ps(t_limit);
+                for axis in 0..3 {
+                    let np = _mm256_load_ps(node.planes[ray.near_rows[axis]].as_ptr());
+                    let fp = _mm256_load_ps(node.planes[ray.far_rows[axis]].as_ptr());
+                    let tn = _mm256_mul_ps(_mm256_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
+                    near = _mm256_max_ps(tn, near);
+                    let tf = _mm256_mul_ps(_mm256_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
+                    far = _mm256_min_ps(_mm256_mul_ps(tf, scale), far);
+                }
+                let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
+                let mut out = [0.0f32; WIDTH];
+                _mm256_storeu_ps(out.as_mut_ptr(), near);
+                (_mm256_movemask_ps(hit) as u32, out)
+            }
+        }
+    }
+}

@@ -1,0 +1,313 @@
+//! A bounding volume hierarchy: ray queries in logarithmic time.
+//!
+//! [`Bvh::build`] makes a binary tree with the binned surface area heuristic (`build`), in
+//! parallel on the current rayon pool, then collapses it into an 8-wide tree (`wide`) whose
+//! nodes test a ray against eight boxes at once with SIMD (`kernels`), and whose leaves hold
+//! triangles four at a time. Traversal (`traverse`) visits the nearest child first for the closest
+//! hit and stops at the first hit for occlusion.
+//!
+//! The instruction set is picked once, at build time, from what the CPU supports: AVX-512 or AVX2
+//! where present, SSE2 on every other x86-64, portable scalar code elsewhere
+//! ([`Isa::detect`]). Every kernel has a scalar twin, and the tests check that all of them give
+//! the same answers, bit for bit.
+//!
+//! Answers never depend on the tree: the slab test is conservative (a box never loses a hit inside
+//! it), the triangle test is the same watertight test as [`BruteForce`](crate::BruteForce), and
+//! hits at exactly equal `t` go to the lowest triangle index. So every build setting and every
+//! instruction set gives the same pixels, only at different speeds.
+//!
+//! ```
+//! use raylab::bvh::{BuildSettings, Bvh};
+//! use raylab::{Accelerator, Ray, Scene};
+//! use glam::Vec3;
+//!
+//! let scene = Scene::built_in("cornell")?;
+//! let bvh = Bvh::new(&scene.triangles);
+//! let hit = bvh.closest_hit(&Ray::new(Vec3::new(0.0, 0.0, -3.0), Vec3::Z)).expect("a wall");
+//! assert!(hit.t > 3.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod bounds;
+mod build;
+mod kernels;
+mod traverse;
+mod wide;
+
+use glam::Vec3;
+
+pub use bounds::{Bounds, RayBoxTest};
+
+use crate::accel::{Accelerator, Hit};
+use crate::ray::Ray;
+use crate::triangle::{Triangle, TriangleBlock};
+use wide::WideBvh;
+
+/// How a BVH is built: a trade of build time for tracing speed. Never changes the answers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildSettings {
+    /// Bins per axis for the SAH sweep (2 to 256): more bins find better splits, slower.
+    pub bins: usize,
+    /// The most triangles in a leaf (1 to 64). Leaves are tested four triangles at a time.
+    pub max_leaf_size: usize,
+    /// Cost of entering a node, relative to `block_cost`.
+    pub traversal_cost: f32,
+    /// Cost of testing a block of four triangles.
+    pub block_cost: f32,
+}
+
+impl BuildSettings {
+    /// Quickest to build: 8 bins.
+    pub const FAST: BuildSettings =
+        BuildSettings { bins: 8, max_leaf_size: 8, traversal_cost: 1.0, block_cost: 1.0 };
+    /// The default: 16 bins, leaves of up to 8 triangles.
+    pub const MEDIUM: BuildSettings =
+        BuildSettings { bins: 16, max_leaf_size: 8, traversal_cost: 1.0, block_cost: 1.0 };
+    /// Best trees: 32 bins.
+    pub const HIGH: BuildSettings =
+        BuildSettings { bins: 32, max_leaf_size: 8, traversal_cost: 1.0, block_cost: 1.0 };
+    /// Every preset with its name.
+    pub const PRESETS: [(&'static str, BuildSettings); 3] =
+        [("fast", Self::FAST), ("medium", Self::MEDIUM), ("high", Self::HIGH)];
+
+    /// The settings with every field clamped to its valid range.
+    fn clamped(&self) -> BuildSettings {
+        BuildSettings {
+            bins: self.bins.clamp(2, 256),
+            max_leaf_size: self.max_leaf_size.clamp(1, 4 * wide::MAX_LEAF_BLOCKS),
+            traversal_cost: if self.traversal_cost.is_finite() {
+                self.traversal_cost.max(0.0)
+            } else {
+                1.0
+            },
+            block_cost: if self.block_cost > 0.0 && self.block_cost.is_finite() {
+                self.block_cost
+            } else {
+                1.0
+            },
+        }
+    }
+}
+
+impl Default for BuildSettings {
+    fn default() -> Self {
+        Self::MEDIUM
+    }
+}
+
+/// The instruction set of the node kernels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Isa {
+    /// Portable code, one box at a time: the reference.
+    Scalar,
+    /// SSE2: two groups of four boxes (every x86-64 CPU).
+    Sse2,
+    /// AVX2: eight boxes at once.
+    Avx2,
+    /// AVX-512 (F and VL): the AVX2 node kernel, with the rest of traversal compiled for AVX-512.
+    Avx512,
+}
+
+impl Isa {
+    /// The best instruction set this CPU supports.
+    pub fn detect() -> Isa {
+        Isa::ALL.into_iter().rev().find(|isa| isa.is_supported()).unwrap_or(Isa::Scalar)
+    }
+
+    /// Every instruction set, from the most portable.
+    pub const ALL: [Isa; 4] = [Isa::Scalar, Isa::Sse2, Isa::Avx2, Isa::Avx512];
+
+    /// Whether this CPU can run it.
+    pub fn is_supported(self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            match self {
+                Isa::Scalar | Isa::Sse2 => true,
+                Isa::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+                Isa::Avx512 => {
+                    std::arch::is_x86_feature_detected!("avx2")
+                        && std::arch::is_x86_feature_detected!("avx512f")
+                        && std::arch::is_x86_feature_detected!("avx512vl")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            self == Isa::Scalar
+        }
+    }
+
+    /// A short name: `scalar`, `sse2`, `avx2`, `avx512`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Isa::Scalar => "scalar",
+            Isa::Sse2 => "sse2",
+            Isa::Avx2 => "avx2",
+            Isa::Avx512 => "avx512",
+        }
+    }
+}
+
+/// Sizes of a built BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BvhStats {
+    /// Triangles given to the build.
+    pub triangles: usize,
+    /// Triangles in the tree: those with zero area or a non-finite vertex can never be hit and
+    /// are left out.
+    pub indexed_triangles: usize,
+    /// Wide nodes.
+    pub nodes: usize,
+    /// Leaf blocks of four triangles.
+    pub blocks: usize,
+}
+
+impl BvhStats {
+    /// Bytes of the BVH: nodes, the leaves' copies of the triangles, and their indices.
+    pub fn bytes(&self) -> usize {
+        self.nodes * size_of::<wide::WideNode>()
+            + self.blocks * (size_of::<TriangleBlock<{ build::BLOCK }>>() + 4 * build::BLOCK)
+    }
+}
+
+/// An 8-wide BVH over triangles; an [`Accelerator`].
+pub struct Bvh {
+    wide: WideBvh,
+    isa: Isa,
+    stats: BvhStats,
+}
+
+impl std::fmt::Debug for Bvh {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Bvh").field("isa", &self.isa).field("stats", &self.stats).finish()
+    }
+}
+
+impl Bvh {
+    /// Builds with the default settings over a scene's triangles.
+    pub fn new(triangles: &[Triangle]) -> Bvh {
+        let vertices: Vec<[Vec3; 3]> = triangles.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
+        Bvh::build(&vertices, &BuildSettings::default())
+    }
+
+    /// Builds over triangles given by their vertices; hits report indices into `triangles`.
+    /// Runs on the current rayon pool.
+    pub fn build(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {
+        let settings = settings.clamped();
+        let prims: Vec<Bounds> = triangles.iter().map(|&t| Bounds::of_triangle(t)).collect();
+        let indices: Vec<u32> = (0..triangles.len() as u32)
+            .filter(|&i| {
+                let [a, b, c] = triangles[i as usize];
+                a.is_finite()
+                    && b.is_finite()
+                    && c.is_finite()
+                    && (c - a).cross(b - a) != Vec3::ZERO
+            })
+            .collect();
+        let indexed_triangles = indices.len();
+        let binary = build::build(&prims, indices, &settings);
+        let wide = wide::collapse(&binary, |i| triangles[i as usize], |i| i);
+        let stats = BvhStats {
+            triangles: triangles.len(),
+            indexed_triangles,
+            nodes: wide.nodes.len(),
+            blocks: wide.blocks.len(),
+        };
+        Bvh { wide, isa: Isa::detect(), stats }
+    }
+
+    /// The same tree traversed with another instruction set, or `None` if this CPU lacks it.
+    pub fn with_isa(mut self, isa: Isa) -> Option<Bvh> {
+        isa.is_supported().then(|| {
+            self.isa = isa;
+            self
+        })
+    }
+
+    /// The instruction set in use.
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    /// Sizes of the tree.
+    pub fn stats(&self) -> BvhStats {
+        self.stats
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod entry {
+    //! One copy of each traversal per instruction set, compiled with that set enabled.
+    use super::kernels::{Avx2, Sse};
+    use super::traverse;
+    use super::wide::WideBvh;
+    use crate::accel::Hit;
+    use crate::ray::Ray;
+
+    pub(super) fn closest_hit_sse2(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe { traverse::closest_hit::<Sse>(bvh, ray) }
+    }
+
+    pub(super) fn occluded_sse2(bvh: &WideBvh, ray: &Ray) -> bool {
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe { traverse::occluded::<Sse>(bvh, ray) }
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn closest_hit_avx2(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+        // SAFETY: this function's caller checked AVX2 support.
+        unsafe { traverse::closest_hit::<Avx2>(bvh, ray) }
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn occluded_avx2(bvh: &WideBvh, ray: &Ray) -> bool {
+        // SAFETY: this function's caller checked AVX2 support.
+        unsafe { traverse::occluded::<Avx2>(bvh, ray) }
+    }
+
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    pub(super) unsafe fn closest_hit_avx512(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
+        unsafe { traverse::closest_hit::<Avx2>(bvh, ray) }
+    }
+
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    pub(super) unsafe fn occluded_avx512(bvh: &WideBvh, ray: &Ray) -> bool {
+        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
+        unsafe { traverse::occluded::<Avx2>(bvh, ray) }
+    }
+}
+
+impl Accelerator for Bvh {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        match self.isa {
+            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { entry::closest_hit_avx512(&self.wide, ray) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { entry::closest_hit_avx2(&self.wide, ray) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => entry::closest_hit_sse2(&self.wide, ray),
+            // SAFETY: the scalar kernel needs no special instructions.
+            _ => unsafe { traverse::closest_hit::<kernels::Scalar>(&self.wide, ray) },
+        }
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        match self.isa {
+            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { entry::occluded_avx512(&self.wide, ray) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { entry::occluded_avx2(&self.wide, ray) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => entry::occluded_sse2(&self.wide, ray),
+            // SAFETY: the scalar kernel needs no special instructions.
+            _ => unsafe { traverse::occluded::<kernels::Scalar>(&self.wide, ray) },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,194 @@
+//! Kernel twins and tree invariants; brute-force agreement is in `tests/bvh.rs`.
+
+use glam::Vec3;
+
+use super::kernels::{NodeKernel, Scalar};
+use super::wide::{Child, WideNode, decode};
+use super::*;
+
+/// A small deterministic generator (PCG-style LCG) for test data.
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn vec(&mut self) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next())
+    }
+}
+
+/// Nodes with random boxes, including flat ones, boxes that share the ray's origin planes, and
+/// unused slots; rays with ±0 and tiny direction components.
+fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {
+    let mut rng = Lcg(7);
+    let mut cases = Vec::new();
+    for i in 0..4000 {
+        let mut node = WideNode {
+            planes: [
+                [f32::INFINITY; 8],
+                [f32::INFINITY; 8],
+                [f32::INFINITY; 8],
+                [f32::NEG_INFINITY; 8],
+                [f32::NEG_INFINITY; 8],
+                [f32::NEG_INFINITY; 8],
+            ],
+            children: [wide::EMPTY; 8],
+        };
+        let origin = (rng.vec() * 4.0 - 2.0).round() * 0.5; // On a grid: shares planes with boxes.
+        for slot in 0..8 {
+            if rng.next() < 0.1 {
+                continue; // unused slot
+            }
+            let a = (rng.vec() * 4.0 - 2.0).round() * 0.5;
+            let mut b = a + (rng.vec() * 2.0).round() * 0.5; // zero extent on some axes
+            if i % 3 == 0 {
+                b = a + rng.vec();
+            }
+            for axis in 0..3 {
+                node.planes[axis][slot] = a[axis];
+                node.planes[3 + axis][slot] = b[axis];
+            }
+            node.children[slot] = slot as u32;
+        }
+        let mut d = rng.vec() * 2.0 - 1.0;
+        for axis in 0..3 {
+            match (i / 3 + axis) % 5 {
+                0 => d[axis] = 0.0,
+                1 => d[axis] = -0.0,
+                2 => d[axis] *= 1e-30,
+                _ => {}
+            }
+        }
+        if d == Vec3::ZERO {
+            d.z = 1.0;
+        }
+        let t_limit = if i % 2 == 0 { f32::INFINITY } else { rng.next() * 3.0 };
+        let mut ray = Ray::new(origin, d);
+        ray.t_min = if i % 4 == 1 { 0.25 } else { 0.0 };
+        cases.push((node, ray, t_limit));
+    }
+    cases
+}
+
+fn check_kernel<K: NodeKernel>(run: impl Fn(&WideNode, &K::Ray, f32) -> (u32, [f32; 8])) {
+    for (node, ray, t_limit) in hostile_cases() {
+        let box_ray = RayBoxTest::new(&ray);
+        // SAFETY: the scalar kernel needs nothing.
+        let (mask, near) = unsafe { Scalar::enter(&node, &box_ray, t_limit) };
+        let (simd_mask, simd_near) = run(&node, &K::prepare(&box_ray), t_limit);
+        assert_eq!(mask, simd_mask, "{ray:?} limit {t_limit}\n{node:?}");
+        for k in 0..8 {
+            if mask & (1 << k) != 0 {
+                // Equal as numbers: only the sign of a zero distance may differ.
+                assert_eq!(near[k], simd_near[k], "child {k} of {node:?}, {ray:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn scalar_kernel_agrees_with_the_box_test() {
+    for (node, ray, t_limit) in hostile_cases() {
+        let box_ray = RayBoxTest::new(&ray);
+        // SAFETY: the scalar kernel needs nothing.
+        let (mask, _) = unsafe { Scalar::enter(&node, &box_ray, t_limit) };
+        for k in 0..8 {
+            let expected = box_ray.enter(&node.bounds(k), t_limit).is_some();
+            assert_eq!(mask & (1 << k) != 0, expected);
+            // Unused slots are never entered.
+            if node.children[k] == wide::EMPTY {
+                assert!(!expected);
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn sse2_kernel_agrees_with_its_scalar_twin() {
+    use super::kernels::Sse;
+    // SAFETY: SSE2 is part of x86-64.
+    check_kernel::<Sse>(|node, ray, t| unsafe { Sse::enter(node, ray, t) });
+}
+
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn avx2_kernel_agrees_with_its_scalar_twin() {
+    use super::kernels::Avx2;
+    if !Isa::Avx2.is_supported() {
+        eprintln!("skipped: this CPU has no AVX2");
+        return;
+    }
+    #[target_feature(enable = "avx2")]
+    fn run(node: &WideNode, ray: &<Avx2 as NodeKernel>::Ray, t: f32) -> (u32, [f32; 8]) {
+        // SAFETY: compiled with AVX2, called only after detection.
+        unsafe { Avx2::enter(node, ray, t) }
+    }
+    // SAFETY: AVX2 support was checked above.
+    check_kernel::<Avx2>(|node, ray, t| unsafe { run(node, ray, t) });
+}
+
+/// Walks the tree: every child box contains its subtree's triangles, every triangle with area
+/// appears exactly once.
+#[test]
+fn wide_trees_cover_every_triangle_once() {
+    let mut rng = Lcg(3);
+    let mut triangles: Vec<[Vec3; 3]> = (0..3000)
+        .map(|_| {
+            let p = rng.vec() * 20.0;
+            [p, p + rng.vec(), p + rng.vec()]
+        })
+        .collect();
+    triangles[10] = [Vec3::ONE; 3]; // zero area
+    triangles[11][1] = Vec3::NAN;
+    for (_, settings) in BuildSettings::PRESETS {
+        let bvh = Bvh::build(&triangles, &settings);
+        let mut seen = vec![0u32; triangles.len()];
+        fn visit(bvh: &Bvh, node: u32, within: Bounds, seen: &mut [u32], triangles: &[[Vec3; 3]]) {
+            let node: &WideNode = &bvh.wide.nodes[node as usize];
+            for k in 0..8 {
+                let b = node.bounds(k);
+                match decode(node.children[k]) {
+                    Child::Empty => assert!(b.is_empty()),
+                    Child::Node(child) => {
+                        assert!(within.min.cmple(b.min).all() && within.max.cmpge(b.max).all());
+                        visit(bvh, child, b, seen, triangles);
+                    }
+                    Child::Leaf { first_block, blocks } => {
+                        for block in first_block..first_block + blocks {
+                            for (lane, &id) in bvh.wide.ids[block as usize].iter().enumerate() {
+                                if id == u32::MAX {
+                                    continue;
+                                }
+                                seen[id as usize] += 1;
+                                let t = bvh.wide.blocks[block as usize].triangle(lane);
+                                assert_eq!(t, triangles[id as usize]);
+                                let tb = Bounds::of_triangle(t);
+                                assert!(b.min.cmple(tb.min).all() && b.max.cmpge(tb.max).all());
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let all = Bounds { min: Vec3::NEG_INFINITY, max: Vec3::INFINITY };
+        visit(&bvh, 0, all, &mut seen, &triangles);
+        for (i, &count) in seen.iter().enumerate() {
+            assert_eq!(count, if i == 10 || i == 11 { 0 } else { 1 }, "triangle {i}");
+        }
+        assert_eq!(bvh.stats().indexed_triangles, 2998);
+    }
+}
+
+#[test]
+fn empty_and_single_triangle_trees_answer() {
+    let bvh = Bvh::build(&[], &BuildSettings::default());
+    assert_eq!(bvh.closest_hit(&Ray::new(Vec3::ZERO, Vec3::Z)), None);
+    assert!(!bvh.occluded(&Ray::new(Vec3::ZERO, Vec3::Z)));
+    let bvh = Bvh::build(&[[Vec3::ZERO, Vec3::X, Vec3::Y]], &BuildSettings::default());
+    let hit = bvh.closest_hit(&Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z)).unwrap();
+    assert_eq!((hit.t, hit.triangle), (1.0, 0));
+    assert!(bvh.occluded(&Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z)));
+}

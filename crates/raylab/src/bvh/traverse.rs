@@ -1,0 +1,147 @@
+//! Single-ray traversal of the wide BVH: closest hit (nearest child first) and any hit.
+//!
+//! Both are generic over the node kernel and `#[inline(always)]`, so each instruction set gets its
+//! own copy compiled with that set enabled (see the `#[target_feature]` entry points below): the
+//! triangle pre-test is then vectorized for the same set too.
+
+use super::bounds::{FAR_SCALE, RayBoxTest};
+use super::kernels::NodeKernel;
+use super::wide::{Child, WIDTH, WideBvh, decode};
+use crate::accel::Hit;
+use crate::float::next_float_up;
+use crate::ray::Ray;
+use crate::triangle::WatertightRay;
+
+/// Stack entries: the wide tree is at most ~80 levels deep (the builder bounds the binary depth),
+/// and each level pushes at most seven siblings.
+const STACK_SIZE: usize = 640;
+
+/// The closest hit; ties at equal `t` go to the lowest triangle index, as in
+/// [`BruteForce`](crate::BruteForce), so the answer never depends on the tree.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+    let triangle_ray = WatertightRay::new(ray);
+    let box_ray = K::prepare(&RayBoxTest::new(ray));
+    let mut best: Option<Hit> = None;
+    // Triangles are accepted for `t < triangle_limit`: the ray's end, then just past the best hit
+    // so that an equal `t` with a lower index can still win.
+    let mut triangle_limit = ray.t_max;
+    // Boxes are entered up to the best hit, conservatively: a box whose computed entry rounds just
+    // past a hit inside it must still be visited.
+    let mut box_limit = ray.t_max * FAR_SCALE;
+
+    let mut stack = [(0u32, 0.0f32); STACK_SIZE];
+    let mut top = 0;
+    let mut node = 0u32;
+    loop {
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        let (mut mask, near) = unsafe { K::enter(&bvh.nodes[node as usize], &box_ray, box_limit) };
+        let children = &bvh.nodes[node as usize].children;
+        // Push the entered children farthest first, so that the nearest is on top.
+        let first = top;
+        while mask != 0 {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let entry = (children[k], near[k]);
+            // Insertion into the pushed run, kept sorted by decreasing distance.
+            let mut i = top;
+            while i > first && stack[i - 1].1 < entry.1 {
+                stack[i] = stack[i - 1];
+                i -= 1;
+            }
+            stack[i] = entry;
+            top += 1;
+        }
+        // Pop until an interior node is due; leaves are intersected on the way.
+        loop {
+            if top == 0 {
+                return best;
+            }
+            top -= 1;
+            let (child, near) = stack[top];
+            if near > box_limit {
+                continue;
+            }
+            match decode(child) {
+                Child::Node(index) => {
+                    node = index;
+                    break;
+                }
+                Child::Leaf { first_block, blocks } => {
+                    for b in first_block as usize..(first_block + blocks) as usize {
+                        let block = &bvh.blocks[b];
+                        let mut candidates = triangle_ray.block_candidates(block, triangle_limit);
+                        while candidates != 0 {
+                            let lane = candidates.trailing_zeros() as usize;
+                            candidates &= candidates - 1;
+                            let [v0, v1, v2] = block.triangle(lane);
+                            let Some(h) = triangle_ray.intersect(v0, v1, v2, triangle_limit) else {
+                                continue;
+                            };
+                            let id = bvh.ids[b][lane];
+                            if best.is_some_and(|best| h.t == best.t && id > best.triangle) {
+                                continue;
+                            }
+                            best = Some(Hit { t: h.t, triangle: id, b1: h.b1, b2: h.b2 });
+                            triangle_limit = next_float_up(h.t);
+                            box_limit = h.t * FAR_SCALE;
+                        }
+                    }
+                }
+                Child::Empty => {}
+            }
+        }
+    }
+}
+
+/// Whether anything is hit; stops at the first hit found.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
+    let triangle_ray = WatertightRay::new(ray);
+    let box_ray = K::prepare(&RayBoxTest::new(ray));
+    let box_limit = ray.t_max * FAR_SCALE;
+    let mut stack = [0u32; STACK_SIZE];
+    let mut top = 0;
+    stack[top] = 0;
+    top += 1;
+    while top > 0 {
+        top -= 1;
+        let node = &bvh.nodes[stack[top] as usize];
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        let (mut mask, _) = unsafe { K::enter(node, &box_ray, box_limit) };
+        while mask != 0 {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            match decode(node.children[k]) {
+                Child::Node(index) => {
+                    stack[top] = index;
+                    top += 1;
+                }
+                Child::Leaf { first_block, blocks } => {
+                    for block in &bvh.blocks[first_block as usize..(first_block + blocks) as usize]
+                    {
+                        let mut candidates = triangle_ray.block_candidates(block, ray.t_max);
+                        while candidates != 0 {
+                            let lane = candidates.trailing_zeros() as usize;
+                            candidates &= candidates - 1;
+                            let [v0, v1, v2] = block.triangle(lane);
+                            if triangle_ray.intersect(v0, v1, v2, ray.t_max).is_some() {
+                                return true;
+                            }
+                        }
+                    }
+                }
+                Child::Empty => {}
+            }
+        }
+    }
+    false
+}
+
+const _: () = assert!(WIDTH == 8);

@@ -1,0 +1,199 @@
+//! The BVH gives exactly the brute-force answers: the same `t`, bit for bit, and the same triangle
+//! (ties at equal `t` go to the lowest index in both), for every build preset and instruction set,
+//! on random triangle soups and hostile inputs.
+
+use glam::Vec3;
+use proptest::prelude::*;
+use raylab::bvh::{BuildSettings, Bvh, Isa};
+use raylab::{Accelerator, BruteForce, Ray, Triangle};
+
+/// Every BVH variant over `triangles`.
+fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
+    let mut all = Vec::new();
+    for (preset, settings) in BuildSettings::PRESETS {
+        for isa in Isa::ALL {
+            if let Some(bvh) = Bvh::build(triangles, &settings).with_isa(isa) {
+                all.push((format!("{preset} {}", isa.name()), bvh));
+            }
+        }
+    }
+    all
+}
+
+fn brute_force(triangles: &[[Vec3; 3]]) -> BruteForce {
+    let t: Vec<Triangle> =
+        triangles.iter().map(|&[a, b, c]| Triangle::new(a, b, c, Vec3::ONE)).collect();
+    BruteForce::new(&t)
+}
+
+/// Compares every BVH with brute force on `rays`; returns how many rays hit something.
+fn assert_agreement(triangles: &[[Vec3; 3]], rays: &[Ray]) -> Result<usize, TestCaseError> {
+    let reference = brute_force(triangles);
+    let expected: Vec<_> =
+        rays.iter().map(|r| (reference.closest_hit(r), reference.occluded(r))).collect();
+    for (name, bvh) in bvhs(triangles) {
+        for (ray, (closest, occluded)) in rays.iter().zip(&expected) {
+            prop_assert_eq!(bvh.closest_hit(ray), *closest, "{}: {:?}", name, ray);
+            prop_assert_eq!(bvh.occluded(ray), *occluded, "{}: {:?}", name, ray);
+        }
+    }
+    Ok(expected.iter().filter(|(c, _)| c.is_some()).count())
+}
+
+fn vec3(range: f32) -> impl Strategy<Value = Vec3> {
+    (-range..range, -range..range, -range..range).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+}
+
+/// Small triangles scattered in a box, some sharing vertices, some on a coarse grid (so that
+/// boxes share planes with ray origins and with each other).
+fn soup() -> impl Strategy<Value = Vec<[Vec3; 3]>> {
+    proptest::collection::vec((vec3(10.0), vec3(1.5), vec3(1.5), any::<bool>()), 1..400).prop_map(
+        |items| {
+            items
+                .into_iter()
+                .map(|(p, a, b, snap)| {
+                    let p = if snap { (p * 2.0).round() * 0.5 } else { p };
+                    let (a, b) = if snap {
+                        ((a * 2.0).round() * 0.5, (b * 2.0).round() * 0.5)
+                    } else {
+                        (a, b)
+                    };
+                    [p, p + a, p + b]
+                })
+                .collect()
+        },
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    #[test]
+    fn random_soups_agree_with_brute_force(
+        triangles in soup(),
+        origins in proptest::collection::vec(vec3(14.0), 8),
+        targets in proptest::collection::vec((0usize..10_000, 0.0f32..=1.0, 0.0f32..=1.0), 24),
+        t_max in prop_oneof![Just(f32::INFINITY), 1.0f32..30.0],
+    ) {
+        let mut rays = Vec::new();
+        for (k, &(aim, s, r)) in targets.iter().enumerate() {
+            let origin = origins[k % origins.len()];
+            let [a, b, c] = triangles[aim % triangles.len()];
+            // At a vertex, along an edge, or inside: exactly where ties and cracks happen.
+            let target = match k % 3 {
+                0 => a,
+                1 => a.lerp(b, s),
+                _ => a.lerp(b, s).lerp(c, r),
+            };
+            if target != origin {
+                rays.push(Ray::segment(origin, target - origin, t_max));
+                // And an axis-parallel ray with signed zeros through the same point.
+                let axis = aim % 3;
+                let mut d = Vec3::splat(if k % 2 == 0 { 0.0 } else { -0.0 });
+                d[axis] = if origin[axis] < target[axis] { 1.0 } else { -1.0 };
+                let mut o = target;
+                o[axis] = origin[axis];
+                if o != target {
+                    rays.push(Ray::segment(o, d, t_max));
+                }
+            }
+        }
+        assert_agreement(&triangles, &rays)?;
+    }
+}
+
+#[test]
+fn coplanar_grids_and_duplicates_agree() {
+    // A grid of quads where many rays hit shared edges and vertices at equal t, plus a duplicate
+    // copy of the whole grid (every hit is a tie between two triangles).
+    let n = 16;
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let p = |x: usize, y: usize| Vec3::new(x as f32 / n as f32, y as f32 / n as f32, 1.0);
+            triangles.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            triangles.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    let copy = triangles.clone();
+    triangles.extend(copy);
+    let mut rays = Vec::new();
+    for j in 0..=4 * n {
+        for i in 0..=4 * n {
+            let target = Vec3::new(i as f32 / (4 * n) as f32, j as f32 / (4 * n) as f32, 1.0);
+            for origin in [Vec3::new(0.5, 0.5, -1.0), Vec3::new(-0.3, 1.7, 0.2)] {
+                rays.push(Ray::new(origin, target - origin));
+            }
+            rays.push(Ray::new(Vec3::new(target.x, target.y, 0.0), Vec3::new(-0.0, 0.0, 1.0)));
+        }
+    }
+    let hits = assert_agreement(&triangles, &rays).unwrap();
+    assert!(hits > rays.len() / 2, "{hits} of {}", rays.len());
+}
+
+#[test]
+fn hostile_inputs_do_not_panic_and_agree() {
+    let big = 3e38f32;
+    let cases: Vec<Vec<[Vec3; 3]>> = vec![
+        // Huge coordinates: box extents overflow to infinity.
+        vec![[Vec3::splat(-big), Vec3::new(big, -big, 0.0), Vec3::splat(big)]],
+        // Tiny triangles near zero, subnormal sizes.
+        (0..50)
+            .map(|i| {
+                let p = Vec3::splat(i as f32 * 1e-40);
+                [p, p + Vec3::X * 1e-39, p + Vec3::Y * 1e-39]
+            })
+            .collect(),
+        // All triangles identical.
+        vec![[Vec3::ZERO, Vec3::X, Vec3::Y]; 300],
+        // All centroids identical, different sizes.
+        (1..200)
+            .map(|i| {
+                let s = i as f32;
+                [Vec3::new(-s, -s, 0.0), Vec3::new(s, -s, 0.0), Vec3::new(0.0, 2.0 * s, 0.0)]
+            })
+            .collect(),
+        // A flat layer (zero extent along z for every box).
+        (0..300)
+            .map(|i| {
+                let p = Vec3::new((i % 20) as f32, (i / 20) as f32, 0.0);
+                [p, p + Vec3::X, p + Vec3::Y]
+            })
+            .collect(),
+    ];
+    for triangles in cases {
+        let mut rays = vec![
+            Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z),
+            Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z),
+            Ray::new(Vec3::new(-5.0, 0.25, 0.0), Vec3::X),
+            Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::new(-0.0, -0.0, 1.0)),
+            Ray::new(Vec3::new(1e-40, 1e-40, -1.0), Vec3::Z),
+            Ray::new(Vec3::NAN, Vec3::Z),
+            Ray::new(Vec3::ZERO, Vec3::ZERO),
+            Ray::new(Vec3::new(0.3, 0.3, -1.0), Vec3::new(f32::INFINITY, 0.0, 1.0)),
+        ];
+        for i in 0..64 {
+            let a = i as f32 * 0.1;
+            rays.push(Ray::new(
+                Vec3::new(a.sin(), a.cos(), -3.0),
+                Vec3::new(-a.sin() * 0.3, 0.1, 1.0),
+            ));
+        }
+        assert_agreement(&triangles, &rays).unwrap();
+    }
+}
+
+#[test]
+fn non_finite_and_zero_area_triangles_are_left_out_but_keep_their_indices() {
+    let triangles = vec![
+        [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0)],
+        [Vec3::NAN, Vec3::X, Vec3::Y],
+        [Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X, Vec3::Y],
+        [Vec3::new(-1.0, -1.0, 2.0), Vec3::new(1.0, -1.0, 2.0), Vec3::new(0.0, 1.0, 2.0)],
+    ];
+    let bvh = Bvh::build(&triangles, &BuildSettings::default());
+    assert_eq!(bvh.stats().triangles, 4);
+    assert_eq!(bvh.stats().indexed_triangles, 1);
+    let hit = bvh.closest_hit(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap();
+    assert_eq!((hit.triangle, hit.t), (3, 2.0));
+}
