@@ -35,6 +35,7 @@ pub mod integrator;
 pub mod light;
 pub mod mesh;
 pub mod ray;
+pub mod ray_sets;
 pub mod render;
 pub mod scene;
 pub mod triangle;
