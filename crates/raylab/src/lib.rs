@@ -49,5 +49,6 @@ pub use light::PointLight;
 pub use mesh::{Material, Mesh};
 pub use ray::{Ray, SurfacePoint};
 pub use render::render;
+pub use scene::{LoadError, LoadedMesh, load_mesh};
 pub use scene::{Scene, SceneError};
 pub use triangle::Triangle;

@@ -4,10 +4,16 @@
 //! queries, and both to an integrator to make pictures.
 
 mod cornell;
+mod file;
+mod obj;
+mod ply;
 
 use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
+pub use file::{
+    LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh, read_limit_bytes,
+};
 
 use crate::light::PointLight;
 use crate::triangle::Triangle;

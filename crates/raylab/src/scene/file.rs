@@ -1,0 +1,352 @@
+//! Loading a triangle mesh from a file: [`load_mesh`] picks the reader by the file's extension.
+//!
+//! | extension | reader |
+//! | --- | --- |
+//! | `.obj` | Wavefront OBJ, with the MTL material libraries it names (`scene::obj`) |
+//! | `.ply` | Stanford PLY: `ascii`, `binary_little_endian` and `binary_big_endian` (`scene::ply`) |
+//! | `.obj.gz`, `.ply.gz` | the same, gzip-compressed (decompressed in memory as they are read) |
+//!
+//! Extensions are matched without regard to case (`BUNNY.OBJ.GZ` is fine).
+//!
+//! **Errors** are one line each and name the file, the place in it and what was expected:
+//! `bunny.ply: line 12: vertex 9: expected 3 values (x y z), found 2`, or for binary data
+//! `dragon.ply: byte 1048: file ends inside face 17 (expected 3 indices)`. Line numbers start
+//! at 1; byte offsets count from the start of the (decompressed) file.
+//!
+//! **Warnings** are problems that do not stop the load: a missing material library, faces with
+//! fewer than 3 vertices, normals given for only some corners. They come back with the mesh in
+//! [`LoadedMesh::warnings`], one line each, for the caller to show.
+//!
+//! **Memory.** The whole file is read into memory before parsing. A file (or a gzip stream once
+//! decompressed) larger than [`read_limit_bytes`] is refused, so that a small gzip bomb cannot
+//! exhaust the machine: the limit is half of the memory the system reports as available
+//! (`MemAvailable` in `/proc/meminfo`), at most 16 GiB and at least 256 MiB; 16 GiB where the
+//! system does not say. Half, because the parsed mesh needs room too.
+
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+use flate2::read::MultiGzDecoder;
+
+use super::{obj, ply};
+use crate::mesh::Mesh;
+
+/// The file name endings [`load_mesh`] accepts, in any case.
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[".obj", ".obj.gz", ".ply", ".ply.gz"];
+
+/// A mesh as loaded, with the warnings the loader has for the caller.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadedMesh {
+    /// The triangles, in file order.
+    pub mesh: Mesh,
+    /// Problems that did not stop the load, one line each, each naming the file (and the line
+    /// where there is one), e.g. `spider.obj: line 3: material library spider.mtl ignored: …`.
+    pub warnings: Vec<String>,
+}
+
+/// A place in a file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// A line of a text file, counted from 1.
+    Line(u64),
+    /// A byte offset into a binary file (after decompression), counted from 0.
+    Byte(u64),
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::Line(line) => write!(f, "line {line}"),
+            Location::Byte(offset) => write!(f, "byte {offset}"),
+        }
+    }
+}
+
+/// Why a mesh file cannot be loaded. Every message is one line and starts with the file's path.
+///
+/// Variants that wrap an [`io::Error`] include its text in their message and do not report it
+/// again as [`std::error::Error::source`], so that printing the chain (`{:#}` with `anyhow`)
+/// says it once.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file does not exist or cannot be read.
+    #[error("{}: cannot read: {error}", .path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        error: io::Error,
+    },
+    /// The path names a folder.
+    #[error("{}: is a folder, not a mesh file", .path.display())]
+    Folder {
+        /// The folder.
+        path: PathBuf,
+    },
+    /// The file name has none of the [`SUPPORTED_EXTENSIONS`].
+    #[error(
+        "{}: unknown mesh file type; the supported extensions are {} (in any case)",
+        .path.display(),
+        SUPPORTED_EXTENSIONS.join(", ")
+    )]
+    UnsupportedExtension {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file is named `.gz` but is not a valid gzip stream (or it is cut short).
+    #[error("{}: not a valid gzip file: {error}", .path.display())]
+    Gzip {
+        /// The file.
+        path: PathBuf,
+        /// What the decompressor said.
+        error: io::Error,
+    },
+    /// The file, or its decompressed content, is larger than [`read_limit_bytes`].
+    #[error(
+        "{}: larger than {limit_bytes} bytes{}, more than this machine can load safely",
+        .path.display(),
+        if *.decompressed { " once decompressed" } else { "" }
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit that was exceeded.
+        limit_bytes: u64,
+        /// Whether the limit was reached while decompressing.
+        decompressed: bool,
+    },
+    /// The content is malformed at a known place.
+    #[error("{}: {location}: {message}", .path.display())]
+    Syntax {
+        /// The file (for a broken material library, the library).
+        path: PathBuf,
+        /// Where in the file.
+        location: Location,
+        /// What was wrong, or what was expected and what was found.
+        message: String,
+    },
+    /// The content is unusable as a whole, e.g. more vertices than 32-bit indices can address.
+    #[error("{}: {message}", .path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What was wrong.
+        message: String,
+    },
+    /// The file is well formed but has no triangles.
+    #[error("{}: no triangles (an empty mesh)", .path.display())]
+    NoTriangles {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// The mesh formats, as chosen by the file name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Obj,
+    Ply,
+}
+
+/// The format and whether the file is gzip-compressed, from the file name's ending (any case).
+fn format_of(path: &Path) -> Option<(Format, bool)> {
+    let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+    let (stem, gzip) = match name.strip_suffix(".gz") {
+        Some(stem) => (stem, true),
+        None => (name.as_str(), false),
+    };
+    if stem.ends_with(".obj") {
+        Some((Format::Obj, gzip))
+    } else if stem.ends_with(".ply") {
+        Some((Format::Ply, gzip))
+    } else {
+        None
+    }
+}
+
+/// Loads the triangle mesh in `path`, choosing the reader by the extension (see the module
+/// documentation for the formats, the error messages and the memory limit).
+///
+/// A file that parses but has no triangles is an error ([`LoadError::NoTriangles`]).
+pub fn load_mesh(path: &Path) -> Result<LoadedMesh, LoadError> {
+    let metadata =
+        std::fs::metadata(path).map_err(|error| LoadError::Read { path: path.into(), error })?;
+    if metadata.is_dir() {
+        return Err(LoadError::Folder { path: path.into() });
+    }
+    let (format, gzip) =
+        format_of(path).ok_or_else(|| LoadError::UnsupportedExtension { path: path.into() })?;
+    let bytes = read_bytes(path, gzip, read_limit_bytes())?;
+    let loaded = match format {
+        Format::Obj => obj::parse_obj(path, &bytes)?,
+        Format::Ply => ply::parse_ply(path, &bytes)?,
+    };
+    if loaded.mesh.triangles.is_empty() {
+        return Err(LoadError::NoTriangles { path: path.into() });
+    }
+    Ok(loaded)
+}
+
+/// The most bytes [`load_mesh`] reads from one file, after decompression: half of the memory
+/// available now (`MemAvailable` in `/proc/meminfo`), clamped to 256 MiB ..= 16 GiB; 16 GiB
+/// where the system does not report it.
+pub fn read_limit_bytes() -> u64 {
+    const MIN: u64 = 256 << 20;
+    const MAX: u64 = 16 << 30;
+    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
+        let line = text.lines().find(|line| line.starts_with("MemAvailable:"))?;
+        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kib.saturating_mul(1024))
+    });
+    available.map_or(MAX, |bytes| (bytes / 2).clamp(MIN, MAX))
+}
+
+/// Reads the whole file, decompressing it if `gzip`, refusing more than `limit` bytes.
+pub(crate) fn read_bytes(path: &Path, gzip: bool, limit: u64) -> Result<Vec<u8>, LoadError> {
+    let read_error = |error| LoadError::Read { path: path.into(), error };
+    let file = File::open(path).map_err(read_error)?;
+    // The size on disk is a hint only: special files report 0, and a file may grow.
+    let size_on_disk = file.metadata().map(|m| m.len()).unwrap_or(0);
+    if !gzip && size_on_disk > limit {
+        return Err(LoadError::TooLarge {
+            path: path.into(),
+            limit_bytes: limit,
+            decompressed: false,
+        });
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(size_on_disk.min(limit)).unwrap_or(0));
+    let result = if gzip {
+        MultiGzDecoder::new(BufReader::new(file))
+            .take(limit.saturating_add(1))
+            .read_to_end(&mut bytes)
+    } else {
+        file.take(limit.saturating_add(1)).read_to_end(&mut bytes)
+    };
+    match result {
+        Ok(_) => {}
+        // The decoder reports a malformed stream as invalid input or data, a cut one as an
+        // unexpected end; anything else is the operating system's.
+        Err(error)
+            if gzip
+                && matches!(
+                    error.kind(),
+                    io::ErrorKind::InvalidInput
+                        | io::ErrorKind::InvalidData
+                        | io::ErrorKind::UnexpectedEof
+                ) =>
+        {
+            return Err(LoadError::Gzip { path: path.into(), error });
+        }
+        Err(error) => return Err(read_error(error)),
+    }
+    if bytes.len() as u64 > limit {
+        return Err(LoadError::TooLarge {
+            path: path.into(),
+            limit_bytes: limit,
+            decompressed: gzip,
+        });
+    }
+    Ok(bytes)
+}
+
+/// `text` quoted for an error message: escaped so that it stays on one line, and cut after
+/// 40 characters.
+pub(crate) fn quoted(text: &str) -> String {
+    const MAX_CHARS: usize = 40;
+    match text.char_indices().nth(MAX_CHARS) {
+        Some((cut, _)) => format!("{:?}…", &text[..cut]),
+        None => format!("{text:?}"),
+    }
+}
+
+/// The name a mesh gets from its path: the file name.
+pub(crate) fn mesh_name(path: &Path) -> String {
+    path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into())
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io::Write;
+
+    use super::*;
+
+    #[test]
+    fn extensions_are_matched_in_any_case() {
+        assert_eq!(format_of(Path::new("a/b.obj")), Some((Format::Obj, false)));
+        assert_eq!(format_of(Path::new("B.OBJ.GZ")), Some((Format::Obj, true)));
+        assert_eq!(format_of(Path::new("x.Ply")), Some((Format::Ply, false)));
+        assert_eq!(format_of(Path::new("x.ply.Gz")), Some((Format::Ply, true)));
+        assert_eq!(format_of(Path::new("x.gz")), None);
+        assert_eq!(format_of(Path::new("x.stl")), None);
+        assert_eq!(format_of(Path::new("obj")), None);
+        assert_eq!(format_of(Path::new("")), None);
+    }
+
+    #[test]
+    fn locations_read_naturally() {
+        assert_eq!(Location::Line(12).to_string(), "line 12");
+        assert_eq!(Location::Byte(1048).to_string(), "byte 1048");
+    }
+
+    #[test]
+    fn quoting_keeps_one_line_and_cuts_long_text() {
+        assert_eq!(quoted("a\nb"), r#""a\nb""#);
+        let long = "é".repeat(50);
+        assert_eq!(quoted(&long), format!("{:?}…", "é".repeat(40)));
+    }
+
+    #[test]
+    fn the_read_limit_is_within_its_bounds() {
+        let limit = read_limit_bytes();
+        assert!((256 << 20..=16 << 30).contains(&limit), "{limit}");
+    }
+
+    fn gzip(bytes: &[u8]) -> Vec<u8> {
+        let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        encoder.write_all(bytes).unwrap();
+        encoder.finish().unwrap()
+    }
+
+    #[test]
+    fn a_gzip_bomb_stops_at_the_limit() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("bomb.obj.gz");
+        std::fs::write(&path, gzip(&vec![b'#'; 1 << 20])).unwrap();
+        let error = read_bytes(&path, true, 1000).unwrap_err();
+        assert!(matches!(error, LoadError::TooLarge { limit_bytes: 1000, decompressed: true, .. }));
+        assert!(error.to_string().contains("larger than 1000 bytes once decompressed"), "{error}");
+        assert_eq!(read_bytes(&path, true, 1 << 20).unwrap().len(), 1 << 20);
+        let plain = folder.path().join("big.obj");
+        std::fs::write(&plain, [b'#'; 1001]).unwrap();
+        let error = read_bytes(&plain, false, 1000).unwrap_err();
+        assert!(matches!(error, LoadError::TooLarge { decompressed: false, .. }), "{error}");
+    }
+
+    #[test]
+    fn concatenated_gzip_members_are_read_whole() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("two.obj.gz");
+        std::fs::write(&path, [gzip(b"first\n"), gzip(b"second\n")].concat()).unwrap();
+        assert_eq!(read_bytes(&path, true, 1000).unwrap(), b"first\nsecond\n");
+    }
+
+    #[test]
+    fn corrupt_or_cut_gzip_is_a_gzip_error() {
+        let folder = tempfile::tempdir().unwrap();
+        let whole = gzip(&b"v 0 0 0\n".repeat(1000));
+        for (name, bytes) in [
+            ("plain.obj.gz", b"v 0 0 0\n".to_vec()),
+            ("cut.obj.gz", whole[..whole.len() / 2].to_vec()),
+            ("no-trailer.obj.gz", whole[..whole.len() - 4].to_vec()),
+        ] {
+            let path = folder.path().join(name);
+            std::fs::write(&path, bytes).unwrap();
+            let error = read_bytes(&path, true, 1 << 20).unwrap_err();
+            assert!(matches!(error, LoadError::Gzip { .. }), "{name}: {error}");
+            let message = error.to_string();
+            assert!(message.contains(name) && !message.contains('\n'), "{message}");
+        }
+    }
+}
