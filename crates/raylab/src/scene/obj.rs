@@ -114,17 +114,21 @@ fn parse_obj_with(
     let mut mesh = Mesh { name: mesh_name(path), ..Mesh::default() };
     let mut normals = CornerAttribute::<Vec3>::default();
     let mut uvs = CornerAttribute::<Vec2>::default();
-    let too_many = |what: &str| LoadError::Invalid {
-        path: path.into(),
-        message: format!("more {what} than 32-bit indices can address"),
+    // The index of the first value appended, if every value appended has a 32-bit index.
+    let first_index = |before: usize, after: usize, what: &str| match u32::try_from(after) {
+        Ok(_) => Ok(before as u32),
+        Err(_) => Err(LoadError::Invalid {
+            path: path.into(),
+            message: format!("more {what} than 32-bit indices can address"),
+        }),
     };
     for model in models {
+        // tobj numbers each group's values from 0, so its indices are below the group's count
+        // and `first + index` below the total, which fits a u32.
         let group = model.mesh;
-        let first = u32::try_from(mesh.positions.len()).map_err(|_| too_many("vertices"))?;
+        let before = mesh.positions.len();
         mesh.positions.extend(group.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
-        if mesh.positions.len() > u32::MAX as usize {
-            return Err(too_many("vertices"));
-        }
+        let first = first_index(before, mesh.positions.len(), "vertices")?;
         let corners = |indices: &[u32], first: u32| -> Vec<[u32; 3]> {
             indices.chunks_exact(3).map(|t| [first + t[0], first + t[1], first + t[2]]).collect()
         };
@@ -134,16 +138,17 @@ fn parse_obj_with(
         keep_normals &= group.normal_indices.len() == group.indices.len();
         keep_uvs &= group.texcoord_indices.len() == group.indices.len();
         if keep_normals {
-            let first = u32::try_from(normals.values.len()).map_err(|_| too_many("normals"))?;
+            let before = normals.values.len();
             normals
                 .values
                 .extend(group.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
+            let first = first_index(before, normals.values.len(), "normals")?;
             normals.triangles.extend(corners(&group.normal_indices, first));
         }
         if keep_uvs {
-            let first =
-                u32::try_from(uvs.values.len()).map_err(|_| too_many("texture coordinates"))?;
+            let before = uvs.values.len();
             uvs.values.extend(group.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+            let first = first_index(before, uvs.values.len(), "texture coordinates")?;
             uvs.triangles.extend(corners(&group.texcoord_indices, first));
         }
         let material = group.material_id.filter(|&id| id < materials.len()).map(|id| id as u32);
@@ -162,10 +167,11 @@ fn parse_obj_with(
     check_finite(path, text, &mesh)?;
 
     if !shared.library_missing.get() {
+        let defined: HashSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
         let unknown: Vec<&(String, u64)> = lines
             .material_uses
             .iter()
-            .filter(|(name, _)| !materials.iter().any(|m| &m.name == name))
+            .filter(|(name, _)| !defined.contains(name.as_str()))
             .collect();
         for (name, line) in unknown.iter().take(MAX_NAMED_WARNINGS) {
             warnings.push(format!(
