@@ -2,6 +2,7 @@
 //! `raylab` library: parse the arguments, call the library, report.
 
 mod args;
+mod bench_cmd;
 mod render_cmd;
 mod system;
 
@@ -21,6 +22,9 @@ struct Cli {
 enum Command {
     /// Render a scene to an image file (the lab's Cornell box by default).
     Render(render_cmd::RenderArgs),
+    /// Measure ray-query speed on the standard ray sets (primary, shadow, diffuse), as Embree is
+    /// measured (shared/bench/BENCHMARK.md).
+    Bench(bench_cmd::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +47,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
+        Command::Bench(args) => bench_cmd::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

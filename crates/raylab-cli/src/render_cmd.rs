@@ -10,7 +10,7 @@ use clap::Args;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::film::format_bytes;
-use raylab::{BruteForce, Camera, Film, Lab, Scene, Stage, image_io, render};
+use raylab::{Bvh, Camera, Film, Lab, Scene, Stage, image_io, render};
 
 use crate::args::{self, Size};
 use crate::system;
@@ -24,8 +24,10 @@ const PROGRESS_AFTER: Duration = Duration::from_millis(500);
 #[derive(Args, Debug)]
 #[command(after_long_help = STAGES_HELP, allow_negative_numbers = true)]
 pub struct RenderArgs {
-    /// The scene: `cornell`, the lab's Cornell box (30 triangles, y down).
-    #[arg(default_value = "cornell")]
+    /// The scene: `cornell`, the lab's Cornell box (30 triangles, y down), or a model file
+    /// (.obj with its .mtl, .ply, either optionally .gz; y up, framed by the camera unless
+    /// --camera is given).
+    #[arg(default_value = "cornell", value_name = "SCENE|MODEL")]
     scene: String,
 
     /// Output image; the format comes from the extension (.png or .ppm).
@@ -36,9 +38,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "WxH", default_value = "500x500", value_parser = args::size, allow_hyphen_values = true)]
     size: Size,
 
-    /// Camera position (lab axes: x right, y down, z forward).
-    #[arg(long, value_name = "X,Y,Z", default_value = "0,0,-3", value_parser = args::vec3, allow_hyphen_values = true)]
-    camera: Vec3,
+    /// Camera position (lab axes: x right, y down, z forward) [default: the lab's (0, 0, -3) for
+    /// `cornell`; for a model, in front of it, framing its bounding box].
+    #[arg(long, value_name = "X,Y,Z", value_parser = args::vec3, allow_hyphen_values = true)]
+    camera: Option<Vec3>,
 
     /// Camera yaw in degrees: rotation about the vertical axis, positive toward +x (the lab's R(y)).
     #[arg(long, value_name = "DEG", default_value = "0", value_parser = args::finite_f32, allow_hyphen_values = true)]
@@ -53,11 +56,13 @@ pub struct RenderArgs {
     #[arg(long, value_name = "DEG", value_parser = args::fov_deg)]
     fov: Option<f32>,
 
-    /// Point-light position [default: the lab's (0, -0.5, -0.7)].
+    /// Point-light position [default: the lab's (0, -0.5, -0.7); for a model, above it, to the
+    /// right and in front].
     #[arg(long, value_name = "X,Y,Z", value_parser = args::vec3, allow_hyphen_values = true)]
     light: Option<Vec3>,
 
-    /// Point-light power P per channel [default: the lab's 14].
+    /// Point-light power P per channel [default: the lab's 14; for a model, enough for an
+    /// irradiance of 1 at its centre].
     #[arg(long, value_name = "WATTS", value_parser = args::non_negative_f32)]
     light_power: Option<f32>,
 
@@ -82,7 +87,7 @@ Every channel is clamped to [0,1] and shown without gamma, as in the lab.";
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     // Everything that can be checked is checked before rendering, so no work is lost.
-    let mut scene = Scene::built_in(&args.scene)?;
+    let (mut scene, is_model) = load_scene(&args.scene)?;
     if let Some(position) = args.light {
         scene.light.position = position;
     }
@@ -100,8 +105,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if !focal_length_px.is_finite() {
         bail!("--fov {} is too small: the focal length would be infinite", args.fov.unwrap_or(0.0));
     }
+    let default_position = match scene.bounds() {
+        Some((lo, hi)) if is_model => Camera::framing(lo, hi, width, height).position,
+        _ => Camera::lab(width, height).position,
+    };
     let camera = Camera {
-        position: args.camera,
+        position: args.camera.unwrap_or(default_position),
         yaw: args.yaw.to_radians(),
         focal_length_px,
         width,
@@ -129,7 +138,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .build()
         .context("cannot start the render threads")?;
 
-    let accel = BruteForce::new(&scene.triangles);
+    let start = Instant::now();
+    let accel = pool.install(|| Bvh::new(&scene.triangles));
+    let build = start.elapsed();
     let integrator = Lab::new(&scene, &accel, args.stage);
     let progress = Progress::new(height);
     let start = Instant::now();
@@ -139,12 +150,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     image_io::save_rgb8(&args.output, &film.to_rgb8_clamped()?)?;
     let report = format!(
-        "{}: {width}×{height}, {} stage {}, {:.1} ms on {threads} thread{}\n{camera}\n",
+        "{}: {width}×{height}, {} ({} triangles) stage {}, {:.1} ms on {threads} thread{} \
+         (+{:.1} ms BVH build)\n{camera}\nlight at {} power {}\n",
         args.output.display(),
         scene.name,
+        scene.triangles.len(),
         args.stage,
         elapsed.as_secs_f64() * 1e3,
         if threads == 1 { "" } else { "s" },
+        build.as_secs_f64() * 1e3,
+        tidy_vec3(scene.light.position),
+        tidy(scene.light.power.x),
     );
     // The image is written; a closed or full standard output is not worth a failure, but it
     // must not be a panic either (`println!` would panic).
@@ -154,6 +170,36 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         _ => Ok(()),
     }
+}
+
+/// A built-in scene by name, or a model file (anything that looks like a path). The flag says
+/// whether it is a model.
+fn load_scene(name: &str) -> Result<(Scene, bool)> {
+    if Scene::built_in(name).is_ok() {
+        return Ok((Scene::built_in(name)?, false));
+    }
+    let path = std::path::Path::new(name);
+    let looks_like_a_file = path.exists() || name.contains('/') || name.contains('.');
+    if !looks_like_a_file {
+        // Neither a built-in name nor a file: say what the built-in scenes are.
+        Scene::built_in(name)?;
+    }
+    let loaded = raylab::scene::load_mesh(path)?;
+    for warning in &loaded.warnings {
+        eprintln!("raylab: warning: {warning}");
+    }
+    Ok((Scene::from_mesh(&loaded.mesh), true))
+}
+
+/// A number with at most 4 significant decimals and no trailing zeros.
+fn tidy(v: f32) -> String {
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+fn tidy_vec3(v: Vec3) -> String {
+    format!("({}, {}, {})", tidy(v.x), tidy(v.y), tidy(v.z))
 }
 
 /// A progress bar that appears only on a terminal and only once a render has taken a while.

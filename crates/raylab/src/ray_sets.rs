@@ -162,6 +162,13 @@ pub struct HitRecord {
     pub prim: u32,
 }
 
+impl Default for HitRecord {
+    /// A miss.
+    fn default() -> Self {
+        HitRecord::from_hit(None)
+    }
+}
+
 impl HitRecord {
     /// The `prim` of a miss.
     pub const MISS: u32 = u32::MAX;

@@ -74,7 +74,7 @@ pub const LANES: usize = 8;
 #[repr(C, align(16))]
 pub struct TriangleBlock<const N: usize = LANES> {
     /// `vertices[j][axis][lane]`: coordinate `axis` of vertex `j` of the triangle in `lane`.
-    vertices: [[[f32; N]; 3]; 3],
+    pub(crate) vertices: [[[f32; N]; 3]; 3],
 }
 
 impl<const N: usize> TriangleBlock<N> {
@@ -113,7 +113,7 @@ impl<const N: usize> TriangleBlock<N> {
 
 /// Widens `t_max · det` by more than the relative rounding of that product and of
 /// `t = t_scaled · (1/det)` (a few units in the last place).
-const T_LIMIT_SLACK: f32 = 1.0 + 8.0 * f32::EPSILON;
+pub(crate) const T_LIMIT_SLACK: f32 = 1.0 + 8.0 * f32::EPSILON;
 
 /// `px·qy − py·qx` in double precision, where the products are exact.
 #[inline(never)]
@@ -126,14 +126,14 @@ fn edge_function_f64(px: f32, py: f32, qx: f32, qy: f32) -> f32 {
 /// maps the ray onto +z. Computed once per ray and reused for every triangle.
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
-    origin: Vec3,
-    t_min: f32,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    shear_x: f32,
-    shear_y: f32,
-    shear_z: f32,
+    pub(crate) origin: Vec3,
+    pub(crate) t_min: f32,
+    pub(crate) kx: usize,
+    pub(crate) ky: usize,
+    pub(crate) kz: usize,
+    pub(crate) shear_x: f32,
+    pub(crate) shear_y: f32,
+    pub(crate) shear_z: f32,
 }
 
 impl WatertightRay {

@@ -8,7 +8,9 @@
 //! plane): the tests in `bvh/mod.rs` check that all kernels agree bit for bit.
 
 use super::bounds::{FAR_SCALE, RayBoxTest};
+use super::build::BLOCK;
 use super::wide::{WIDTH, WideNode};
+use crate::triangle::{TriangleBlock, WatertightRay};
 
 /// Which children a ray enters, and where.
 pub(crate) trait NodeKernel {
@@ -24,6 +26,20 @@ pub(crate) trait NodeKernel {
     /// # Safety
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
     unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]);
+
+    /// The triangles of `block` that [`WatertightRay::intersect`] may hit below `t_max`: the
+    /// scalar twin is [`WatertightRay::block_candidates`].
+    ///
+    /// # Safety
+    /// As for [`enter`](Self::enter).
+    #[inline(always)]
+    unsafe fn block_candidates(
+        ray: &WatertightRay,
+        block: &TriangleBlock<BLOCK>,
+        t_max: f32,
+    ) -> u32 {
+        ray.block_candidates(block, t_max)
+    }
 }
 
 /// Plane rows of the near and far planes per axis: the box's min for a positive direction.
@@ -85,6 +101,15 @@ mod x86 {
         type Ray = Broadcast<__m128>;
 
         #[inline(always)]
+        unsafe fn block_candidates(
+            ray: &WatertightRay,
+            block: &TriangleBlock<BLOCK>,
+            t_max: f32,
+        ) -> u32 {
+            block_candidates_sse(ray, block, t_max)
+        }
+
+        #[inline(always)]
         fn prepare(ray: &RayBoxTest) -> Self::Ray {
             let (near_rows, far_rows) = plane_rows(ray);
             // SAFETY: SSE2 is part of x86-64.
@@ -128,11 +153,93 @@ mod x86 {
         }
     }
 
+    /// [`WatertightRay::block_candidates`] for four triangles with SSE2: the same operations in
+    /// the same order (no fused multiply-add), so the same mask bit for bit.
+    #[inline(always)]
+    pub(crate) fn block_candidates_sse(
+        ray: &WatertightRay,
+        block: &TriangleBlock<BLOCK>,
+        t_max: f32,
+    ) -> u32 {
+        let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
+        let [p0, p1, p2] = &block.vertices;
+        // SAFETY: SSE2 is part of x86-64; each load reads one row of 4 floats of the block,
+        // which is 16-byte aligned (`repr(align(16))`).
+        unsafe {
+            let splat = _mm_set1_ps;
+            let (ox, oy, oz) =
+                (splat(ray.origin[kx]), splat(ray.origin[ky]), splat(ray.origin[kz]));
+            let (sx, sy, sz) = (splat(ray.shear_x), splat(ray.shear_y), splat(ray.shear_z));
+            let load = |row: &[f32; BLOCK]| _mm_load_ps(row.as_ptr());
+            let a_kx = _mm_sub_ps(load(&p0[kx]), ox);
+            let a_ky = _mm_sub_ps(load(&p0[ky]), oy);
+            let a_kz = _mm_sub_ps(load(&p0[kz]), oz);
+            let b_kx = _mm_sub_ps(load(&p1[kx]), ox);
+            let b_ky = _mm_sub_ps(load(&p1[ky]), oy);
+            let b_kz = _mm_sub_ps(load(&p1[kz]), oz);
+            let c_kx = _mm_sub_ps(load(&p2[kx]), ox);
+            let c_ky = _mm_sub_ps(load(&p2[ky]), oy);
+            let c_kz = _mm_sub_ps(load(&p2[kz]), oz);
+            let ax = _mm_sub_ps(a_kx, _mm_mul_ps(sx, a_kz));
+            let ay = _mm_sub_ps(a_ky, _mm_mul_ps(sy, a_kz));
+            let bx = _mm_sub_ps(b_kx, _mm_mul_ps(sx, b_kz));
+            let by = _mm_sub_ps(b_ky, _mm_mul_ps(sy, b_kz));
+            let cx = _mm_sub_ps(c_kx, _mm_mul_ps(sx, c_kz));
+            let cy = _mm_sub_ps(c_ky, _mm_mul_ps(sy, c_kz));
+            let e0 = _mm_sub_ps(_mm_mul_ps(bx, cy), _mm_mul_ps(by, cx));
+            let e1 = _mm_sub_ps(_mm_mul_ps(cx, ay), _mm_mul_ps(cy, ax));
+            let e2 = _mm_sub_ps(_mm_mul_ps(ax, by), _mm_mul_ps(ay, bx));
+            let zero = _mm_setzero_ps();
+            let any_zero = _mm_or_ps(
+                _mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)),
+                _mm_cmpeq_ps(e2, zero),
+            );
+            let all_ge = _mm_and_ps(
+                _mm_and_ps(_mm_cmpge_ps(e0, zero), _mm_cmpge_ps(e1, zero)),
+                _mm_cmpge_ps(e2, zero),
+            );
+            let all_le = _mm_and_ps(
+                _mm_and_ps(_mm_cmple_ps(e0, zero), _mm_cmple_ps(e1, zero)),
+                _mm_cmple_ps(e2, zero),
+            );
+            let inside = _mm_or_ps(all_ge, all_le);
+            let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+            let t_scaled = _mm_add_ps(
+                _mm_add_ps(
+                    _mm_mul_ps(e0, _mm_mul_ps(sz, a_kz)),
+                    _mm_mul_ps(e1, _mm_mul_ps(sz, b_kz)),
+                ),
+                _mm_mul_ps(e2, _mm_mul_ps(sz, c_kz)),
+            );
+            let t_limit =
+                _mm_mul_ps(_mm_mul_ps(splat(t_max), det), splat(crate::triangle::T_LIMIT_SLACK));
+            let front = _mm_and_ps(
+                _mm_and_ps(_mm_cmpgt_ps(det, zero), _mm_cmpgt_ps(t_scaled, zero)),
+                _mm_cmplt_ps(t_scaled, t_limit),
+            );
+            let back = _mm_and_ps(
+                _mm_and_ps(_mm_cmplt_ps(det, zero), _mm_cmplt_ps(t_scaled, zero)),
+                _mm_cmpgt_ps(t_scaled, t_limit),
+            );
+            let pass = _mm_or_ps(any_zero, _mm_and_ps(inside, _mm_or_ps(front, back)));
+            _mm_movemask_ps(pass) as u32
+        }
+    }
+
     /// All eight children in one AVX2 register.
     pub(crate) struct Avx2;
 
     impl NodeKernel for Avx2 {
         type Ray = Broadcast<__m256>;
+
+        #[inline(always)]
+        unsafe fn block_candidates(
+            ray: &WatertightRay,
+            block: &TriangleBlock<BLOCK>,
+            t_max: f32,
+        ) -> u32 {
+            block_candidates_sse(ray, block, t_max)
+        }
 
         #[inline(always)]
         fn prepare(ray: &RayBoxTest) -> Self::Ray {

@@ -16,6 +16,43 @@ use crate::triangle::WatertightRay;
 /// and each level pushes at most seven siblings.
 const STACK_SIZE: usize = 640;
 
+/// A traversal stack on the call stack, not initialized: zeroing 5 KB per ray would cost about as
+/// much as tracing it.
+struct Stack<T: Copy> {
+    entries: [std::mem::MaybeUninit<T>; STACK_SIZE],
+    /// Entries below this index have been written.
+    written: usize,
+}
+
+impl<T: Copy> Stack<T> {
+    #[inline(always)]
+    fn new() -> Self {
+        // SAFETY: an array of `MaybeUninit` needs no initialization (the pattern of the
+        // `MaybeUninit` documentation); `[MaybeUninit::uninit(); N]` compiles to a memset here.
+        let entries = unsafe {
+            std::mem::MaybeUninit::<[std::mem::MaybeUninit<T>; STACK_SIZE]>::uninit().assume_init()
+        };
+        Stack { entries, written: 0 }
+    }
+
+    /// Writes entry `i`; entries are written in order, so `i <= written`. Panics past the end.
+    #[inline(always)]
+    fn set(&mut self, i: usize, value: T) {
+        assert!(i <= self.written, "stack entries are written without gaps");
+        self.entries[i] = std::mem::MaybeUninit::new(value);
+        self.written = self.written.max(i + 1);
+    }
+
+    /// Reads an entry that was written.
+    #[inline(always)]
+    fn get(&self, i: usize) -> T {
+        assert!(i < self.written, "read of an unwritten stack entry");
+        // SAFETY: every entry below `written` was initialized by `set` (entries are only ever
+        // written at indices up to `written`, so there are no gaps).
+        unsafe { self.entries[i].assume_init() }
+    }
+}
+
 /// The closest hit; ties at equal `t` go to the lowest triangle index, as in
 /// [`BruteForce`](crate::BruteForce), so the answer never depends on the tree.
 ///
@@ -33,7 +70,7 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
     // past a hit inside it must still be visited.
     let mut box_limit = ray.t_max * FAR_SCALE;
 
-    let mut stack = [(0u32, 0.0f32); STACK_SIZE];
+    let mut stack = Stack::<(u32, f32)>::new();
     let mut top = 0;
     let mut node = 0u32;
     loop {
@@ -48,11 +85,11 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
             let entry = (children[k], near[k]);
             // Insertion into the pushed run, kept sorted by decreasing distance.
             let mut i = top;
-            while i > first && stack[i - 1].1 < entry.1 {
-                stack[i] = stack[i - 1];
+            while i > first && stack.get(i - 1).1 < entry.1 {
+                stack.set(i, stack.get(i - 1));
                 i -= 1;
             }
-            stack[i] = entry;
+            stack.set(i, entry);
             top += 1;
         }
         // Pop until an interior node is due; leaves are intersected on the way.
@@ -61,7 +98,7 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
                 return best;
             }
             top -= 1;
-            let (child, near) = stack[top];
+            let (child, near) = stack.get(top);
             if near > box_limit {
                 continue;
             }
@@ -73,7 +110,9 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
                 Child::Leaf { first_block, blocks } => {
                     for b in first_block as usize..(first_block + blocks) as usize {
                         let block = &bvh.blocks[b];
-                        let mut candidates = triangle_ray.block_candidates(block, triangle_limit);
+                        // SAFETY: the caller guarantees `K`'s instruction set.
+                        let mut candidates =
+                            unsafe { K::block_candidates(&triangle_ray, block, triangle_limit) };
                         while candidates != 0 {
                             let lane = candidates.trailing_zeros() as usize;
                             candidates &= candidates - 1;
@@ -106,13 +145,13 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
     let triangle_ray = WatertightRay::new(ray);
     let box_ray = K::prepare(&RayBoxTest::new(ray));
     let box_limit = ray.t_max * FAR_SCALE;
-    let mut stack = [0u32; STACK_SIZE];
+    let mut stack = Stack::<u32>::new();
     let mut top = 0;
-    stack[top] = 0;
+    stack.set(top, 0);
     top += 1;
     while top > 0 {
         top -= 1;
-        let node = &bvh.nodes[stack[top] as usize];
+        let node = &bvh.nodes[stack.get(top) as usize];
         // SAFETY: the caller guarantees `K`'s instruction set.
         let (mut mask, _) = unsafe { K::enter(node, &box_ray, box_limit) };
         while mask != 0 {
@@ -120,13 +159,15 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
             mask &= mask - 1;
             match decode(node.children[k]) {
                 Child::Node(index) => {
-                    stack[top] = index;
+                    stack.set(top, index);
                     top += 1;
                 }
                 Child::Leaf { first_block, blocks } => {
                     for block in &bvh.blocks[first_block as usize..(first_block + blocks) as usize]
                     {
-                        let mut candidates = triangle_ray.block_candidates(block, ray.t_max);
+                        // SAFETY: the caller guarantees `K`'s instruction set.
+                        let mut candidates =
+                            unsafe { K::block_candidates(&triangle_ray, block, ray.t_max) };
                         while candidates != 0 {
                             let lane = candidates.trailing_zeros() as usize;
                             candidates &= candidates - 1;

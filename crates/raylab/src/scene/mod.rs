@@ -5,6 +5,7 @@
 
 mod cornell;
 mod file;
+mod model;
 mod obj;
 mod ply;
 
@@ -14,6 +15,7 @@ pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
 pub use file::{
     LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh, read_limit_bytes,
 };
+pub use model::model_to_lab;
 
 use crate::light::PointLight;
 use crate::triangle::Triangle;

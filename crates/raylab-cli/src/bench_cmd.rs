@@ -1,0 +1,366 @@
+//! `raylab bench`: the ray-set benchmark (`shared/bench/BENCHMARK.md`), side by side with Embree.
+//!
+//! `--generate DIR` writes the protocol's `primary.rays`, `shadow.rays` and `diffuse.rays` for a
+//! mesh. `--rays DIR` builds the BVH, traces the three sets on 1 and N threads the way the Embree
+//! reference program does (threads take chunks of 4096 rays from an atomic counter; one untimed
+//! warm-up pass, then the median of `--reps` passes), prints a table, and, when DIR holds
+//! reference answers (`*.hits`, `shadow.occluded`, as Embree's program writes them), how many of
+//! raylab's answers agree with them.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use raylab::bvh::{BuildSettings, Bvh};
+use raylab::ray_sets::{self, Frame, HitRecord};
+use raylab::{Accelerator, Ray};
+
+use crate::system;
+
+/// The most threads `--threads` accepts.
+const MAX_THREADS: usize = 1024;
+/// Rays per work item, as in the Embree reference program.
+const CHUNK: usize = 4096;
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// The mesh (.obj, .ply, optionally .gz).
+    mesh: PathBuf,
+
+    /// Write the protocol's ray sets for MESH into DIR (created if needed).
+    #[arg(long, value_name = "DIR", conflicts_with = "rays", required_unless_present = "rays")]
+    generate: Option<PathBuf>,
+
+    /// Trace the ray sets in DIR (`primary.rays`, `shadow.rays`, `diffuse.rays`, or `.gz`).
+    #[arg(long, value_name = "DIR")]
+    rays: Option<PathBuf>,
+
+    /// Image size of the primary rays for --generate.
+    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = crate::args::size)]
+    size: crate::args::Size,
+
+    /// Focal length as a multiple of the image width, for --generate (the protocol's f = W).
+    #[arg(long, value_name = "F", default_value = "1", value_parser = crate::args::positive_f32)]
+    focal: f32,
+
+    /// The second thread count to measure, besides 1 [default: one per core].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+
+    /// Timed repetitions per measurement; the median is reported.
+    #[arg(long, value_name = "N", default_value = "7")]
+    reps: usize,
+
+    /// BVH build preset: fast, medium or high.
+    #[arg(long, value_name = "PRESET", default_value = "medium")]
+    build: String,
+
+    /// Also write the figures as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+
+    /// Also write raylab's answers (`primary.hits`, `shadow.hits`, `shadow.occluded`,
+    /// `diffuse.hits`) into OUT (created if needed).
+    #[arg(long, value_name = "OUT")]
+    write_hits: Option<PathBuf>,
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let settings = BuildSettings::PRESETS
+        .iter()
+        .find(|(name, _)| *name == args.build)
+        .map(|(_, s)| *s)
+        .with_context(|| {
+            format!("unknown build preset '{}': use fast, medium or high", args.build)
+        })?;
+    let threads = args.threads.unwrap_or_else(system::cores);
+    if threads == 0 || threads > MAX_THREADS {
+        bail!("--threads must be between 1 and {MAX_THREADS}, not {threads}");
+    }
+    if args.reps == 0 || args.reps > 1000 {
+        bail!("--reps must be between 1 and 1000, not {}", args.reps);
+    }
+    let loaded = raylab::scene::load_mesh(&args.mesh)?;
+    for warning in &loaded.warnings {
+        eprintln!("raylab: warning: {warning}");
+    }
+    let mesh = loaded.mesh;
+    let triangles: Vec<_> = mesh.triangle_vertices().collect();
+
+    if let Some(dir) = &args.generate {
+        return generate(args, &mesh, &triangles, dir, &settings);
+    }
+    let dir = args.rays.as_ref().expect("clap requires --generate or --rays");
+    let sets = [("primary", false), ("shadow", true), ("diffuse", false)].map(
+        |(name, occlusion)| -> Result<(&str, bool, Vec<Ray>)> {
+            Ok((name, occlusion, ray_sets::read_rays(&find_file(dir, &format!("{name}.rays"))?)?))
+        },
+    );
+    let sets: Vec<(&str, bool, Vec<Ray>)> = sets.into_iter().collect::<Result<_>>()?;
+
+    // Build: the median over `reps` builds on 1 thread and on N threads.
+    let build_ms = |threads: usize| -> Result<(f64, Bvh)> {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+        let mut times = Vec::new();
+        let mut bvh = None;
+        for _ in 0..args.reps.max(3) {
+            let start = Instant::now();
+            let built = pool.install(|| Bvh::build(&triangles, &settings));
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+            bvh = Some(built);
+        }
+        Ok((median(&mut times), bvh.expect("at least one build")))
+    };
+    let (build_1, _) = build_ms(1)?;
+    let (build_n, bvh) = build_ms(threads)?;
+    let stats = bvh.stats();
+
+    println!(
+        "{}: {} triangles ({} in the BVH), BVH {} preset, {} kernels",
+        args.mesh.display(),
+        stats.triangles,
+        stats.indexed_triangles,
+        args.build,
+        bvh.isa().name()
+    );
+    println!(
+        "BVH build: {build_1:.1} ms on 1 thread, {build_n:.1} ms on {threads}; {} bytes ({:.1} per triangle)",
+        stats.bytes(),
+        stats.bytes() as f64 / stats.triangles.max(1) as f64
+    );
+    println!(
+        "{:<9} {:<9} {:>9} {:>13} {:>13}",
+        "set",
+        "query",
+        "rays",
+        "1 thread",
+        format!("{threads} threads")
+    );
+
+    let mut results = Vec::new();
+    for (name, occlusion, rays) in &sets {
+        let query = if *occlusion { "occluded" } else { "closest" };
+        let mut per_threads = Vec::new();
+        for n in [1, threads] {
+            let seconds = if *occlusion {
+                time_median(args.reps, || trace_occluded(&bvh, rays, n))
+            } else {
+                time_median(args.reps, || trace_closest(&bvh, rays, n))
+            };
+            per_threads.push((n, rays.len() as f64 / seconds / 1e6));
+        }
+        println!(
+            "{:<9} {:<9} {:>9} {:>8.2} Mr/s {:>8.2} Mr/s",
+            name,
+            query,
+            rays.len(),
+            per_threads[0].1,
+            per_threads[1].1
+        );
+        results.push(SetResult { set: name.to_string(), query, mrays_per_s: per_threads });
+    }
+
+    // Answers: compare with reference files in DIR where present, and write them if asked.
+    let primary_hits: Vec<HitRecord> = trace_closest(&bvh, &sets[0].2, threads);
+    let shadow_occluded = trace_occluded(&bvh, &sets[1].2, threads);
+    let shadow_hits = trace_closest(&bvh, &sets[1].2, threads);
+    let diffuse_hits = trace_closest(&bvh, &sets[2].2, threads);
+    for (file, ours) in [
+        ("primary.hits", &primary_hits),
+        ("shadow.hits", &shadow_hits),
+        ("diffuse.hits", &diffuse_hits),
+    ] {
+        if let Ok(path) = find_file(dir, file) {
+            let reference = ray_sets::read_hits(&path)?;
+            let agreement = compare_hits(&reference, ours);
+            println!("{file}: {agreement}");
+        }
+    }
+    if let Ok(path) = find_file(dir, "shadow.occluded") {
+        let reference = ray_sets::read_occluded(&path)?;
+        let same = reference.iter().zip(&shadow_occluded).filter(|(a, b)| a == b).count();
+        println!(
+            "shadow.occluded: {same} of {} agree ({} differ)",
+            reference.len(),
+            reference.len().max(shadow_occluded.len()) - same
+        );
+    }
+    if let Some(out) = &args.write_hits {
+        std::fs::create_dir_all(out)
+            .with_context(|| format!("cannot create '{}'", out.display()))?;
+        ray_sets::write_hits(&out.join("primary.hits"), &primary_hits)?;
+        ray_sets::write_hits(&out.join("shadow.hits"), &shadow_hits)?;
+        ray_sets::write_occluded(&out.join("shadow.occluded"), &shadow_occluded)?;
+        ray_sets::write_hits(&out.join("diffuse.hits"), &diffuse_hits)?;
+        println!("answers written to {}", out.display());
+    }
+
+    if let Some(path) = &args.json {
+        let json = to_json(stats.triangles, build_1, build_n, threads, stats.bytes(), &results);
+        std::fs::write(path, json).with_context(|| format!("cannot write '{}'", path.display()))?;
+    }
+    Ok(())
+}
+
+/// `DIR/NAME`, or `DIR/NAME.gz`.
+fn find_file(dir: &Path, name: &str) -> Result<PathBuf> {
+    let plain = dir.join(name);
+    if plain.is_file() {
+        return Ok(plain);
+    }
+    let gz = dir.join(format!("{name}.gz"));
+    if gz.is_file() {
+        return Ok(gz);
+    }
+    bail!("'{}': no such file (nor .gz)", plain.display())
+}
+
+fn generate(
+    args: &BenchArgs,
+    mesh: &raylab::Mesh,
+    triangles: &[[glam::Vec3; 3]],
+    dir: &Path,
+    settings: &BuildSettings,
+) -> Result<()> {
+    let frame = Frame::of(mesh).context("the mesh has no triangles")?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
+    let bvh = Bvh::build(triangles, settings);
+    let focal = args.focal as f64 * args.size.width as f64;
+    let primary = ray_sets::primary_rays(&frame, args.size.width, args.size.height, focal);
+    let hits = trace_closest(&bvh, &primary, system::cores());
+    let shadow = ray_sets::shadow_rays(&frame, &primary, &hits);
+    let diffuse = ray_sets::diffuse_rays(&frame, mesh, &primary, &hits);
+    for (name, rays) in [("primary", &primary), ("shadow", &shadow), ("diffuse", &diffuse)] {
+        ray_sets::write_rays(&dir.join(format!("{name}.rays")), rays)?;
+    }
+    println!(
+        "{}: {} primary, {} shadow and {} diffuse rays written to {}",
+        args.mesh.display(),
+        primary.len(),
+        shadow.len(),
+        diffuse.len(),
+        dir.display()
+    );
+    Ok(())
+}
+
+/// One set's figures: its name, its query, and Mrays/s per thread count.
+struct SetResult {
+    set: String,
+    query: &'static str,
+    mrays_per_s: Vec<(usize, f64)>,
+}
+
+/// Runs `f` over `rays` on `threads` threads that take chunks of [`CHUNK`] rays from a shared
+/// counter, writing each answer into its ray's slot.
+fn trace<T: Copy + Default + Send>(
+    rays: &[Ray],
+    threads: usize,
+    f: impl Fn(&Ray) -> T + Sync,
+) -> Vec<T> {
+    let mut out = vec![T::default(); rays.len()];
+    let chunks: Vec<Mutex<&mut [T]>> = out.chunks_mut(CHUNK).map(Mutex::new).collect();
+    let next = AtomicUsize::new(0);
+    let work = || {
+        loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            let Some(chunk) = chunks.get(k) else { break };
+            let mut chunk = chunk.lock().expect("no thread panics while holding a chunk");
+            for (slot, ray) in chunk.iter_mut().zip(&rays[k * CHUNK..]) {
+                *slot = f(ray);
+            }
+        }
+    };
+    std::thread::scope(|scope| {
+        for _ in 1..threads {
+            scope.spawn(work);
+        }
+        work();
+    });
+    drop(chunks);
+    out
+}
+
+fn trace_closest(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<HitRecord> {
+    trace(rays, threads, |ray| HitRecord::from_hit(bvh.closest_hit(ray)))
+}
+
+fn trace_occluded(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<bool> {
+    trace(rays, threads, |ray| bvh.occluded(ray))
+}
+
+/// One untimed warm-up, then the median wall time of `reps` runs, in seconds.
+fn time_median<T>(reps: usize, mut f: impl FnMut() -> T) -> f64 {
+    std::hint::black_box(f());
+    let mut times: Vec<f64> = (0..reps)
+        .map(|_| {
+            let start = Instant::now();
+            std::hint::black_box(f());
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    median(&mut times)
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) }
+}
+
+/// How far two sets of closest hits agree, by the protocol's rules: the same hit or miss, `t`
+/// within 1e-5 relative, and a different triangle only where the `t` values agree.
+fn compare_hits(reference: &[HitRecord], ours: &[HitRecord]) -> String {
+    if reference.len() != ours.len() {
+        return format!(
+            "{} reference records for {} rays: not comparable",
+            reference.len(),
+            ours.len()
+        );
+    }
+    let (mut hit_miss, mut t_off, mut other_prim_same_t) = (0, 0, 0);
+    for (r, o) in reference.iter().zip(ours) {
+        if r.is_hit() != o.is_hit() {
+            hit_miss += 1;
+        } else if r.is_hit() {
+            let close = (r.t - o.t).abs() <= 1e-5 * r.t.abs().max(o.t.abs());
+            if !close {
+                t_off += 1;
+            } else if r.prim != o.prim {
+                other_prim_same_t += 1;
+            }
+        }
+    }
+    let agree = reference.len() - hit_miss - t_off;
+    format!(
+        "{agree} of {} agree ({:.4} %); {hit_miss} hit/miss and {t_off} t differences; \
+         {other_prim_same_t} other triangles at equal t",
+        reference.len(),
+        100.0 * agree as f64 / reference.len().max(1) as f64
+    )
+}
+
+fn to_json(
+    triangles: usize,
+    build_1: f64,
+    build_n: f64,
+    threads: usize,
+    bvh_bytes: usize,
+    results: &[SetResult],
+) -> String {
+    let sets: Vec<String> = results
+        .iter()
+        .map(|r| {
+            let figures: Vec<String> =
+                r.mrays_per_s.iter().map(|(n, m)| format!("\"{n}\": {m:.4}")).collect();
+            format!("    \"{}\": {{\"{}\": {{{}}}}}", r.set, r.query, figures.join(", "))
+        })
+        .collect();
+    format!(
+        "{{\n  \"triangles\": {triangles},\n  \"build_ms\": {build_1:.3},\n  \"build_ms_threads\": {{\"1\": {build_1:.3}, \"{threads}\": {build_n:.3}}},\n  \"bvh_bytes\": {bvh_bytes},\n  \"sets\": {{\n{}\n  }}\n}}\n",
+        sets.join(",\n")
+    )
+}
