@@ -240,28 +240,58 @@ impl WatertightRay {
             return None; // `t_max · det` may have rounded; decide on t itself.
         }
 
-        // Reject hits whose t is not conservatively greater than zero (PBR 4th ed. §6.8.4):
-        // together with the offset of spawned rays this rules out self-intersection.
-        let max_zt = az.abs().max(bz.abs()).max(cz.abs());
-        let delta_z = gamma(3) * max_zt;
-        let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
-        let max_yt = ay.abs().max(by.abs()).max(cy.abs());
-        // The error of `a[kx] − shear_x·a[kz]` is relative to both terms. PBR bounds the second
-        // by the sheared z, which is too loose for short directions (it rejects real hits, e.g.
-        // of a 10⁻⁶-sized scene's rays) and too tight for long ones; bounding it directly keeps
-        // the bound conservative and tight for directions of any length.
-        let max_unsheared_z = a[kz].abs().max(b[kz].abs()).max(c[kz].abs());
-        let delta_x = gamma(5) * (max_xt + self.shear_x.abs() * max_unsheared_z);
-        let delta_y = gamma(5) * (max_yt + self.shear_y.abs() * max_unsheared_z);
-        let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        let delta_t =
-            3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t || t < self.t_min {
+        // A caller that sets `t_min > 0` brings its own epsilon (as Embree's `tnear`): hits
+        // from `t_min` on count. Otherwise reject hits whose t is not conservatively greater than
+        // zero (PBR 4th ed. §6.8.4): together with the offset of spawned rays this rules out
+        // self-intersection. The bound is loose for small triangles seen at grazing angles, so it
+        // is not applied on top of an explicit `t_min` (where it would reject real hits that are
+        // well past the caller's epsilon).
+        if self.t_min > 0.0 {
+            if t < self.t_min {
+                return None;
+            }
+        } else if t
+            <= self.conservative_delta_t(
+                [a, b, c],
+                [ax, bx, cx],
+                [ay, by, cy],
+                [e0, e1, e2],
+                inv_det,
+            )
+        {
             return None;
         }
 
         Some(TriangleHit { t, b0: e0 * inv_det, b1: e1 * inv_det, b2: e2 * inv_det })
+    }
+
+    /// PBR 4th ed. §6.8.4's bound on the rounding error of `t`, for vertices relative to the
+    /// origin `v`, their sheared coordinates `x`, `y`, the edge functions `e` and `1/det`.
+    #[inline]
+    fn conservative_delta_t(
+        &self,
+        v: [Vec3; 3],
+        x: [f32; 3],
+        y: [f32; 3],
+        e: [f32; 3],
+        inv_det: f32,
+    ) -> f32 {
+        let kz = self.kz;
+        let max3 = |p: [f32; 3]| p[0].abs().max(p[1].abs()).max(p[2].abs());
+        let max_zt = max3(v.map(|p| self.shear_z * p[kz]));
+        let delta_z = gamma(3) * max_zt;
+        let max_xt = max3(x);
+        let max_yt = max3(y);
+        // The error of `a[kx] − shear_x·a[kz]` is relative to both terms. PBR bounds the second
+        // by the sheared z, which is too loose for short directions (it rejects real hits, e.g.
+        // of a 10⁻⁶-sized scene's rays) and too tight for long ones; bounding it directly keeps
+        // the bound conservative and tight for directions of any length.
+        let max_unsheared_z = max3(v.map(|p| p[kz]));
+        let delta_x = gamma(5) * (max_xt + self.shear_x.abs() * max_unsheared_z);
+        let delta_y = gamma(5) * (max_yt + self.shear_y.abs() * max_unsheared_z);
+        let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let max_e = max3(e);
+        3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
     }
 }
 
