@@ -197,3 +197,69 @@ fn non_finite_and_zero_area_triangles_are_left_out_but_keep_their_indices() {
     let hit = bvh.closest_hit(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap();
     assert_eq!((hit.triangle, hit.t), (3, 2.0));
 }
+
+/// Rays from around a mesh's bounding box toward random points of random triangles (and a few
+/// random directions), deterministic.
+fn mesh_rays(triangles: &[[Vec3; 3]], count: usize) -> Vec<Ray> {
+    let (lo, hi) = triangles
+        .iter()
+        .flatten()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let centre = 0.5 * (lo + hi);
+    let radius = 0.5 * (hi - lo).length();
+    let mut state = 12345u64;
+    let mut next = move || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((state >> 40) as f32) / (1u64 << 24) as f32
+    };
+    (0..count)
+        .map(|i| {
+            let on_sphere =
+                Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vec3::X);
+            let origin = if i % 4 == 0 { centre } else { centre + on_sphere * radius * 1.5 };
+            let [a, b, c] = triangles[(next() * triangles.len() as f32) as usize % triangles.len()];
+            let target = a.lerp(b, next()).lerp(c, next());
+            let direction = if i % 7 == 0 { on_sphere } else { target - origin };
+            Ray::new(origin, direction)
+        })
+        .collect()
+}
+
+fn mesh_agrees(path: &std::path::Path, rays: usize) {
+    let mesh = raylab::scene::load_mesh(path).unwrap().mesh;
+    let triangles: Vec<[Vec3; 3]> = mesh.triangle_vertices().collect();
+    let rays = mesh_rays(&triangles, rays);
+    let hits = assert_agreement(&triangles, &rays).unwrap();
+    eprintln!(
+        "{}: {} triangles, {hits} of {} rays hit",
+        path.display(),
+        triangles.len(),
+        rays.len()
+    );
+    assert!(hits > rays.len() / 2);
+}
+
+#[test]
+fn the_repository_meshes_agree_with_brute_force() {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
+    for (file, rays) in [
+        ("teapot.obj", 2000),
+        ("bunny_lowres.obj", 2000),
+        ("cornell_box/cornell_box.obj", 2000),
+        ("spider/spider.obj", 2000),
+        ("bunny.obj.gz", 150),
+    ] {
+        mesh_agrees(&data.join(file), rays);
+    }
+}
+
+/// The big meshes of `shared/data` beside the checkout (not in the repository):
+/// `cargo test --release -p raylab --test bvh -- --ignored`.
+#[test]
+#[ignore = "needs ../shared/data and a release build"]
+fn the_shared_meshes_agree_with_brute_force() {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
+    for file in ["dragon_res2.obj.gz", "2CylinderEngine/2CylinderEngine.obj.gz", "dragon.obj.gz"] {
+        mesh_agrees(&data.join(file), 100);
+    }
+}
