@@ -188,3 +188,125 @@ fn a_rejected_render_keeps_the_previous_image() {
     assert_eq!(std::fs::read(dir.path().join("render.png")).unwrap(), b"the previous picture");
     assert_eq!(files_in(dir.path()), ["render.png"]);
 }
+
+fn mesh_data(path: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../raylab/tests/data/meshes").join(path)
+}
+
+#[test]
+fn a_model_renders_upright_framed_and_lit() {
+    let dir = tempfile::tempdir().unwrap();
+    let teapot = mesh_data("teapot.obj");
+    let out = raylab(
+        dir.path(),
+        &["render", teapot.to_str().unwrap(), "-o", "t.png", "--size", "120x80"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("teapot") && stdout.contains("992 triangles"), "{stdout}");
+    let image = image::open(dir.path().join("t.png")).unwrap().to_rgb8();
+    // Framed: the teapot is in the picture but does not touch the border; the background is black.
+    let lit = |x: u32, y: u32| image.get_pixel(x, y).0.iter().any(|&c| c > 0);
+    let border_lit =
+        (0..120).any(|x| lit(x, 0) || lit(x, 79)) || (0..80).any(|y| lit(0, y) || lit(119, y));
+    assert!(!border_lit, "the model touches the border");
+    let covered =
+        (0..80).flat_map(|y| (0..120).map(move |x| (x, y))).filter(|&(x, y)| lit(x, y)).count();
+    assert!(covered > 120 * 80 / 10, "the model covers only {covered} pixels");
+    // Lit: brighter than the ambient term alone somewhere (the light reaches it).
+    let brightest = image.pixels().map(|p| p.0[0]).max().unwrap();
+    assert!(brightest > 150, "brightest {brightest}");
+    // Upright and not mirrored: a y-up triangle with its apex at the top and its right angle at
+    // the bottom right must appear so.
+    std::fs::write(dir.path().join("tent.obj"), "v -1 0 0\nv 1 0 0\nv 1 2 0\nf 1 2 3\n").unwrap();
+    let out = raylab(dir.path(), &["render", "tent.obj", "-o", "tent.png", "--size", "100x100"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let image = image::open(dir.path().join("tent.png")).unwrap().to_rgb8();
+    let lit = |x: u32, y: u32| image.get_pixel(x, y).0.iter().any(|&c| c > 0);
+    let row = |y: u32| (0..100).filter(|&x| lit(x, y)).collect::<Vec<u32>>();
+    let rows: Vec<u32> = (0..100).filter(|&y| !row(y).is_empty()).collect();
+    let (top, bottom) = (row(rows[0]), row(*rows.last().unwrap()));
+    assert!(top.len() * 4 < bottom.len(), "apex row {} wide, base row {}", top.len(), bottom.len());
+    assert!(top[0] > 50, "the apex is on the right, not mirrored: {top:?}");
+}
+
+#[test]
+fn a_broken_model_is_one_line_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    let out = raylab(dir.path(), &["render", "bad.obj", "-o", "x.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("bad.obj") && stderr.contains("line 3"), "{stderr}");
+    assert!(!dir.path().join("x.png").exists());
+    let out = raylab(dir.path(), &["render", "missing.ply"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("missing.ply"));
+}
+
+#[test]
+fn bench_generates_traces_and_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = mesh_data("cornell_box/cornell_box.obj");
+    let mesh = mesh.to_str().unwrap();
+    let out = raylab(dir.path(), &["bench", mesh, "--generate", "rays", "--size", "32x24"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let primary = raylab::ray_sets::read_rays(&dir.path().join("rays/primary.rays")).unwrap();
+    assert_eq!(primary.len(), 32 * 24);
+    let out = raylab(
+        dir.path(),
+        &[
+            "bench",
+            mesh,
+            "--rays",
+            "rays",
+            "--reps",
+            "1",
+            "--threads",
+            "2",
+            "--json",
+            "b.json",
+            "--write-hits",
+            "hits",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    for word in ["primary", "shadow", "diffuse", "Mr/s", "BVH build", "per triangle"] {
+        assert!(stdout.contains(word), "{word}: {stdout}");
+    }
+    let json = std::fs::read_to_string(dir.path().join("b.json")).unwrap();
+    for key in [
+        "\"triangles\": 32",
+        "\"build_ms\"",
+        "\"bvh_bytes\"",
+        "\"primary\": {\"closest\": {\"1\": ",
+        "\"shadow\": {\"occluded\"",
+        "\"diffuse\": {\"closest\"",
+    ] {
+        assert!(json.contains(key), "{key}: {json}");
+    }
+    // The answers written back are raylab's own: tracing them again gives the same.
+    let hits = raylab::ray_sets::read_hits(&dir.path().join("hits/primary.hits")).unwrap();
+    assert_eq!(hits.len(), primary.len());
+    assert!(hits.iter().filter(|h| h.is_hit()).count() > primary.len() / 2);
+    let occluded =
+        raylab::ray_sets::read_occluded(&dir.path().join("hits/shadow.occluded")).unwrap();
+    assert_eq!(occluded.len(), hits.iter().filter(|h| h.is_hit()).count());
+    // With the answers in the ray folder, bench reports full agreement.
+    std::fs::copy(dir.path().join("hits/primary.hits"), dir.path().join("rays/primary.hits"))
+        .unwrap();
+    let out =
+        raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"]);
+    assert!(text(&out.stdout).contains("primary.hits: 768 of 768 agree"), "{}", text(&out.stdout));
+    // Bad input: one line, non-zero.
+    let out = raylab(dir.path(), &["bench", mesh, "--rays", "nowhere"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("nowhere"), "{}", text(&out.stderr));
+    std::fs::write(dir.path().join("rays/shadow.rays"), b"RAYS junk").unwrap();
+    let out = raylab(dir.path(), &["bench", mesh, "--rays", "rays"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(text(&out.stderr).lines().count(), 1);
+    assert!(text(&out.stderr).contains("shadow.rays"), "{}", text(&out.stderr));
+}

@@ -63,16 +63,19 @@ impl Scene {
 }
 
 impl Camera {
-    /// A camera looking along +z (yaw 0) that frames the box `(lo, hi)`: the box's bounding
-    /// sphere fits in the narrower field of view, with a small margin. `f = width`, as the lab's
-    /// camera.
+    /// A camera looking along +z (yaw 0) that frames the box `(lo, hi)`: the whole box is in view
+    /// with a margin of about 5 %, at the distance where its nearest face just fits the field of
+    /// view across and down. `f = width`, as the lab's camera.
     pub fn framing(lo: Vec3, hi: Vec3, width: u32, height: u32) -> Camera {
         let mut camera = Camera::lab(width, height);
         let centre = 0.5 * (lo + hi);
-        let radius = 0.5 * (hi - lo).length();
-        let half_fov = camera.fov_x_deg().min(camera.fov_y_deg()).to_radians() / 2.0;
-        let distance = 1.05 * radius / half_fov.sin();
-        camera.position = centre - Vec3::Z * distance.max(f32::MIN_POSITIVE);
+        let half = 0.5 * (hi - lo);
+        let tan_x = (camera.fov_x_deg().to_radians() / 2.0).tan();
+        let tan_y = (camera.fov_y_deg().to_radians() / 2.0).tan();
+        // Every corner is at most `half.z` nearer than the centre, so the distance from the
+        // centre that fits the front face also fits the rest of the box.
+        let fit = (half.x / tan_x).max(half.y / tan_y) * 1.1 + half.z;
+        camera.position = centre - Vec3::Z * fit.max(f32::MIN_POSITIVE);
         camera
     }
 }
