@@ -37,7 +37,6 @@ fn compare(reference: &[HitRecord], ours: &[HitRecord]) -> Agreement {
             a.hit_miss += 1;
         } else if r.is_hit() {
             let rel = (r.t - o.t).abs() / r.t.abs().max(o.t.abs());
-            if rel > 1e-3 {}
             a.t_max_rel = a.t_max_rel.max(rel);
             if rel > 1e-5 {
                 a.t_far += 1;
