@@ -77,6 +77,13 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
         // SAFETY: the caller guarantees `K`'s instruction set.
         let (mut mask, near) = unsafe { K::enter(&bvh.nodes[node as usize], &box_ray, box_limit) };
         let children = &bvh.nodes[node as usize].children;
+        // One interior child entered (common deep in the tree): descend without the stack.
+        if mask.count_ones() == 1 {
+            if let Child::Node(index) = decode(children[mask.trailing_zeros() as usize]) {
+                node = index;
+                continue;
+            }
+        }
         // Push the entered children farthest first, so that the nearest is on top.
         let first = top;
         while mask != 0 {

@@ -91,7 +91,7 @@ impl FromStr for Stage {
 
 /// The lab's integrator over a scene and an accelerator built from its triangles.
 #[derive(Clone, Copy, Debug)]
-pub struct Lab<'a, A> {
+pub struct Lab<'a, A: ?Sized> {
     scene: &'a Scene,
     accel: &'a A,
     stage: Stage,
@@ -99,14 +99,14 @@ pub struct Lab<'a, A> {
     pub ambient: Vec3,
 }
 
-impl<'a, A: Accelerator> Lab<'a, A> {
+impl<'a, A: Accelerator + ?Sized> Lab<'a, A> {
     /// The lab's model at `stage`, with the lab's ambient light `N = 0.5`.
     pub fn new(scene: &'a Scene, accel: &'a A, stage: Stage) -> Self {
         Lab { scene, accel, stage, ambient: Vec3::splat(0.5) }
     }
 }
 
-impl<A: Accelerator> Integrator for Lab<'_, A> {
+impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
     fn radiance(&self, ray: &Ray) -> Vec3 {
         let Some(hit) = self.accel.closest_hit(ray) else {
             return Vec3::ZERO;
