@@ -10,7 +10,7 @@
 //! Large nodes are binned in parallel and their two children built in parallel (rayon), so the
 //! build uses every thread of the pool it runs in; on a pool of one thread it is sequential.
 
-use glam::Vec3;
+use glam::Vec3A;
 
 use super::BuildSettings;
 use super::bounds::Bounds;
@@ -52,8 +52,10 @@ const MAX_SAH_DEPTH: usize = 48;
 /// Builds over `prims` (the bounds of each primitive; primitives whose index is not in `indices`
 /// are left out).
 pub(crate) fn build(prims: &[Bounds], indices: Vec<u32>, settings: &BuildSettings) -> BinaryBvh {
-    let centroids: Vec<Vec3> = prims.iter().map(Bounds::centroid).collect();
-    let builder = Builder { prims, centroids: &centroids, settings };
+    let boxes: Vec<Aabb> =
+        prims.iter().map(|b| Aabb { min: b.min.into(), max: b.max.into() }).collect();
+    let centroids: Vec<Vec3A> = boxes.iter().map(|b| 0.5 * (b.min + b.max)).collect();
+    let builder = Builder { prims: &boxes, centroids: &centroids, settings };
     let mut order = indices;
     let mut nodes = Vec::with_capacity(2 * order.len() / settings.max_leaf_size.max(1) + 1);
     if !order.is_empty() {
@@ -63,17 +65,53 @@ pub(crate) fn build(prims: &[Bounds], indices: Vec<u32>, settings: &BuildSetting
     BinaryBvh { nodes, order }
 }
 
+/// A box in SIMD-friendly form, for the build only.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Aabb {
+    min: Vec3A,
+    max: Vec3A,
+}
+
+impl Default for Aabb {
+    fn default() -> Self {
+        Aabb::EMPTY
+    }
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
+
+    #[inline]
+    fn union(self, other: Aabb) -> Aabb {
+        Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    #[inline]
+    fn grow(self, p: Vec3A) -> Aabb {
+        Aabb { min: self.min.min(p), max: self.max.max(p) }
+    }
+
+    #[inline]
+    fn half_area(&self) -> f32 {
+        self.bounds().half_area()
+    }
+
+    #[inline]
+    fn bounds(&self) -> Bounds {
+        Bounds { min: self.min.into(), max: self.max.into() }
+    }
+}
+
 struct Builder<'a> {
-    prims: &'a [Bounds],
-    centroids: &'a [Vec3],
+    prims: &'a [Aabb],
+    centroids: &'a [Vec3A],
     settings: &'a BuildSettings,
 }
 
-/// Per-bin bounds of primitives, of their centroids, and counts.
+/// Per-bin bounds of primitives, and counts.
 #[derive(Clone, Copy, Default)]
 struct Bin {
-    bounds: Bounds,
-    centroids: Bounds,
+    bounds: Aabb,
     count: u32,
 }
 
@@ -83,8 +121,8 @@ struct Split {
     /// Primitives in bins `< bin` go left.
     bin: usize,
     cost: f32,
-    left: (Bounds, Bounds),
-    right: (Bounds, Bounds),
+    left: Aabb,
+    right: Aabb,
 }
 
 /// How many leaf blocks `n` primitives fill.
@@ -93,12 +131,36 @@ fn blocks(n: u32) -> f32 {
     n.div_ceil(BLOCK as u32) as f32
 }
 
+/// Maps centroids to bins: `bin = ⌊(c − min)·scale⌋`, clamped to the last bin.
+#[derive(Clone, Copy)]
+struct Binning {
+    min: Vec3A,
+    scale: Vec3A,
+    last: u32,
+}
+
+impl Binning {
+    fn new(centroid_bounds: &Aabb, bins: usize) -> Self {
+        let extent = centroid_bounds.max - centroid_bounds.min;
+        // Slightly fewer than `bins` per extent, so that the maximum lands in the last bin.
+        let per_extent = bins as f32 * (1.0 - 1e-6);
+        let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), per_extent / extent, Vec3A::ZERO);
+        Binning { min: centroid_bounds.min, scale, last: bins as u32 - 1 }
+    }
+
+    /// The bins of a centroid along the three axes.
+    #[inline]
+    fn bins(&self, c: Vec3A) -> glam::UVec3 {
+        ((c - self.min) * self.scale).as_uvec3().min(glam::UVec3::splat(self.last))
+    }
+}
+
 impl Builder<'_> {
-    fn bounds_of(&self, indices: &[u32]) -> (Bounds, Bounds) {
-        let fold = |(b, c): (Bounds, Bounds), &i: &u32| {
+    fn bounds_of(&self, indices: &[u32]) -> (Aabb, Aabb) {
+        let fold = |(b, c): (Aabb, Aabb), &i: &u32| {
             (b.union(self.prims[i as usize]), c.grow(self.centroids[i as usize]))
         };
-        let empty = (Bounds::EMPTY, Bounds::EMPTY);
+        let empty = (Aabb::EMPTY, Aabb::EMPTY);
         if indices.len() >= PARALLEL_MIN {
             use rayon::prelude::*;
             indices
@@ -115,20 +177,20 @@ impl Builder<'_> {
         &self,
         indices: &mut [u32],
         first: u32,
-        bounds: Bounds,
-        centroid_bounds: Bounds,
+        bounds: Aabb,
+        centroid_bounds: Aabb,
         depth: usize,
         out: &mut Vec<BinaryNode>,
     ) {
         let n = indices.len();
-        let leaf = BinaryNode { bounds, first_or_right: first, count: n as u32 };
+        let leaf = BinaryNode { bounds: bounds.bounds(), first_or_right: first, count: n as u32 };
         if n <= 1 {
             out.push(leaf);
             return;
         }
         let max_leaf = self.settings.max_leaf_size;
         let split = if depth < MAX_SAH_DEPTH {
-            self.best_split(indices, bounds, centroid_bounds)
+            self.best_split(indices, &bounds, &centroid_bounds)
         } else {
             None
         };
@@ -139,8 +201,9 @@ impl Builder<'_> {
                     out.push(leaf);
                     return;
                 }
-                let mid = self.partition(indices, &split, centroid_bounds);
-                (mid, split.left, split.right)
+                let (mid, left_centroids, right_centroids) =
+                    self.partition(indices, &split, &centroid_bounds);
+                (mid, (split.left, left_centroids), (split.right, right_centroids))
             }
             None => {
                 // All centroids coincide (or the depth limit is reached): no split separates
@@ -155,7 +218,7 @@ impl Builder<'_> {
         };
 
         let node_index = out.len();
-        out.push(BinaryNode { bounds, first_or_right: 0, count: 0 });
+        out.push(BinaryNode { bounds: bounds.bounds(), first_or_right: 0, count: 0 });
         let (left_indices, right_indices) = indices.split_at_mut(mid);
         let right_first = first + mid as u32;
         if n >= PARALLEL_MIN {
@@ -177,37 +240,16 @@ impl Builder<'_> {
         }
     }
 
-    /// The bin of a centroid coordinate along `axis`.
-    #[inline]
-    fn bin_of(&self, c: f32, axis: usize, centroid_bounds: &Bounds, scale: Vec3) -> usize {
+    fn best_split(&self, indices: &[u32], bounds: &Aabb, centroid_bounds: &Aabb) -> Option<Split> {
         let bins = self.settings.bins;
-        let b = ((c - centroid_bounds.min[axis]) * scale[axis]) as usize;
-        b.min(bins - 1)
-    }
-
-    fn bin_scale(&self, centroid_bounds: &Bounds) -> Vec3 {
-        let extent = centroid_bounds.max - centroid_bounds.min;
-        // Slightly fewer than `bins` per extent, so that the maximum lands in the last bin.
-        let bins = self.settings.bins as f32 * (1.0 - 1e-6);
-        Vec3::select(extent.cmpgt(Vec3::ZERO), bins / extent, Vec3::ZERO)
-    }
-
-    fn best_split(
-        &self,
-        indices: &[u32],
-        bounds: Bounds,
-        centroid_bounds: Bounds,
-    ) -> Option<Split> {
-        let bins = self.settings.bins;
-        let scale = self.bin_scale(&centroid_bounds);
+        let binning = Binning::new(centroid_bounds, bins);
         let extent = centroid_bounds.max - centroid_bounds.min;
         let fill = |mut acc: Vec<[Bin; 3]>, &i: &u32| {
-            let c = self.centroids[i as usize];
             let b = self.prims[i as usize];
-            for axis in 0..3 {
-                let bin = &mut acc[self.bin_of(c[axis], axis, &centroid_bounds, scale)][axis];
+            let k = binning.bins(self.centroids[i as usize]);
+            for (axis, bin) in [k.x, k.y, k.z].into_iter().enumerate() {
+                let bin = &mut acc[bin as usize][axis];
                 bin.bounds = bin.bounds.union(b);
-                bin.centroids = bin.centroids.grow(c);
                 bin.count += 1;
             }
             acc
@@ -216,7 +258,6 @@ impl Builder<'_> {
             for (x, y) in a.iter_mut().zip(&b) {
                 for axis in 0..3 {
                     x[axis].bounds = x[axis].bounds.union(y[axis].bounds);
-                    x[axis].centroids = x[axis].centroids.union(y[axis].centroids);
                     x[axis].count += y[axis].count;
                 }
             }
@@ -236,61 +277,61 @@ impl Builder<'_> {
         // A flat node has zero area; its splits are then compared among themselves only.
         let parent_area = bounds.half_area().max(f32::MIN_POSITIVE);
         let mut best: Option<Split> = None;
-        let mut right_sweep = vec![(Bounds::EMPTY, Bounds::EMPTY, 0u32); bins];
+        let mut right_sweep = vec![(Aabb::EMPTY, 0u32); bins];
         for axis in 0..3 {
             if extent[axis] <= 0.0 {
                 continue;
             }
             // Sweep from the right: right_sweep[k] covers bins k..bins.
-            let mut acc = (Bounds::EMPTY, Bounds::EMPTY, 0u32);
+            let mut acc = (Aabb::EMPTY, 0u32);
             for k in (1..bins).rev() {
                 let bin = &binned[k][axis];
-                acc = (acc.0.union(bin.bounds), acc.1.union(bin.centroids), acc.2 + bin.count);
+                acc = (acc.0.union(bin.bounds), acc.1 + bin.count);
                 right_sweep[k] = acc;
             }
-            let mut left = (Bounds::EMPTY, Bounds::EMPTY, 0u32);
+            let mut left = (Aabb::EMPTY, 0u32);
             for k in 1..bins {
                 let bin = &binned[k - 1][axis];
-                left = (left.0.union(bin.bounds), left.1.union(bin.centroids), left.2 + bin.count);
+                left = (left.0.union(bin.bounds), left.1 + bin.count);
                 let right = right_sweep[k];
-                if left.2 == 0 || right.2 == 0 {
+                if left.1 == 0 || right.1 == 0 {
                     continue;
                 }
                 let cost = self.settings.traversal_cost
-                    + (left.0.half_area() * blocks(left.2) + right.0.half_area() * blocks(right.2))
+                    + (left.0.half_area() * blocks(left.1) + right.0.half_area() * blocks(right.1))
                         * self.settings.block_cost
                         / parent_area;
                 if best.as_ref().is_none_or(|b| cost < b.cost) {
-                    best = Some(Split {
-                        axis,
-                        bin: k,
-                        cost,
-                        left: (left.0, left.1),
-                        right: (right.0, right.1),
-                    });
+                    best = Some(Split { axis, bin: k, cost, left: left.0, right: right.0 });
                 }
             }
         }
         best
     }
 
-    /// Moves the primitives of bins `< split.bin` to the front; returns how many there are.
-    fn partition(&self, indices: &mut [u32], split: &Split, centroid_bounds: Bounds) -> usize {
-        let scale = self.bin_scale(&centroid_bounds);
-        let goes_left = |i: u32| {
-            let c = self.centroids[i as usize][split.axis];
-            self.bin_of(c, split.axis, &centroid_bounds, scale) < split.bin
-        };
+    /// Moves the primitives of bins `< split.bin` to the front; returns how many there are and
+    /// the bounds of the two sides' centroids.
+    fn partition(
+        &self,
+        indices: &mut [u32],
+        split: &Split,
+        centroid_bounds: &Aabb,
+    ) -> (usize, Aabb, Aabb) {
+        let binning = Binning::new(centroid_bounds, self.settings.bins);
+        let (mut left, mut right) = (Aabb::EMPTY, Aabb::EMPTY);
         let (mut lo, mut hi) = (0, indices.len());
         while lo < hi {
-            if goes_left(indices[lo]) {
+            let c = self.centroids[indices[lo] as usize];
+            if (binning.bins(c)[split.axis] as usize) < split.bin {
+                left = left.grow(c);
                 lo += 1;
             } else {
+                right = right.grow(c);
                 hi -= 1;
                 indices.swap(lo, hi);
             }
         }
-        lo
+        (lo, left, right)
     }
 }
 
@@ -308,6 +349,8 @@ fn append_relocated(out: &mut Vec<BinaryNode>, subtree: &[BinaryNode]) {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
 
     fn check_tree(bvh: &BinaryBvh, prims: &[Bounds], max_leaf: usize) {
