@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use raylab::bvh::{BuildSettings, Bvh};
+use raylab::bvh::{BuildSettings, Bvh, Isa};
 use raylab::ray_sets::{self, Frame, HitRecord};
 use raylab::{Accelerator, Ray};
 
@@ -57,6 +57,10 @@ pub struct BenchArgs {
     /// BVH build preset: fast, medium or high.
     #[arg(long, value_name = "PRESET", default_value = "medium")]
     build: String,
+
+    /// Node-kernel instruction set: scalar, sse2, avx2 or avx512 [default: the best this CPU has].
+    #[arg(long, value_name = "ISA")]
+    isa: Option<String>,
 
     /// Also write the figures as JSON to FILE.
     #[arg(long, value_name = "FILE")]
@@ -116,6 +120,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     let (build_1, _) = build_ms(1)?;
     let (build_n, bvh) = build_ms(threads)?;
+    let bvh = match &args.isa {
+        None => bvh,
+        Some(name) => {
+            let isa = Isa::ALL.into_iter().find(|isa| isa.name() == name).with_context(|| {
+                format!("unknown --isa '{name}': use scalar, sse2, avx2 or avx512")
+            })?;
+            bvh.with_isa(isa).with_context(|| format!("this CPU cannot run --isa {name}"))?
+        }
+    };
     let stats = bvh.stats();
 
     println!(
