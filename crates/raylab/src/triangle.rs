@@ -171,7 +171,7 @@ impl WatertightRay {
 
     /// Intersects the ray with triangle `(v0, v1, v2)`, counting hits on edges and vertices,
     /// for `0 < t < t_max` and `t >= ray.t_min`. Both sides of the triangle are hit.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f32) -> Option<TriangleHit> {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         // Translate to the ray's origin, then shear so the ray runs along +z.
