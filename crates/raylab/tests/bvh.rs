@@ -263,3 +263,27 @@ fn the_shared_meshes_agree_with_brute_force() {
         mesh_agrees(&data.join(file), 100);
     }
 }
+
+/// Build settings and instruction sets change speed, never pixels: a model rendered with the
+/// lab's light model (shadow rays included) through every BVH variant gives the same film as
+/// through brute force, value for value.
+#[test]
+fn every_bvh_variant_renders_the_same_pixels() {
+    use raylab::{Camera, Lab, Scene, Stage, render};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/meshes/spider/spider.obj");
+    let scene = Scene::from_mesh(&raylab::scene::load_mesh(&path).unwrap().mesh);
+    let (lo, hi) = scene.bounds().unwrap();
+    let camera = Camera::framing(lo, hi, 96, 64);
+    let film_of = |accel: &dyn Accelerator| {
+        let integrator = Lab::new(&scene, accel, Stage::Ambient);
+        render(&camera, &integrator, &|_| {}).unwrap().to_rgb8_clamped().unwrap()
+    };
+    let reference = film_of(&BruteForce::new(&scene.triangles));
+    let covered = reference.pixels().filter(|p| p.0 != [0, 0, 0]).count();
+    assert!(covered > 96 * 64 / 10, "the spider covers only {covered} pixels");
+    let vertices: Vec<[Vec3; 3]> = scene.triangles.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
+    for (name, bvh) in bvhs(&vertices) {
+        assert!(film_of(&bvh) == reference, "{name} changed pixels");
+    }
+}

@@ -27,19 +27,60 @@ pub(crate) trait NodeKernel {
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
     unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]);
 
-    /// The triangles of `block` that [`WatertightRay::intersect`] may hit below `t_max`: the
-    /// scalar twin is [`WatertightRay::block_candidates`].
+    /// The hits of a ray on the triangles of `block` below `t_max`, as
+    /// [`WatertightRay::intersect`] decides them. The blocks must hold no zero-area triangles
+    /// (the BVH leaves them out). The scalar twin is [`block_hits_scalar`].
     ///
     /// # Safety
     /// As for [`enter`](Self::enter).
     #[inline(always)]
-    unsafe fn block_candidates(
+    unsafe fn block_hits(
         ray: &WatertightRay,
         block: &TriangleBlock<BLOCK>,
         t_max: f32,
-    ) -> u32 {
-        ray.block_candidates(block, t_max)
+    ) -> BlockHits {
+        block_hits_scalar(ray, block, t_max)
     }
+}
+
+/// What a block test decides for each of its four lanes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct BlockHits {
+    /// Lanes hit, with their `t` and barycentrics below, exactly as `intersect` computes them.
+    pub hits: u32,
+    /// Lanes that only [`WatertightRay::intersect`] can decide (an edge function rounded to zero
+    /// and must be recomputed in double precision).
+    pub undecided: u32,
+    /// Ray parameter per lane (meaningful where `hits` has the bit).
+    pub t: [f32; BLOCK],
+    /// Barycentric weight of `v1` per lane.
+    pub b1: [f32; BLOCK],
+    /// Barycentric weight of `v2` per lane.
+    pub b2: [f32; BLOCK],
+}
+
+/// The scalar twin of the block kernels: the batched pre-test, then the full scalar test on each
+/// candidate. Decides every lane.
+#[inline(always)]
+pub(crate) fn block_hits_scalar(
+    ray: &WatertightRay,
+    block: &TriangleBlock<BLOCK>,
+    t_max: f32,
+) -> BlockHits {
+    let mut out = BlockHits::default();
+    let mut candidates = ray.block_candidates(block, t_max);
+    while candidates != 0 {
+        let lane = candidates.trailing_zeros() as usize;
+        candidates &= candidates - 1;
+        let [v0, v1, v2] = block.triangle(lane);
+        if let Some(h) = ray.intersect(v0, v1, v2, t_max) {
+            out.hits |= 1 << lane;
+            out.t[lane] = h.t;
+            out.b1[lane] = h.b1;
+            out.b2[lane] = h.b2;
+        }
+    }
+    out
 }
 
 /// Plane rows of the near and far planes per axis: the box's min for a positive direction.
@@ -75,6 +116,8 @@ impl NodeKernel for Scalar {
     }
 }
 
+#[cfg(all(test, target_arch = "x86_64"))]
+pub(crate) use x86::block_hits_sse;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Sse};
 
@@ -101,12 +144,12 @@ mod x86 {
         type Ray = Broadcast<__m128>;
 
         #[inline(always)]
-        unsafe fn block_candidates(
+        unsafe fn block_hits(
             ray: &WatertightRay,
             block: &TriangleBlock<BLOCK>,
             t_max: f32,
-        ) -> u32 {
-            block_candidates_sse(ray, block, t_max)
+        ) -> BlockHits {
+            block_hits_sse(ray, block, t_max)
         }
 
         #[inline(always)]
@@ -153,18 +196,22 @@ mod x86 {
         }
     }
 
-    /// [`WatertightRay::block_candidates`] for four triangles with SSE2: the same operations in
-    /// the same order (no fused multiply-add), so the same mask bit for bit.
+    /// [`block_hits_scalar`] for four triangles with SSE2. Every value is computed by the same
+    /// operations in the same order as [`WatertightRay::block_candidates`] and
+    /// [`WatertightRay::intersect`] (no fused multiply-add), so every decision, `t` and
+    /// barycentric is the same bit for bit; lanes whose edge functions round to exactly zero are
+    /// left `undecided` for the scalar test's double-precision path.
     #[inline(always)]
-    pub(crate) fn block_candidates_sse(
+    pub(crate) fn block_hits_sse(
         ray: &WatertightRay,
         block: &TriangleBlock<BLOCK>,
         t_max: f32,
-    ) -> u32 {
+    ) -> BlockHits {
+        use crate::float::gamma;
         let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
         let [p0, p1, p2] = &block.vertices;
         // SAFETY: SSE2 is part of x86-64; each load reads one row of 4 floats of the block,
-        // which is 16-byte aligned (`repr(align(16))`).
+        // which is 16-byte aligned (`repr(align(16))`); stores go to arrays of 4 floats.
         unsafe {
             let splat = _mm_set1_ps;
             let (ox, oy, oz) =
@@ -204,13 +251,11 @@ mod x86 {
             );
             let inside = _mm_or_ps(all_ge, all_le);
             let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-            let t_scaled = _mm_add_ps(
-                _mm_add_ps(
-                    _mm_mul_ps(e0, _mm_mul_ps(sz, a_kz)),
-                    _mm_mul_ps(e1, _mm_mul_ps(sz, b_kz)),
-                ),
-                _mm_mul_ps(e2, _mm_mul_ps(sz, c_kz)),
-            );
+            let az = _mm_mul_ps(sz, a_kz);
+            let bz = _mm_mul_ps(sz, b_kz);
+            let cz = _mm_mul_ps(sz, c_kz);
+            let t_scaled =
+                _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
             let t_limit =
                 _mm_mul_ps(_mm_mul_ps(splat(t_max), det), splat(crate::triangle::T_LIMIT_SLACK));
             let front = _mm_and_ps(
@@ -221,8 +266,68 @@ mod x86 {
                 _mm_and_ps(_mm_cmplt_ps(det, zero), _mm_cmplt_ps(t_scaled, zero)),
                 _mm_cmpgt_ps(t_scaled, t_limit),
             );
-            let pass = _mm_or_ps(any_zero, _mm_and_ps(inside, _mm_or_ps(front, back)));
-            _mm_movemask_ps(pass) as u32
+            let candidate = _mm_or_ps(any_zero, _mm_and_ps(inside, _mm_or_ps(front, back)));
+            let candidates = _mm_movemask_ps(candidate) as u32;
+            let undecided = candidates & _mm_movemask_ps(any_zero) as u32;
+            let decidable = candidates & !undecided;
+            if decidable == 0 {
+                return BlockHits { undecided, ..BlockHits::default() };
+            }
+
+            // The rest of `intersect`, lane by lane, for the lanes without a zero edge function.
+            let inv_det = _mm_div_ps(splat(1.0), det);
+            let t = _mm_mul_ps(t_scaled, inv_det);
+            // `t.is_nan() || t >= t_max` rejects: accept `t < t_max` (false for NaN).
+            let mut accept = _mm_cmplt_ps(t, splat(t_max));
+            if ray.t_min > 0.0 {
+                // `t < t_min` rejects.
+                accept = _mm_and_ps(accept, _mm_cmpnlt_ps(t, splat(ray.t_min)));
+            } else {
+                // `t <= delta_t` rejects; the same expression as `conservative_delta_t`.
+                let abs = |v: __m128| _mm_andnot_ps(splat(-0.0), v);
+                let max3 = |a: __m128, b: __m128, c: __m128| {
+                    _mm_max_ps(_mm_max_ps(abs(a), abs(b)), abs(c))
+                };
+                let max_zt = max3(az, bz, cz);
+                let delta_z = _mm_mul_ps(splat(gamma(3)), max_zt);
+                let max_xt = max3(ax, bx, cx);
+                let max_yt = max3(ay, by, cy);
+                let max_unsheared_z = max3(a_kz, b_kz, c_kz);
+                let delta_x = _mm_mul_ps(
+                    splat(gamma(5)),
+                    _mm_add_ps(max_xt, _mm_mul_ps(splat(ray.shear_x.abs()), max_unsheared_z)),
+                );
+                let delta_y = _mm_mul_ps(
+                    splat(gamma(5)),
+                    _mm_add_ps(max_yt, _mm_mul_ps(splat(ray.shear_y.abs()), max_unsheared_z)),
+                );
+                let delta_e = _mm_mul_ps(
+                    splat(2.0),
+                    _mm_add_ps(
+                        _mm_add_ps(
+                            _mm_mul_ps(_mm_mul_ps(splat(gamma(2)), max_xt), max_yt),
+                            _mm_mul_ps(delta_y, max_xt),
+                        ),
+                        _mm_mul_ps(delta_x, max_yt),
+                    ),
+                );
+                let max_e = max3(e0, e1, e2);
+                let sum = _mm_add_ps(
+                    _mm_add_ps(
+                        _mm_mul_ps(_mm_mul_ps(splat(gamma(3)), max_e), max_zt),
+                        _mm_mul_ps(delta_e, max_zt),
+                    ),
+                    _mm_mul_ps(delta_z, max_e),
+                );
+                let delta_t = _mm_mul_ps(_mm_mul_ps(splat(3.0), sum), abs(inv_det));
+                accept = _mm_and_ps(accept, _mm_cmpnle_ps(t, delta_t));
+            }
+            let hits = decidable & _mm_movemask_ps(accept) as u32;
+            let mut out = BlockHits { hits, undecided, ..BlockHits::default() };
+            _mm_storeu_ps(out.t.as_mut_ptr(), t);
+            _mm_storeu_ps(out.b1.as_mut_ptr(), _mm_mul_ps(e1, inv_det));
+            _mm_storeu_ps(out.b2.as_mut_ptr(), _mm_mul_ps(e2, inv_det));
+            out
         }
     }
 
@@ -233,12 +338,12 @@ mod x86 {
         type Ray = Broadcast<__m256>;
 
         #[inline(always)]
-        unsafe fn block_candidates(
+        unsafe fn block_hits(
             ray: &WatertightRay,
             block: &TriangleBlock<BLOCK>,
             t_max: f32,
-        ) -> u32 {
-            block_candidates_sse(ray, block, t_max)
+        ) -> BlockHits {
+            block_hits_sse(ray, block, t_max)
         }
 
         #[inline(always)]

@@ -192,3 +192,74 @@ fn empty_and_single_triangle_trees_answer() {
     assert_eq!((hit.t, hit.triangle), (1.0, 0));
     assert!(bvh.occluded(&Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z)));
 }
+
+/// The SSE block kernel decides every lane as the scalar test does, with the same `t` and
+/// barycentrics bit for bit; lanes it leaves undecided are exactly those the scalar test must
+/// recompute in double precision.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn sse2_block_kernel_agrees_with_its_scalar_twin() {
+    use super::kernels::{block_hits_scalar, block_hits_sse};
+    use crate::triangle::{TriangleBlock, WatertightRay};
+    let mut rng = Lcg(11);
+    let mut decided_hits = 0;
+    let mut undecided_lanes = 0;
+    for case in 0..20_000 {
+        // On a coarse grid half of the time, so that edge functions are exactly zero.
+        let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
+        let triangles: Vec<[Vec3; 3]> = (0..4)
+            .map(|_| {
+                let p = snap(rng.vec() * 4.0 - 2.0);
+                [p, snap(p + rng.vec() * 2.0 - 1.0), snap(p + rng.vec() * 2.0 - 1.0)]
+            })
+            .filter(|[a, b, c]| (*c - *a).cross(*b - *a) != Vec3::ZERO)
+            .collect();
+        if triangles.is_empty() {
+            continue;
+        }
+        let block = TriangleBlock::<4>::pack(triangles.iter().copied())[0];
+        let [a, b, c] = triangles[case % triangles.len()];
+        let target = match case % 3 {
+            0 => a,
+            1 => a.lerp(b, rng.next()),
+            _ => a.lerp(b, rng.next()).lerp(c, rng.next()),
+        };
+        // Now and then start just off the surface, where the conservative `t > 0` bound decides.
+        let origin = match case % 4 {
+            3 => target + (rng.vec() * 2.0 - 1.0) * [1e-5, 1e-6, 1e-7][case % 3],
+            _ => snap(rng.vec() * 8.0 - 4.0),
+        };
+        if origin == target {
+            continue;
+        }
+        let mut ray = Ray::new(origin, target - origin);
+        ray.t_min = if case % 5 == 0 { 0.5 * rng.next() } else { 0.0 };
+        let ray = WatertightRay::new(&ray);
+        for t_max in [f32::INFINITY, 1.0, 0.5 + rng.next()] {
+            let scalar = block_hits_scalar(&ray, &block, t_max);
+            let simd = block_hits_sse(&ray, &block, t_max);
+            assert_eq!(simd.hits & simd.undecided, 0);
+            let mut resolved = simd.hits;
+            for lane in 0..4 {
+                if simd.undecided & (1 << lane) != 0 {
+                    undecided_lanes += 1;
+                    let [v0, v1, v2] = block.triangle(lane);
+                    if ray.intersect(v0, v1, v2, t_max).is_some() {
+                        resolved |= 1 << lane;
+                    }
+                }
+                if simd.hits & (1 << lane) != 0 {
+                    decided_hits += 1;
+                    let same = |x: f32, y: f32| x.to_bits() == y.to_bits();
+                    assert!(same(simd.t[lane], scalar.t[lane]), "t {simd:?} {scalar:?}");
+                    assert!(
+                        same(simd.b1[lane], scalar.b1[lane])
+                            && same(simd.b2[lane], scalar.b2[lane])
+                    );
+                }
+            }
+            assert_eq!(resolved, scalar.hits, "case {case}, t_max {t_max}: {simd:?} vs {scalar:?}");
+        }
+    }
+    assert!(decided_hits > 10_000 && undecided_lanes > 1000, "{decided_hits} {undecided_lanes}");
+}

@@ -118,22 +118,35 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
                     for b in first_block as usize..(first_block + blocks) as usize {
                         let block = &bvh.blocks[b];
                         // SAFETY: the caller guarantees `K`'s instruction set.
-                        let mut candidates =
-                            unsafe { K::block_candidates(&triangle_ray, block, triangle_limit) };
-                        while candidates != 0 {
-                            let lane = candidates.trailing_zeros() as usize;
-                            candidates &= candidates - 1;
-                            let [v0, v1, v2] = block.triangle(lane);
-                            let Some(h) = triangle_ray.intersect(v0, v1, v2, triangle_limit) else {
-                                continue;
+                        let decided =
+                            unsafe { K::block_hits(&triangle_ray, block, triangle_limit) };
+                        let mut hits = decided.hits;
+                        let mut undecided = decided.undecided;
+                        while hits | undecided != 0 {
+                            let lane = (hits | undecided).trailing_zeros() as usize;
+                            let bit = 1 << lane;
+                            let hit = if hits & bit != 0 {
+                                hits &= !bit;
+                                (decided.t[lane], decided.b1[lane], decided.b2[lane])
+                            } else {
+                                undecided &= !bit;
+                                let [v0, v1, v2] = block.triangle(lane);
+                                match triangle_ray.intersect(v0, v1, v2, triangle_limit) {
+                                    Some(h) => (h.t, h.b1, h.b2),
+                                    None => continue,
+                                }
                             };
+                            let (t, b1, b2) = hit;
                             let id = bvh.ids[b][lane];
-                            if best.is_some_and(|best| h.t == best.t && id > best.triangle) {
-                                continue;
+                            // Lanes of one block are all tested against the limit at its start.
+                            let better = best.is_none_or(|best| {
+                                t < best.t || (t == best.t && id < best.triangle)
+                            });
+                            if better {
+                                best = Some(Hit { t, triangle: id, b1, b2 });
+                                triangle_limit = next_float_up(t);
+                                box_limit = t * FAR_SCALE;
                             }
-                            best = Some(Hit { t: h.t, triangle: id, b1: h.b1, b2: h.b2 });
-                            triangle_limit = next_float_up(h.t);
-                            box_limit = h.t * FAR_SCALE;
                         }
                     }
                 }
@@ -173,11 +186,14 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
                     for block in &bvh.blocks[first_block as usize..(first_block + blocks) as usize]
                     {
                         // SAFETY: the caller guarantees `K`'s instruction set.
-                        let mut candidates =
-                            unsafe { K::block_candidates(&triangle_ray, block, ray.t_max) };
-                        while candidates != 0 {
-                            let lane = candidates.trailing_zeros() as usize;
-                            candidates &= candidates - 1;
+                        let decided = unsafe { K::block_hits(&triangle_ray, block, ray.t_max) };
+                        if decided.hits != 0 {
+                            return true;
+                        }
+                        let mut undecided = decided.undecided;
+                        while undecided != 0 {
+                            let lane = undecided.trailing_zeros() as usize;
+                            undecided &= undecided - 1;
                             let [v0, v1, v2] = block.triangle(lane);
                             if triangle_ray.intersect(v0, v1, v2, ray.t_max).is_some() {
                                 return true;
