@@ -122,6 +122,20 @@ fn edge_function_f64(px: f32, py: f32, qx: f32, qy: f32) -> f32 {
     (px as f64 * qy as f64 - py as f64 * qx as f64) as f32
 }
 
+/// The axis along which `d` is longest, which the watertight test maps to z; ties go to the
+/// lowest axis, so any ray gets one answer.
+#[inline]
+pub fn dominant_axis(d: Vec3) -> usize {
+    let abs = d.abs();
+    if abs.x >= abs.y && abs.x >= abs.z {
+        0
+    } else if abs.y >= abs.z {
+        1
+    } else {
+        2
+    }
+}
+
 /// The per-ray part of the watertight test: which axis the ray is mostly along, and the shear that
 /// maps the ray onto +z. Computed once per ray and reused for every triangle.
 #[derive(Clone, Copy, Debug)]
@@ -141,15 +155,7 @@ impl WatertightRay {
     #[inline]
     pub fn new(ray: &Ray) -> Self {
         let d = ray.direction;
-        let abs = d.abs();
-        // The dominant axis becomes z; ties go to the lowest axis, so any ray gets one answer.
-        let kz = if abs.x >= abs.y && abs.x >= abs.z {
-            0
-        } else if abs.y >= abs.z {
-            1
-        } else {
-            2
-        };
+        let kz = dominant_axis(d);
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         // Swapping x and y keeps the triangles' winding when the ray points along −z.
@@ -159,7 +165,8 @@ impl WatertightRay {
         let shear_z = 1.0 / d[kz];
         WatertightRay {
             origin: ray.origin,
-            t_min: ray.t_min,
+            // A NaN range start admits no hit.
+            t_min: if ray.t_min.is_nan() { f32::INFINITY } else { ray.t_min },
             kx,
             ky,
             kz,
@@ -236,7 +243,8 @@ impl WatertightRay {
 
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
-        if t.is_nan() || t >= t_max {
+        // Also rejects a NaN `t` or a NaN `t_max`.
+        if t.is_nan() || t_max.is_nan() || t >= t_max {
             return None; // `t_max · det` may have rounded; decide on t itself.
         }
 

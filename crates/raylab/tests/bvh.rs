@@ -287,3 +287,56 @@ fn every_bvh_variant_renders_the_same_pixels() {
         assert!(film_of(&bvh) == reference, "{name} changed pixels");
     }
 }
+
+/// A flat, axis-aligned triangle seen along another axis: the watertight test's `t` (0.99999917)
+/// rounds below the triangle's box entry (1.0) by more than the slab test's own rounding. The
+/// BVH must still find it, on a segment that ends in between and behind a nearer competitor
+/// (the review's counterexample to an unpadded box test).
+#[test]
+fn hits_that_round_below_their_box_entry_are_not_pruned() {
+    let o = Vec3::new(-0.9050156, -0.5129226, -1.2556036);
+    let d = Vec3::new(-0.13466823, -0.27086824, 0.26947773);
+    let flat = [
+        Vec3::new(-1.052601, -1.2355757, -0.9861258),
+        Vec3::new(-1.0098381, 0.25269437, -0.9861258),
+        Vec3::new(-1.0920787, 0.3346547, -0.9861258),
+    ];
+    // A small triangle across the ray at t ≈ 0.9999994, and fillers so the two get leaves of
+    // their own.
+    let p = o + 0.9999994 * d;
+    let u = d.any_orthonormal_vector() * 0.01;
+    let w = d.normalize().cross(u);
+    let mut triangles = vec![flat];
+    let centre = (flat[0] + flat[1] + flat[2]) / 3.0;
+    for k in 0..7 {
+        let c = centre + Vec3::new(0.0, 0.002 * k as f32, 0.001);
+        triangles.push([c, c + Vec3::X * 0.001, c + Vec3::Y * 0.001]);
+    }
+    triangles.push([p - u - w, p + u - w, p + 2.0 * w]);
+    for k in 0..7 {
+        let c = p + Vec3::new(0.0, 0.0, -0.3 - 0.002 * k as f32);
+        triangles.push([c, c + Vec3::Y * 0.001, c + Vec3::X * 0.001]);
+    }
+    let rays = [Ray::new(o, d), Ray::segment(o, d, 0.9999995)];
+    assert_agreement(&triangles, &rays).unwrap();
+    assert_agreement(&triangles[..1], &rays).unwrap();
+    assert!(brute_force(&triangles[..1]).occluded(&rays[1]), "the case still exercises the bug");
+}
+
+#[test]
+fn rays_with_nan_or_empty_ranges_agree_on_every_kernel() {
+    let triangles =
+        [[Vec3::new(0.0, 0.0, 5.0), Vec3::new(1.0, 0.0, 5.0), Vec3::new(0.0, 1.0, 5.0)]];
+    // Through the triangle's edge (an exactly zero edge function) and through its inside.
+    let mut rays = Vec::new();
+    for origin in [Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.2, 0.2, 0.0)] {
+        for (t_min, t_max) in [(0.0, f32::NAN), (f32::NAN, 10.0), (6.0, 4.0), (0.0, f32::INFINITY)]
+        {
+            let mut ray = Ray::segment(origin, Vec3::Z, t_max);
+            ray.t_min = t_min;
+            rays.push(ray);
+        }
+    }
+    let hits = assert_agreement(&triangles, &rays).unwrap();
+    assert_eq!(hits, 2, "only the two rays with a valid range hit");
+}

@@ -98,6 +98,8 @@ pub struct RayBoxTest {
     pub negative: [bool; 3],
     /// The ray's `t_min`, clamped to be at least 0.
     pub t_min: f32,
+    /// The ray's dominant axis, as the watertight triangle test picks it.
+    pub dominant_axis: usize,
 }
 
 /// The factor on far distances that makes the slab test conservative.
@@ -113,17 +115,20 @@ impl RayBoxTest {
             inv_direction: d.recip(),
             negative: [d.x.is_sign_negative(), d.y.is_sign_negative(), d.z.is_sign_negative()],
             t_min: ray.t_min.max(0.0),
+            dominant_axis: crate::triangle::dominant_axis(d),
         }
     }
 
-    /// The entry distance of the ray into `bounds` if it meets the box within `[t_min, t_max]`.
+    /// The entry distance of the ray into `bounds` if it meets the box within `[t_min, t_max]`,
+    /// both moved out by [`SLAB_PAD`] (see there).
     ///
     /// This is the scalar twin of the SIMD node kernels: they compute the same values in the same
-    /// order of operations.
+    /// order of operations. The ray must have a finite origin and a non-zero direction.
     #[inline]
     pub fn enter(&self, bounds: &Bounds, t_max: f32) -> Option<f32> {
         let mut near = self.t_min;
         let mut far = t_max;
+        let mut reach = 0.0;
         for axis in 0..3 {
             let (near_plane, far_plane) = if self.negative[axis] {
                 (bounds.max[axis], bounds.min[axis])
@@ -132,13 +137,32 @@ impl RayBoxTest {
             };
             let inv = self.inv_direction[axis];
             let o = self.origin[axis];
+            let t_near = (near_plane - o) * inv;
+            let t_far = (far_plane - o) * inv;
             // `f32::max`/`min` return the other operand when one is NaN.
-            near = ((near_plane - o) * inv).max(near);
-            far = (((far_plane - o) * inv) * FAR_SCALE).min(far);
+            near = t_near.max(near);
+            far = (t_far * FAR_SCALE).min(far);
+            if axis == self.dominant_axis {
+                reach = t_near.abs().max(t_far.abs());
+            }
         }
+        let pad = reach * SLAB_PAD;
+        let (near, far) = (near - pad, far + pad);
         (near <= far).then_some(near)
     }
 }
+
+/// The relative margin, on the box's reach along the ray's dominant axis, by which box entry
+/// and exit are moved out.
+///
+/// The slab test's own rounding is covered by [`FAR_SCALE`], but a BVH must also never prune a
+/// box whose triangle the watertight test would hit at a `t` that rounds below the box's entry
+/// (or above its exit, against a segment's end). That test's error in `t` grows with the
+/// vertices' distance from the origin along the dominant axis (PBR 4th ed. §6.8.4: `δt` is
+/// proportional to `max |zᵢ|`), which for a triangle inside the box is at most the box's reach
+/// `max(|t_near|, |t_far|)` on that axis. Flat, axis-aligned triangles seen along another axis
+/// err by about 1e-6 of that reach; the margin is 32 units of `f32::EPSILON` (3.8e-6).
+pub const SLAB_PAD: f32 = 32.0 * f32::EPSILON;
 
 #[cfg(test)]
 mod tests {
@@ -148,16 +172,25 @@ mod tests {
         Bounds { min: Vec3::ZERO, max: Vec3::ONE }
     }
 
+    /// An entry distance: `expected`, moved out by at most the pad on a reach of `reach`.
+    fn assert_entry(entry: Option<f32>, expected: f32, reach: f32) {
+        let entry = entry.expect("the box is entered");
+        assert!(
+            entry <= expected && entry >= expected - 2.0 * SLAB_PAD * reach,
+            "{entry} vs {expected}"
+        );
+    }
+
     #[test]
     fn enters_at_the_near_face_from_any_direction() {
         let b = unit_box();
         let from_left = RayBoxTest::new(&Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X));
-        assert_eq!(from_left.enter(&b, f32::INFINITY), Some(1.0));
+        assert_entry(from_left.enter(&b, f32::INFINITY), 1.0, 2.0);
         let from_right = RayBoxTest::new(&Ray::new(Vec3::new(3.0, 0.5, 0.5), -Vec3::X));
-        assert_eq!(from_right.enter(&b, f32::INFINITY), Some(2.0));
-        assert_eq!(from_right.enter(&b, 1.5), None);
+        assert_entry(from_right.enter(&b, f32::INFINITY), 2.0, 3.0);
+        assert_eq!(from_right.enter(&b, 1.9), None);
         let inside = RayBoxTest::new(&Ray::new(Vec3::splat(0.5), Vec3::Y));
-        assert_eq!(inside.enter(&b, f32::INFINITY), Some(0.0));
+        assert_entry(inside.enter(&b, f32::INFINITY), 0.0, 0.5);
         let behind = RayBoxTest::new(&Ray::new(Vec3::new(2.0, 0.5, 0.5), Vec3::X));
         assert_eq!(behind.enter(&b, f32::INFINITY), None);
     }
@@ -169,8 +202,8 @@ mod tests {
         for dx in [0.0, -0.0] {
             for dy in [0.0, -0.0] {
                 let ray = Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::new(dx, dy, 1.0));
-                assert_eq!(RayBoxTest::new(&ray).enter(&b, f32::INFINITY), Some(1.0), "{dx} {dy}");
-                let outside = Ray::new(Vec3::new(-1e-30, 0.5, -1.0), Vec3::new(dx, dy, 1.0));
+                assert_entry(RayBoxTest::new(&ray).enter(&b, f32::INFINITY), 1.0, 2.0);
+                let outside = Ray::new(Vec3::new(-1e-3, 0.5, -1.0), Vec3::new(dx, dy, 1.0));
                 assert_eq!(RayBoxTest::new(&outside).enter(&b, f32::INFINITY), None);
             }
         }
@@ -180,7 +213,7 @@ mod tests {
     fn flat_boxes_are_hit() {
         let flat = Bounds { min: Vec3::new(0.0, 0.0, 1.0), max: Vec3::new(1.0, 1.0, 1.0) };
         let ray = Ray::new(Vec3::new(0.5, 0.5, 0.0), Vec3::Z);
-        assert_eq!(RayBoxTest::new(&ray).enter(&flat, f32::INFINITY), Some(1.0));
+        assert_entry(RayBoxTest::new(&ray).enter(&flat, f32::INFINITY), 1.0, 1.0);
     }
 
     #[test]

@@ -3,11 +3,12 @@
 //! Each kernel computes, for every child, the same values as [`RayBoxTest::enter`] (the scalar
 //! twin) in the same order of operations: per axis `tn = (near plane − o)·(1/d)` folded into
 //! `near = max(tn, near)`, and `tf = ((far plane − o)·(1/d))·(1 + 2γ₃)` into `far = min(tf, far)`,
-//! then `near <= far`. x86's `maxps`/`minps` return their second operand when the first is NaN,
+//! then, both moved out by `SLAB_PAD` times the box's reach on the ray's dominant axis,
+//! `near <= far`. x86's `maxps`/`minps` return their second operand when the first is NaN,
 //! which is how the scalar `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face
-//! plane): the tests in `bvh/mod.rs` check that all kernels agree bit for bit.
+//! plane): the tests in `bvh/tests.rs` check that all kernels agree bit for bit.
 
-use super::bounds::{FAR_SCALE, RayBoxTest};
+use super::bounds::{FAR_SCALE, RayBoxTest, SLAB_PAD};
 use super::build::BLOCK;
 use super::wide::{WIDTH, WideNode};
 use crate::triangle::{TriangleBlock, WatertightRay};
@@ -138,6 +139,7 @@ mod x86 {
         t_min: V,
         near_rows: [usize; 3],
         far_rows: [usize; 3],
+        dominant_axis: usize,
     }
 
     impl NodeKernel for Sse {
@@ -163,6 +165,7 @@ mod x86 {
                     t_min: _mm_set1_ps(ray.t_min),
                     near_rows,
                     far_rows,
+                    dominant_axis: ray.dominant_axis,
                 }
             }
         }
@@ -176,17 +179,27 @@ mod x86 {
                 let limit = _mm_set1_ps(t_limit);
                 let mut out = [0.0f32; WIDTH];
                 let mut mask = 0u32;
+                let pad_scale = _mm_set1_ps(SLAB_PAD);
+                let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
+                let kz = ray.dominant_axis;
                 for half in 0..2 {
                     let mut near = ray.t_min;
                     let mut far = limit;
+                    let mut reach = _mm_setzero_ps();
                     for axis in 0..3 {
                         let np = _mm_load_ps(node.planes[ray.near_rows[axis]][4 * half..].as_ptr());
                         let fp = _mm_load_ps(node.planes[ray.far_rows[axis]][4 * half..].as_ptr());
                         let tn = _mm_mul_ps(_mm_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
-                        near = _mm_max_ps(tn, near);
                         let tf = _mm_mul_ps(_mm_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
+                        near = _mm_max_ps(tn, near);
                         far = _mm_min_ps(_mm_mul_ps(tf, scale), far);
+                        if axis == kz {
+                            reach = _mm_max_ps(abs(tn), abs(tf));
+                        }
                     }
+                    let pad = _mm_mul_ps(reach, pad_scale);
+                    let near = _mm_sub_ps(near, pad);
+                    let far = _mm_add_ps(far, pad);
                     let hit = _mm_cmple_ps(near, far);
                     mask |= (_mm_movemask_ps(hit) as u32) << (4 * half);
                     _mm_storeu_ps(out[4 * half..].as_mut_ptr(), near);
@@ -357,6 +370,7 @@ mod x86 {
                     t_min: _mm256_set1_ps(ray.t_min),
                     near_rows,
                     far_rows,
+                    dominant_axis: ray.dominant_axis,
                 }
             }
         }
@@ -369,14 +383,22 @@ mod x86 {
                 let scale = _mm256_set1_ps(FAR_SCALE);
                 let mut near = ray.t_min;
                 let mut far = _mm256_set1_ps(t_limit);
+                let mut reach = _mm256_setzero_ps();
+                let abs = |v: __m256| _mm256_andnot_ps(_mm256_set1_ps(-0.0), v);
                 for axis in 0..3 {
                     let np = _mm256_load_ps(node.planes[ray.near_rows[axis]].as_ptr());
                     let fp = _mm256_load_ps(node.planes[ray.far_rows[axis]].as_ptr());
                     let tn = _mm256_mul_ps(_mm256_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
-                    near = _mm256_max_ps(tn, near);
                     let tf = _mm256_mul_ps(_mm256_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
+                    near = _mm256_max_ps(tn, near);
                     far = _mm256_min_ps(_mm256_mul_ps(tf, scale), far);
+                    if axis == ray.dominant_axis {
+                        reach = _mm256_max_ps(abs(tn), abs(tf));
+                    }
                 }
+                let pad = _mm256_mul_ps(reach, _mm256_set1_ps(SLAB_PAD));
+                let near = _mm256_sub_ps(near, pad);
+                let far = _mm256_add_ps(far, pad);
                 let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
                 let mut out = [0.0f32; WIDTH];
                 _mm256_storeu_ps(out.as_mut_ptr(), near);

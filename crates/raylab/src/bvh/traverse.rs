@@ -53,6 +53,17 @@ impl<T: Copy> Stack<T> {
     }
 }
 
+/// Whether the ray can hit anything at all: an empty or NaN range, a non-finite origin, or a zero
+/// or NaN direction never hit a triangle (the triangle test rejects them too); the slab kernels
+/// may then assume a finite origin and a finite `1/d` on the dominant axis.
+#[inline(always)]
+fn can_hit(ray: &Ray) -> bool {
+    ray.t_min <= ray.t_max
+        && ray.origin.is_finite()
+        && !ray.direction.is_nan()
+        && ray.direction != glam::Vec3::ZERO
+}
+
 /// The closest hit; ties at equal `t` go to the lowest triangle index, as in
 /// [`BruteForce`](crate::BruteForce), so the answer never depends on the tree.
 ///
@@ -60,6 +71,9 @@ impl<T: Copy> Stack<T> {
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
 pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+    if !can_hit(ray) {
+        return None;
+    }
     let triangle_ray = WatertightRay::new(ray);
     let box_ray = K::prepare(&RayBoxTest::new(ray));
     let mut best: Option<Hit> = None;
@@ -162,6 +176,9 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
 pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
+    if !can_hit(ray) {
+        return false;
+    }
     let triangle_ray = WatertightRay::new(ray);
     let box_ray = K::prepare(&RayBoxTest::new(ray));
     let box_limit = ray.t_max * FAR_SCALE;
