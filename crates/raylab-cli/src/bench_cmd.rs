@@ -144,20 +144,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         stats.bytes(),
         stats.bytes() as f64 / stats.triangles.max(1) as f64
     );
-    println!(
-        "{:<9} {:<9} {:>9} {:>13} {:>13}",
-        "set",
-        "query",
-        "rays",
-        "1 thread",
-        format!("{threads} threads")
-    );
-
+    // The thread counts measured: 1, and N if it differs.
+    let thread_counts: Vec<usize> = if threads == 1 { vec![1] } else { vec![1, threads] };
+    let mut header = format!("{:<9} {:<9} {:>9}", "set", "query", "rays");
+    for &n in &thread_counts {
+        header += &format!(
+            " {:>13}",
+            if n == 1 { "1 thread".to_string() } else { format!("{n} threads") }
+        );
+    }
+    println!("{header}");
     let mut results = Vec::new();
     for (name, occlusion, rays) in &sets {
         let query = if *occlusion { "occluded" } else { "closest" };
         let mut per_threads = Vec::new();
-        for n in [1, threads] {
+        for &n in &thread_counts {
             let seconds = if *occlusion {
                 time_median(args.reps, || trace_occluded(&bvh, rays, n))
             } else {
@@ -165,14 +166,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             };
             per_threads.push((n, rays.len() as f64 / seconds / 1e6));
         }
-        println!(
-            "{:<9} {:<9} {:>9} {:>8.2} Mr/s {:>8.2} Mr/s",
-            name,
-            query,
-            rays.len(),
-            per_threads[0].1,
-            per_threads[1].1
-        );
+        let mut line = format!("{:<9} {:<9} {:>9}", name, query, rays.len());
+        for (_, mrays) in &per_threads {
+            line += &format!(" {mrays:>8.2} Mr/s");
+        }
+        println!("{line}");
         results.push(SetResult { set: name.to_string(), query, mrays_per_s: per_threads });
     }
 
@@ -239,6 +237,17 @@ fn generate(
     settings: &BuildSettings,
 ) -> Result<()> {
     let frame = Frame::of(mesh).context("the mesh has no triangles")?;
+    // Three sets of 32-byte rays and the primary hits, at most.
+    let rays = args.size.width as u64 * args.size.height as u64;
+    let needed = rays.saturating_mul(3 * 32 + 8);
+    if rays > u32::MAX as u64 || system::available_memory_bytes().is_some_and(|a| needed > a) {
+        bail!(
+            "--size {}x{} makes {rays} rays per set, {} of memory: too many",
+            args.size.width,
+            args.size.height,
+            raylab::film::format_bytes(needed)
+        );
+    }
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
     let bvh = Bvh::build(triangles, settings);
     let focal = args.focal as f64 * args.size.width as f64;
@@ -364,6 +373,11 @@ fn to_json(
     bvh_bytes: usize,
     results: &[SetResult],
 ) -> String {
+    let build_threads = if threads == 1 {
+        format!("\"1\": {build_1:.3}")
+    } else {
+        format!("\"1\": {build_1:.3}, \"{threads}\": {build_n:.3}")
+    };
     let sets: Vec<String> = results
         .iter()
         .map(|r| {
@@ -373,7 +387,7 @@ fn to_json(
         })
         .collect();
     format!(
-        "{{\n  \"triangles\": {triangles},\n  \"build_ms\": {build_1:.3},\n  \"build_ms_threads\": {{\"1\": {build_1:.3}, \"{threads}\": {build_n:.3}}},\n  \"bvh_bytes\": {bvh_bytes},\n  \"sets\": {{\n{}\n  }}\n}}\n",
+        "{{\n  \"triangles\": {triangles},\n  \"build_ms\": {build_1:.3},\n  \"build_ms_threads\": {{{build_threads}}},\n  \"bvh_bytes\": {bvh_bytes},\n  \"sets\": {{\n{}\n  }}\n}}\n",
         sets.join(",\n")
     )
 }

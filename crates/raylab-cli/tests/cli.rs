@@ -294,6 +294,15 @@ fn bench_generates_traces_and_reports() {
     let occluded =
         raylab::ray_sets::read_occluded(&dir.path().join("hits/shadow.occluded")).unwrap();
     assert_eq!(occluded.len(), hits.iter().filter(|h| h.is_hit()).count());
+    // One thread: every figure once, no duplicate keys.
+    let out = raylab(
+        dir.path(),
+        &["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1", "--json", "one.json"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let json = std::fs::read_to_string(dir.path().join("one.json")).unwrap();
+    assert_eq!(json.matches("\"1\":").count(), 4, "{json}");
+    assert!(!text(&out.stdout).contains("1 threads"), "{}", text(&out.stdout));
     // With the answers in the ray folder, bench reports full agreement.
     std::fs::copy(dir.path().join("hits/primary.hits"), dir.path().join("rays/primary.hits"))
         .unwrap();

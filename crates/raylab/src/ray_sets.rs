@@ -19,8 +19,7 @@
 //! `t: f32, prim: u32` (a miss is `+∞`, `0xFFFFFFFF`); `.occluded` = one byte per ray, no header.
 //! Readers accept gzip-compressed files whose name ends in `.gz`.
 
-use std::fs;
-use std::io::{self, BufWriter, Read, Write};
+use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
@@ -244,19 +243,13 @@ pub fn diffuse_rays(frame: &Frame, mesh: &Mesh, primary: &[Ray], hits: &[HitReco
         .collect()
 }
 
-/// Reads a whole file, decompressing it if its name ends in `.gz`.
+/// Reads a whole file, decompressing it if its name ends in `.gz`, within the loaders' size
+/// limit (so a gzip bomb cannot exhaust memory).
 fn read_bytes(path: &Path) -> Result<Vec<u8>, RaySetError> {
-    let io_error = |e: io::Error| RaySetError::new(path, format!("cannot read: {e}"));
-    let file = fs::File::open(path).map_err(io_error)?;
-    let mut bytes = Vec::new();
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
-        flate2::read::MultiGzDecoder::new(file)
-            .read_to_end(&mut bytes)
-            .map_err(|e| RaySetError::new(path, format!("not a valid gzip file: {e}")))?;
-    } else {
-        io::BufReader::new(file).read_to_end(&mut bytes).map_err(io_error)?;
-    }
-    Ok(bytes)
+    let gzip = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    crate::scene::read_file_bytes(path, gzip).map_err(|e| {
+        RaySetError::new(path, e.to_string().replacen(&format!("{}: ", path.display()), "", 1))
+    })
 }
 
 /// Checks a 16-byte header and returns the record count.
@@ -428,6 +421,8 @@ pub fn write_occluded(path: &Path, occluded: &[bool]) -> Result<(), RaySetError>
 
 #[cfg(test)]
 mod tests {
+    use std::fs;
+
     use super::*;
 
     #[test]

@@ -28,11 +28,14 @@ struct Agreement {
     other_triangle: usize,
 }
 
-fn compare(reference: &[HitRecord], ours: &[HitRecord]) -> Agreement {
+/// Compares answers; every `t` beyond 1e-5 relative must still be within 1e-5 of the ray's
+/// coordinate scale (`max(|origin|, t)`): a rounding difference at a short or grazing hit, not a
+/// different surface.
+fn compare(rays: &[Ray], reference: &[HitRecord], ours: &[HitRecord]) -> Agreement {
     assert_eq!(reference.len(), ours.len());
     let mut a =
         Agreement { rays: ours.len(), hit_miss: 0, t_far: 0, t_max_rel: 0.0, other_triangle: 0 };
-    for (r, o) in reference.iter().zip(ours) {
+    for ((ray, r), o) in rays.iter().zip(reference).zip(ours) {
         if r.is_hit() != o.is_hit() {
             a.hit_miss += 1;
         } else if r.is_hit() {
@@ -40,6 +43,15 @@ fn compare(reference: &[HitRecord], ours: &[HitRecord]) -> Agreement {
             a.t_max_rel = a.t_max_rel.max(rel);
             if rel > 1e-5 {
                 a.t_far += 1;
+                let scale = ray.origin.abs().max_element().max(r.t);
+                assert!(
+                    (r.t - o.t).abs() <= 1e-5 * scale,
+                    "{ray:?}: Embree t {} ({}), ours {} ({})",
+                    r.t,
+                    r.prim,
+                    o.t,
+                    o.prim
+                );
             } else if r.prim != o.prim {
                 a.other_triangle += 1;
             }
@@ -48,7 +60,8 @@ fn compare(reference: &[HitRecord], ours: &[HitRecord]) -> Agreement {
     a
 }
 
-fn check_mesh(mesh_file: &str, dir: &str) {
+/// `allowed`: the rays of the shadow and diffuse sets whose `t` may differ beyond 1e-5.
+fn check_mesh(mesh_file: &str, dir: &str, allowed: (usize, usize)) {
     let mesh = raylab::scene::load_mesh(&data(mesh_file)).unwrap().mesh;
     let triangles: Vec<_> = mesh.triangle_vertices().collect();
     let bvh = Bvh::build(&triangles, &Default::default());
@@ -74,32 +87,22 @@ fn check_mesh(mesh_file: &str, dir: &str) {
     // libm's cos/sin may round differently in the last bit, rarely.
     assert!(bit_different * 1000 <= diffuse.len(), "{dir}: {bit_different} diffuse rays differ");
 
-    // The same answers.
-    for (set, rays) in
-        [("primary", &primary), ("shadow", &read_rays("shadow.rays")), ("diffuse", &diffuse)]
-    {
-        let a = compare(&read_hits(&format!("{set}.hits")), &closest(rays));
+    // The same answers. `t` beyond 1e-5 relative: at most as many rays as measured when these
+    // files were made (shadow, diffuse), each within 1e-5 of its coordinate scale.
+    let shadow_rays = read_rays("shadow.rays");
+    for (set, rays, allowed_t_far) in [
+        ("primary", &primary, 0),
+        ("shadow", &shadow_rays, allowed.0),
+        ("diffuse", &diffuse, allowed.1),
+    ] {
+        let a = compare(rays, &read_hits(&format!("{set}.hits")), &closest(rays));
         eprintln!(
             "{dir} {set}: {} rays, {} hit/miss differences, {} with t beyond 1e-5 (max {:.2e}), {} other triangles at equal t",
             a.rays, a.hit_miss, a.t_far, a.t_max_rel, a.other_triangle
         );
         assert_eq!(a.hit_miss, 0, "{dir} {set}: hit/miss differences");
-        if set == "primary" {
-            assert_eq!(a.t_far, 0, "{dir} {set}: t differences");
-        } else {
-            // Grazing segments: Embree's own robust mode moves these by up to 2.2e-5.
-            assert!(
-                a.t_far * 100 <= a.rays && a.t_max_rel < 1e-3,
-                "{dir} {set}: {} t differences",
-                a.t_far
-            );
-        }
-        // A different triangle only where two share an edge or vertex hit at equal t: rare.
-        assert!(
-            a.other_triangle * 100 <= a.rays,
-            "{dir} {set}: {} other triangles",
-            a.other_triangle
-        );
+        assert!(a.t_far <= allowed_t_far, "{dir} {set}: {} t differences", a.t_far);
+        assert_eq!(a.other_triangle, 0, "{dir} {set}: other triangles at equal t");
     }
     let shadow = read_rays("shadow.rays");
     let occluded: Vec<bool> = shadow.iter().map(|r| bvh.occluded(r)).collect();
@@ -112,15 +115,15 @@ fn check_mesh(mesh_file: &str, dir: &str) {
 
 #[test]
 fn the_cornell_box_agrees_with_embree() {
-    check_mesh("meshes/cornell_box/cornell_box.obj", "cornell_box");
+    check_mesh("meshes/cornell_box/cornell_box.obj", "cornell_box", (1, 3));
 }
 
 #[test]
 fn the_teapot_agrees_with_embree() {
-    check_mesh("meshes/teapot.obj", "teapot");
+    check_mesh("meshes/teapot.obj", "teapot", (4, 0));
 }
 
 #[test]
 fn the_bunny_agrees_with_embree() {
-    check_mesh("meshes/bunny.obj.gz", "bunny");
+    check_mesh("meshes/bunny.obj.gz", "bunny", (5, 0));
 }

@@ -203,6 +203,12 @@ pub fn read_limit_bytes() -> u64 {
     available.map_or(MAX, |bytes| (bytes / 2).clamp(MIN, MAX))
 }
 
+/// Reads the whole file, decompressing it if `gzip`, within [`read_limit_bytes`]: for other
+/// readers of untrusted files (the ray-set files).
+pub(crate) fn read_file_bytes(path: &Path, gzip: bool) -> Result<Vec<u8>, LoadError> {
+    read_bytes(path, gzip, read_limit_bytes())
+}
+
 /// Reads the whole file, decompressing it if `gzip`, refusing more than `limit` bytes.
 pub(crate) fn read_bytes(path: &Path, gzip: bool, limit: u64) -> Result<Vec<u8>, LoadError> {
     let read_error = |error| LoadError::Read { path: path.into(), error };

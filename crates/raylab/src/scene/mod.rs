@@ -12,6 +12,7 @@ mod ply;
 use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
+pub(crate) use file::read_file_bytes;
 pub use file::{
     LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh, read_limit_bytes,
 };

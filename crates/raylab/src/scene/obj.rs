@@ -68,6 +68,7 @@ fn parse_obj_with(
     read_library: &ReadLibrary,
 ) -> Result<LoadedMesh, LoadError> {
     let shared = Shared {
+        obj_path: path,
         read_library,
         line: Cell::new(0),
         failure: RefCell::new(None),
@@ -216,6 +217,8 @@ fn describe(error: tobj::LoadError) -> String {
 
 /// State shared by the line reader and the material library loader, which tobj holds apart.
 struct Shared<'a> {
+    /// The OBJ file, for messages.
+    obj_path: &'a Path,
     read_library: &'a ReadLibrary<'a>,
     /// The line the reader is on.
     line: Cell<u64>,
@@ -260,7 +263,7 @@ impl Shared<'_> {
     fn read_one(&self, name: &str) -> Result<(PathBuf, Vec<u8>), LoadError> {
         if name.is_empty() {
             return Err(LoadError::Invalid {
-                path: "".into(),
+                path: self.obj_path.into(),
                 message: "`mtllib` names no file".into(),
             });
         }
