@@ -84,7 +84,7 @@ impl Mesh {
 
     /// The number of triangles with exactly zero area (all cross products zero).
     pub fn zero_area_triangles(&self) -> usize {
-        self.triangle_vertices().filter(|[a, b, c]| (*c - *a).cross(*b - *a) == Vec3::ZERO).count()
+        self.triangle_vertices().filter(|&t| crate::triangle::is_degenerate(t)).count()
     }
 }
 

@@ -122,6 +122,14 @@ fn edge_function_f64(px: f32, py: f32, qx: f32, qy: f32) -> f32 {
     (px as f64 * qy as f64 - py as f64 * qx as f64) as f32
 }
 
+/// Whether a triangle has exactly zero area (its edge cross product is the zero vector), so that
+/// no ray ever hits it. Compares the cross product itself rather than its squared length, which
+/// underflows for tiny triangles.
+#[inline]
+pub fn is_degenerate([v0, v1, v2]: [Vec3; 3]) -> bool {
+    (v2 - v0).cross(v1 - v0) == Vec3::ZERO
+}
+
 /// The axis along which `d` is longest, which the watertight test maps to z; ties go to the
 /// lowest axis, so any ray gets one answer.
 #[inline]
@@ -216,7 +224,7 @@ impl WatertightRay {
         }
         // A zero-area triangle is never hit (as in PBR 4th ed.; comparing the cross product itself
         // rather than its squared length, which underflows for tiny triangles).
-        if (v2 - v0).cross(v1 - v0) == Vec3::ZERO {
+        if is_degenerate([v0, v1, v2]) {
             return None;
         }
         let det = e0 + e1 + e2;

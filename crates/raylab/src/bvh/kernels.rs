@@ -19,7 +19,10 @@ pub(crate) trait NodeKernel {
     type Ray: Copy;
 
     /// Prepares a ray.
-    fn prepare(ray: &RayBoxTest) -> Self::Ray;
+    ///
+    /// # Safety
+    /// As for [`enter`](Self::enter).
+    unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray;
 
     /// The mask of children entered within `[t_min, t_limit]` (bit `k` for child `k`), and each
     /// child's entry distance (meaningful only where the bit is set).
@@ -99,7 +102,7 @@ impl NodeKernel for Scalar {
     type Ray = RayBoxTest;
 
     #[inline(always)]
-    fn prepare(ray: &RayBoxTest) -> RayBoxTest {
+    unsafe fn prepare(ray: &RayBoxTest) -> RayBoxTest {
         *ray
     }
 
@@ -155,7 +158,7 @@ mod x86 {
         }
 
         #[inline(always)]
-        fn prepare(ray: &RayBoxTest) -> Self::Ray {
+        unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
             let (near_rows, far_rows) = plane_rows(ray);
             // SAFETY: SSE2 is part of x86-64.
             unsafe {
@@ -360,9 +363,9 @@ mod x86 {
         }
 
         #[inline(always)]
-        fn prepare(ray: &RayBoxTest) -> Self::Ray {
+        unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
             let (near_rows, far_rows) = plane_rows(ray);
-            // SAFETY: only called from traversal compiled with AVX2 enabled, after detection.
+            // SAFETY: the caller checked AVX2 support (this function's contract).
             unsafe {
                 Broadcast {
                     origin: [0, 1, 2].map(|a| _mm256_set1_ps(ray.origin[a])),

@@ -170,6 +170,10 @@ impl BvhStats {
     }
 }
 
+/// The most triangles one BVH holds: every one could need a leaf block of its own, and leaf
+/// references address 2²⁷ − 1 blocks.
+pub const MAX_TRIANGLES: usize = (1 << 27) - 2;
+
 /// An 8-wide BVH over triangles; an [`Accelerator`].
 pub struct Bvh {
     wide: WideBvh,
@@ -192,16 +196,17 @@ impl Bvh {
 
     /// Builds over triangles given by their vertices; hits report indices into `triangles`.
     /// Runs on the current rayon pool.
+    ///
+    /// # Panics
+    /// With more than [`MAX_TRIANGLES`] (about 134 million) triangles.
     pub fn build(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {
+        assert!(triangles.len() <= MAX_TRIANGLES, "a BVH holds at most {MAX_TRIANGLES} triangles");
         let settings = settings.clamped();
         let prims: Vec<Bounds> = triangles.iter().map(|&t| Bounds::of_triangle(t)).collect();
         let indices: Vec<u32> = (0..triangles.len() as u32)
             .filter(|&i| {
-                let [a, b, c] = triangles[i as usize];
-                a.is_finite()
-                    && b.is_finite()
-                    && c.is_finite()
-                    && (c - a).cross(b - a) != Vec3::ZERO
+                let t = triangles[i as usize];
+                t.iter().all(|v| v.is_finite()) && !crate::triangle::is_degenerate(t)
             })
             .collect();
         let indexed_triangles = indices.len();

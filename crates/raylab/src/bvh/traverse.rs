@@ -75,7 +75,8 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
         return None;
     }
     let triangle_ray = WatertightRay::new(ray);
-    let box_ray = K::prepare(&RayBoxTest::new(ray));
+    // SAFETY: the caller guarantees `K`'s instruction set.
+    let box_ray = unsafe { K::prepare(&RayBoxTest::new(ray)) };
     let mut best: Option<Hit> = None;
     // Triangles are accepted for `t < triangle_limit`: the ray's end, then just past the best hit
     // so that an equal `t` with a lower index can still win.
@@ -180,7 +181,8 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
         return false;
     }
     let triangle_ray = WatertightRay::new(ray);
-    let box_ray = K::prepare(&RayBoxTest::new(ray));
+    // SAFETY: the caller guarantees `K`'s instruction set.
+    let box_ray = unsafe { K::prepare(&RayBoxTest::new(ray)) };
     let box_limit = ray.t_max * FAR_SCALE;
     let mut stack = Stack::<u32>::new();
     let mut top = 0;
