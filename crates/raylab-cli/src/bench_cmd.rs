@@ -15,7 +15,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use raylab::bvh::{BuildSettings, Bvh, Isa};
-use raylab::ray_sets::{self, Frame, HitRecord};
+use raylab::ray_sets::{self, Agreement, Frame, HitRecord};
 use raylab::{Accelerator, Ray};
 
 use crate::system;
@@ -186,8 +186,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     ] {
         if let Ok(path) = find_file(dir, file) {
             let reference = ray_sets::read_hits(&path)?;
-            let agreement = compare_hits(&reference, ours);
-            println!("{file}: {agreement}");
+            if reference.len() != ours.len() {
+                println!(
+                    "{file}: {} records for {} rays, not comparable",
+                    reference.len(),
+                    ours.len()
+                );
+            } else {
+                println!("{file}: {}", Agreement::of(&reference, ours));
+            }
         }
     }
     if let Ok(path) = find_file(dir, "shadow.occluded") {
@@ -331,38 +338,6 @@ fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
     let n = values.len();
     if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) }
-}
-
-/// How far two sets of closest hits agree, by the protocol's rules: the same hit or miss, `t`
-/// within 1e-5 relative, and a different triangle only where the `t` values agree.
-fn compare_hits(reference: &[HitRecord], ours: &[HitRecord]) -> String {
-    if reference.len() != ours.len() {
-        return format!(
-            "{} reference records for {} rays: not comparable",
-            reference.len(),
-            ours.len()
-        );
-    }
-    let (mut hit_miss, mut t_off, mut other_prim_same_t) = (0, 0, 0);
-    for (r, o) in reference.iter().zip(ours) {
-        if r.is_hit() != o.is_hit() {
-            hit_miss += 1;
-        } else if r.is_hit() {
-            let close = (r.t - o.t).abs() <= 1e-5 * r.t.abs().max(o.t.abs());
-            if !close {
-                t_off += 1;
-            } else if r.prim != o.prim {
-                other_prim_same_t += 1;
-            }
-        }
-    }
-    let agree = reference.len() - hit_miss - t_off;
-    format!(
-        "{agree} of {} agree ({:.4} %); {hit_miss} hit/miss and {t_off} t differences; \
-         {other_prim_same_t} other triangles at equal t",
-        reference.len(),
-        100.0 * agree as f64 / reference.len().max(1) as f64
-    )
 }
 
 fn to_json(

@@ -186,6 +186,84 @@ impl HitRecord {
     }
 }
 
+/// How far two sets of closest hits for the same rays agree, by the protocol's rules: the same
+/// hit or miss, `t` within [`Agreement::T_TOLERANCE`] relative, and a different triangle only
+/// where the `t` values agree.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Agreement {
+    /// Rays compared.
+    pub rays: usize,
+    /// Rays that one side hits and the other misses.
+    pub hit_miss: usize,
+    /// Rays both hit, with `t` beyond the tolerance.
+    pub t_differences: usize,
+    /// The largest relative `t` difference among rays both hit.
+    pub max_relative_t: f32,
+    /// Rays both hit at agreeing `t`, on different triangles (a shared edge or vertex).
+    pub other_triangles: usize,
+}
+
+impl Agreement {
+    /// The relative `t` tolerance of the protocol.
+    pub const T_TOLERANCE: f32 = 1e-5;
+
+    /// Compares `ours` with `reference`, record by record (the shorter length if they differ).
+    pub fn of(reference: &[HitRecord], ours: &[HitRecord]) -> Agreement {
+        let mut a = Agreement { rays: reference.len().min(ours.len()), ..Agreement::default() };
+        for (r, o) in reference.iter().zip(ours) {
+            if r.is_hit() != o.is_hit() {
+                a.hit_miss += 1;
+            } else if r.is_hit() {
+                let relative = relative_difference(r.t, o.t);
+                a.max_relative_t = a.max_relative_t.max(relative);
+                if relative > Self::T_TOLERANCE {
+                    a.t_differences += 1;
+                } else if r.prim != o.prim {
+                    a.other_triangles += 1;
+                }
+            }
+        }
+        a
+    }
+
+    /// The indices of the rays both hit with `t` beyond the tolerance.
+    pub fn t_outliers<'a>(
+        reference: &'a [HitRecord],
+        ours: &'a [HitRecord],
+    ) -> impl Iterator<Item = usize> + 'a {
+        reference.iter().zip(ours).enumerate().filter_map(|(i, (r, o))| {
+            (r.is_hit() && o.is_hit() && relative_difference(r.t, o.t) > Self::T_TOLERANCE)
+                .then_some(i)
+        })
+    }
+
+    /// Rays that agree (differences at equal `t` on another triangle count as agreeing).
+    pub fn agreeing(&self) -> usize {
+        self.rays - self.hit_miss - self.t_differences
+    }
+}
+
+fn relative_difference(a: f32, b: f32) -> f32 {
+    (a - b).abs() / a.abs().max(b.abs())
+}
+
+impl std::fmt::Display for Agreement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} of {} agree ({:.4} %); {} hit/miss and {} t differences (largest {:.1e}); \
+             {} other triangles at equal t",
+            self.agreeing(),
+            self.rays,
+            100.0 * self.agreeing() as f64 / self.rays.max(1) as f64,
+            self.hit_miss,
+            self.t_differences,
+            self.max_relative_t,
+            self.other_triangles
+        )
+    }
+}
+
 /// `o + t·d` in `f64` from the stored `f32` values, rounded to `f32` (protocol §4).
 fn hit_point(ray: &Ray, t: f32) -> DVec3 {
     let p = ray.origin.as_dvec3() + t as f64 * ray.direction.as_dvec3();
@@ -442,6 +520,20 @@ mod tests {
         let mut pixel1 = Pcg32::new(1, DIFFUSE_STREAM);
         assert!((pixel1.next_unit() - 0.607114613).abs() < 1e-9);
         assert!((pixel1.next_unit() - 0.047637701).abs() < 1e-9);
+    }
+
+    #[test]
+    fn agreement_follows_the_protocol_rules() {
+        let hit = |t, prim| HitRecord { t, prim };
+        let miss = HitRecord::from_hit(None);
+        let reference = [hit(1.0, 0), hit(1.0, 1), hit(2.0, 2), miss, hit(3.0, 3), miss];
+        let ours = [hit(1.0, 0), hit(1.000001, 5), hit(2.001, 2), hit(1.0, 0), miss, miss];
+        let a = Agreement::of(&reference, &ours);
+        assert_eq!((a.rays, a.hit_miss, a.t_differences, a.other_triangles), (6, 2, 1, 1));
+        assert_eq!(a.agreeing(), 3);
+        assert!((a.max_relative_t - 0.001 / 2.001).abs() < 1e-6);
+        assert_eq!(Agreement::t_outliers(&reference, &ours).collect::<Vec<_>>(), [2]);
+        assert!(a.to_string().starts_with("3 of 6 agree (50.0000 %); 2 hit/miss and 1 t"), "{a}");
     }
 
     #[test]
