@@ -152,13 +152,14 @@ pub fn check_writable(path: &Path) -> Result<ImageFormat, ImageIoError> {
 /// complete or not at all.
 pub fn save_rgb8(path: &Path, image: &RgbImage) -> Result<(), ImageIoError> {
     let format = output_format(path)?;
-    let temporary = temporary_file_beside(path)?;
-    let write_error =
-        |source: io::Error| ImageIoError::Io { action: "write", path: path.to_path_buf(), source };
-    {
-        let mut out = BufWriter::new(temporary.as_file());
+    write_atomically(path, |out| {
+        let write_error = |source: io::Error| ImageIoError::Io {
+            action: "write",
+            path: path.to_path_buf(),
+            source,
+        };
         match format {
-            ImageFormat::Png => image::codecs::png::PngEncoder::new(&mut out)
+            ImageFormat::Png => image::codecs::png::PngEncoder::new(out)
                 .write_image(
                     image.as_raw(),
                     image.width(),
@@ -169,13 +170,32 @@ pub fn save_rgb8(path: &Path, image: &RgbImage) -> Result<(), ImageIoError> {
                     action: "write",
                     path: path.to_path_buf(),
                     source,
-                })?,
+                }),
             ImageFormat::Ppm => {
                 write!(out, "P6\n{} {}\n255\n", image.width(), image.height())
                     .map_err(write_error)?;
-                out.write_all(image.as_raw()).map_err(write_error)?;
+                out.write_all(image.as_raw()).map_err(write_error)
             }
         }
+    })
+}
+
+/// Writes a file atomically: `write` fills a temporary file beside `path` (readable like any new
+/// file), which is flushed, synced and then renamed into place. A failure at any step leaves
+/// `path` as it was. Used for every file raylab writes: images and ray-set files alike.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<&fs::File>) -> Result<(), ImageIoError>,
+) -> Result<(), ImageIoError> {
+    if path.is_dir() {
+        return Err(ImageIoError::IsAFolder { path: path.to_path_buf() });
+    }
+    let temporary = temporary_file_beside(path)?;
+    let write_error =
+        |source: io::Error| ImageIoError::Io { action: "write", path: path.to_path_buf(), source };
+    {
+        let mut out = BufWriter::new(temporary.as_file());
+        write(&mut out)?;
         out.flush().map_err(write_error)?;
     }
     // On disk before the rename, so that even a crash cannot leave a renamed, empty file.

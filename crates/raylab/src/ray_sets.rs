@@ -19,7 +19,7 @@
 //! `t: f32, prim: u32` (a miss is `+∞`, `0xFFFFFFFF`); `.occluded` = one byte per ray, no header.
 //! Readers accept gzip-compressed files whose name ends in `.gz`.
 
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
@@ -420,29 +420,24 @@ pub fn read_occluded(path: &Path) -> Result<Vec<bool>, RaySetError> {
         .collect()
 }
 
-/// Writes `path` whole or not at all: into a temporary file beside it, synced, then renamed.
+/// Writes `path` whole or not at all, with the mechanism every raylab output uses
+/// ([`crate::image_io::write_atomically`]).
 fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<(), RaySetError> {
-    let io_error = |e: io::Error| RaySetError::new(path, format!("cannot write: {e}"));
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let temporary = tempfile::Builder::new()
-        .prefix(".raylab-")
-        .suffix(".tmp")
-        .tempfile_in(folder)
-        .map_err(io_error)?;
-    {
-        let mut out = BufWriter::new(temporary.as_file());
-        write(&mut out).map_err(io_error)?;
-        out.flush().map_err(io_error)?;
-    }
-    temporary.as_file().sync_all().map_err(io_error)?;
-    temporary.persist(path).map_err(|e| io_error(e.error))?;
-    Ok(())
+    crate::image_io::write_atomically(path, |out| {
+        write(out).map_err(|source| crate::image_io::ImageIoError::Io {
+            action: "write",
+            path: path.to_path_buf(),
+            source,
+        })
+    })
+    .map_err(|e| {
+        let message = e.to_string();
+        // The message names the path already; keep it once.
+        RaySetError::new(path, message.replacen(&format!(" '{}'", path.display()), "", 1))
+    })
 }
 
 fn header(out: &mut dyn Write, magic: &[u8; 4], count: usize) -> io::Result<()> {
@@ -560,6 +555,12 @@ mod tests {
         assert!(message.contains("header says 1 records"), "{message}");
         let message = read_rays(&dir.path().join("missing.rays")).unwrap_err().to_string();
         assert!(message.contains("missing.rays") && message.contains("cannot read"), "{message}");
+        let nowhere = dir.path().join("missing/a.rays");
+        let message = write_rays(&nowhere, &rays).unwrap_err().to_string();
+        assert!(
+            message.starts_with(&format!("{}: cannot write: folder", nowhere.display())),
+            "{message}"
+        );
         fs::write(&occluded_path, [0, 1, 2]).unwrap();
         let message = read_occluded(&occluded_path).unwrap_err().to_string();
         assert!(message.contains("byte 2"), "{message}");
