@@ -175,14 +175,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 /// A built-in scene by name, or a model file (anything that looks like a path). The flag says
 /// whether it is a model.
 fn load_scene(name: &str) -> Result<(Scene, bool)> {
-    if Scene::built_in(name).is_ok() {
-        return Ok((Scene::built_in(name)?, false));
-    }
     let path = std::path::Path::new(name);
     let looks_like_a_file = path.exists() || name.contains('/') || name.contains('.');
-    if !looks_like_a_file {
+    match Scene::built_in(name) {
+        Ok(scene) => return Ok((scene, false)),
         // Neither a built-in name nor a file: say what the built-in scenes are.
-        Scene::built_in(name)?;
+        Err(unknown) if !looks_like_a_file => return Err(unknown.into()),
+        Err(_) => {}
     }
     let loaded = raylab::scene::load_mesh(path)?;
     for warning in &loaded.warnings {

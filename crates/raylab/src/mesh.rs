@@ -71,9 +71,7 @@ impl Mesh {
     /// The bounding box `(min, max)` of the vertices that some triangle uses, or `None` for a
     /// mesh without triangles.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let mut corners = self.triangles.iter().flatten().map(|&v| self.positions[v as usize]);
-        let first = corners.next()?;
-        Some(corners.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
+        bounds_of(self.triangles.iter().flatten().map(|&v| self.positions[v as usize]))
     }
 
     /// The material of triangle `i`, if it has one.
@@ -86,6 +84,13 @@ impl Mesh {
     pub fn zero_area_triangles(&self) -> usize {
         self.triangle_vertices().filter(|&t| crate::triangle::is_degenerate(t)).count()
     }
+}
+
+/// The bounding box `(min, max)` of some points, or `None` for none.
+pub fn bounds_of(points: impl IntoIterator<Item = Vec3>) -> Option<(Vec3, Vec3)> {
+    let mut points = points.into_iter();
+    let first = points.next()?;
+    Some(points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
 }
 
 #[cfg(test)]

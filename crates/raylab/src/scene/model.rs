@@ -40,9 +40,7 @@ impl Scene {
 
     /// The bounding box `(min, max)` of every triangle, or `None` for an empty scene.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let mut points = self.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]);
-        let first = points.next()?;
-        Some(points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
+        crate::mesh::bounds_of(self.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]))
     }
 
     /// A light above the scene, a little to the right and in front of it (toward a camera that
