@@ -174,8 +174,38 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         results.push(SetResult { set: name.to_string(), query, mrays_per_s: per_threads });
     }
 
+    // The coherent path: primary rays in 8×8 tiles, traced as packets.
+    let primary = &sets[0].2;
+    let tiles = tile_order(primary.len());
+    let tiled: Vec<Ray> = tiles.iter().map(|&i| primary[i]).collect();
+    let mut per_threads = Vec::new();
+    for &n in &thread_counts {
+        let seconds = time_median(args.reps, || trace_packets(&bvh, &tiled, n));
+        per_threads.push((n, tiled.len() as f64 / seconds / 1e6));
+    }
+    let mut line = format!("{:<9} {:<9} {:>9}", "primary", "packet", tiled.len());
+    for (_, mrays) in &per_threads {
+        line += &format!(" {mrays:>8.2} Mr/s");
+    }
+    println!("{line}");
+    results.push(SetResult {
+        set: "primary".to_string(),
+        query: "packet",
+        mrays_per_s: per_threads,
+    });
+
     // Answers: compare with reference files in DIR where present, and write them if asked.
     let primary_hits: Vec<HitRecord> = trace_closest(&bvh, &sets[0].2, threads);
+    let mut packet_hits = vec![HitRecord::default(); primary.len()];
+    for (&i, hit) in tiles.iter().zip(trace_packets(&bvh, &tiled, threads)) {
+        packet_hits[i] = hit;
+    }
+    let differ = packet_hits.iter().zip(&primary_hits).filter(|(a, b)| a != b).count();
+    println!(
+        "primary packets: {} of {} answers identical to single rays",
+        primary.len() - differ,
+        primary.len()
+    );
     let shadow_occluded = trace_occluded(&bvh, &sets[1].2, threads);
     let shadow_hits = trace_closest(&bvh, &sets[1].2, threads);
     let diffuse_hits = trace_closest(&bvh, &sets[2].2, threads);
@@ -317,6 +347,54 @@ fn trace_closest(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<HitRecord> {
     trace(rays, threads, |ray| HitRecord::from_hit(bvh.closest_hit(ray)))
 }
 
+/// Closest hits through [`Accelerator::closest_hits`], a chunk at a time.
+fn trace_packets(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<HitRecord> {
+    let mut out = vec![HitRecord::default(); rays.len()];
+    let chunks: Vec<Mutex<&mut [HitRecord]>> = out.chunks_mut(CHUNK).map(Mutex::new).collect();
+    let next = AtomicUsize::new(0);
+    let work = || {
+        let mut hits = vec![None; CHUNK];
+        loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            let Some(chunk) = chunks.get(k) else { break };
+            let mut chunk = chunk.lock().expect("no thread panics while holding a chunk");
+            let rays = &rays[k * CHUNK..k * CHUNK + chunk.len()];
+            bvh.closest_hits(rays, &mut hits[..rays.len()]);
+            for (slot, hit) in chunk.iter_mut().zip(&hits) {
+                *slot = HitRecord::from_hit(*hit);
+            }
+        }
+    };
+    std::thread::scope(|scope| {
+        for _ in 1..threads {
+            scope.spawn(work);
+        }
+        work();
+    });
+    drop(chunks);
+    out
+}
+
+/// The order that visits a square image's pixels (row-major, `count` of them) in 8×8 tiles,
+/// tile rows first; consecutive rays for an image that is not square.
+fn tile_order(count: usize) -> Vec<usize> {
+    let width = count.isqrt();
+    if width * width != count {
+        return (0..count).collect();
+    }
+    let mut order = Vec::with_capacity(count);
+    for tile_y in (0..width).step_by(8) {
+        for tile_x in (0..width).step_by(8) {
+            for y in tile_y..(tile_y + 8).min(width) {
+                for x in tile_x..(tile_x + 8).min(width) {
+                    order.push(y * width + x);
+                }
+            }
+        }
+    }
+    order
+}
+
 fn trace_occluded(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<bool> {
     trace(rays, threads, |ray| bvh.occluded(ray))
 }
@@ -353,12 +431,26 @@ fn to_json(
     } else {
         format!("\"1\": {build_1:.3}, \"{threads}\": {build_n:.3}")
     };
-    let sets: Vec<String> = results
+    // One object per set, its queries in the order measured.
+    let mut names: Vec<&str> = Vec::new();
+    for r in results {
+        if !names.contains(&r.set.as_str()) {
+            names.push(&r.set);
+        }
+    }
+    let sets: Vec<String> = names
         .iter()
-        .map(|r| {
-            let figures: Vec<String> =
-                r.mrays_per_s.iter().map(|(n, m)| format!("\"{n}\": {m:.4}")).collect();
-            format!("    \"{}\": {{\"{}\": {{{}}}}}", r.set, r.query, figures.join(", "))
+        .map(|&set| {
+            let queries: Vec<String> = results
+                .iter()
+                .filter(|r| r.set == set)
+                .map(|r| {
+                    let figures: Vec<String> =
+                        r.mrays_per_s.iter().map(|(n, m)| format!("\"{n}\": {m:.4}")).collect();
+                    format!("\"{}\": {{{}}}", r.query, figures.join(", "))
+                })
+                .collect();
+            format!("    \"{set}\": {{{}}}", queries.join(", "))
         })
         .collect();
     format!(

@@ -26,7 +26,8 @@ fn brute_force(triangles: &[[Vec3; 3]]) -> BruteForce {
     BruteForce::new(&t)
 }
 
-/// Compares every BVH with brute force on `rays`; returns how many rays hit something.
+/// Compares every BVH with brute force on `rays`, one at a time and as packets (the whole slice
+/// at once, which the BVH cuts into packets of 64); returns how many rays hit something.
 fn assert_agreement(triangles: &[[Vec3; 3]], rays: &[Ray]) -> Result<usize, TestCaseError> {
     let reference = brute_force(triangles);
     let expected: Vec<_> =
@@ -36,8 +37,33 @@ fn assert_agreement(triangles: &[[Vec3; 3]], rays: &[Ray]) -> Result<usize, Test
             prop_assert_eq!(bvh.closest_hit(ray), *closest, "{}: {:?}", name, ray);
             prop_assert_eq!(bvh.occluded(ray), *occluded, "{}: {:?}", name, ray);
         }
+        let mut closest = vec![None; rays.len()];
+        let mut occluded = vec![false; rays.len()];
+        bvh.closest_hits(rays, &mut closest);
+        bvh.occluded_each(rays, &mut occluded);
+        for (i, (c, o)) in expected.iter().enumerate() {
+            prop_assert_eq!(closest[i], *c, "{} packet: {:?}", name, rays[i]);
+            prop_assert_eq!(occluded[i], *o, "{} packet: {:?}", name, rays[i]);
+        }
     }
     Ok(expected.iter().filter(|(c, _)| c.is_some()).count())
+}
+
+/// A tile of `side`×`side` rays from `origin` through a small square of directions around
+/// `centre` (spread `spread`), as a pinhole camera makes them; with `jitter`, every ray starts
+/// at its own point near `origin` (as a lens or an area light would).
+fn tile(origin: Vec3, centre: Vec3, spread: f32, side: usize, jitter: f32, t_max: f32) -> Vec<Ray> {
+    let (u, v) = centre.normalize_or(Vec3::Z).any_orthonormal_pair();
+    let mut rays = Vec::new();
+    for y in 0..side {
+        for x in 0..side {
+            let (fx, fy) = (x as f32 / side as f32 - 0.5, y as f32 / side as f32 - 0.5);
+            let d = centre + spread * (fx * u + fy * v);
+            let o = origin + jitter * (fy * u - fx * v);
+            rays.push(Ray::segment(o, d, t_max));
+        }
+    }
+    rays
 }
 
 fn vec3(range: f32) -> impl Strategy<Value = Vec3> {
@@ -96,6 +122,34 @@ proptest! {
                 if o != target {
                     rays.push(Ray::segment(o, d, t_max));
                 }
+            }
+        }
+        assert_agreement(&triangles, &rays)?;
+    }
+
+    /// Coherent packets: tiles of camera rays (and of rays from nearby origins) aimed at the
+    /// soup, wide and narrow, some across a direction axis (so that packets split by octant),
+    /// and a shadow-like tile of segments toward one point.
+    #[test]
+    fn coherent_tiles_agree_with_brute_force(
+        triangles in soup(),
+        origin in vec3(14.0),
+        aim in 0usize..10_000,
+        spread in prop_oneof![Just(0.0f32), 1e-3f32..0.1, 0.1f32..2.0],
+        jitter in prop_oneof![Just(0.0f32), 1e-3f32..3.0],
+        side in 2usize..12,
+        t_max in prop_oneof![Just(f32::INFINITY), 1.0f32..30.0],
+    ) {
+        let [a, b, c] = triangles[aim % triangles.len()];
+        let target = (a + b + c) / 3.0;
+        prop_assume!(target != origin);
+        let mut rays = tile(origin, target - origin, spread, side, jitter, t_max);
+        // Segments from points of the tile's hits toward the origin, as shadow rays to a light.
+        let reference = brute_force(&triangles);
+        for ray in rays.clone() {
+            if let Some(hit) = reference.closest_hit(&ray) {
+                let p = ray.at(hit.t * 0.999);
+                rays.push(Ray::segment(p, origin - p, 1.0));
             }
         }
         assert_agreement(&triangles, &rays)?;
@@ -228,7 +282,17 @@ fn mesh_rays(triangles: &[[Vec3; 3]], count: usize) -> Vec<Ray> {
 fn mesh_agrees(path: &std::path::Path, rays: usize) {
     let mesh = raylab::scene::load_mesh(path).unwrap().mesh;
     let triangles: Vec<[Vec3; 3]> = mesh.triangle_vertices().collect();
-    let rays = mesh_rays(&triangles, rays);
+    let mut rays = mesh_rays(&triangles, rays);
+    // And two 8×8 tiles of camera rays, from in front and from a corner.
+    let frame = raylab::ray_sets::Frame::of(&mesh).unwrap();
+    let camera = raylab::ray_sets::primary_rays(&frame, 32, 32, 32.0);
+    for (y, row) in camera.chunks(32).enumerate() {
+        if (12..20).contains(&y) {
+            rays.extend_from_slice(&row[12..20]);
+        }
+    }
+    let (lo, hi) = mesh.bounds().unwrap();
+    rays.extend(tile(hi + (hi - lo), 0.5 * (lo + hi) - hi - (hi - lo), 0.3, 8, 0.0, f32::INFINITY));
     let hits = assert_agreement(&triangles, &rays).unwrap();
     eprintln!(
         "{}: {} triangles, {hits} of {} rays hit",

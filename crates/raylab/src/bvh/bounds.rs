@@ -152,6 +152,116 @@ impl RayBoxTest {
     }
 }
 
+/// The slab test of a whole packet of rays at once: a box passes if any ray of the packet may
+/// enter it, as [`RayBoxTest::enter`] decides for each ray (Reshetov et al., "Multi-Level Ray
+/// Tracing Algorithm", 2005, and Wald et al., "Ray Tracing Deformable Scenes Using Dynamic
+/// Bounding Volume Hierarchies", 2007, bound a packet by its interval arithmetic).
+///
+/// Per axis it holds the intervals of the rays' origins and of their `1/d`, which must not
+/// change sign within the packet. Each ray's slab distance `(plane − o)·(1/d)` then lies between
+/// the least and the greatest of the four corner products, *also after rounding*, because
+/// rounding is monotonic: so the packet's entry is at most each ray's entry, its exit at least
+/// each ray's exit, and its margin at least each ray's [`SLAB_PAD`] margin. The packet test is
+/// thus a superset of every member's test, in floating point, and can never prune a box that
+/// one of its rays would enter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frustum {
+    /// Per axis, the least origin coordinate.
+    pub origin_lo: Vec3,
+    /// Per axis, the greatest origin coordinate.
+    pub origin_hi: Vec3,
+    /// Per axis, the least `1/d` (all of one sign, finite and non-zero).
+    pub inv_lo: Vec3,
+    /// Per axis, the greatest `1/d`.
+    pub inv_hi: Vec3,
+    /// Per axis, whether the directions are negative.
+    pub negative: [bool; 3],
+    /// The least `t_min`.
+    pub t_min: f32,
+    /// The axes that are some ray's dominant axis: the margin is taken over these.
+    pub pad_axes: [bool; 3],
+}
+
+impl Frustum {
+    /// The bound of the rays, or `None` if they cannot share one: no rays, a direction whose
+    /// signs differ from the first ray's, or a direction component that is zero or so small
+    /// that `1/d` is infinite (such rays are traced one by one).
+    pub fn of(rays: impl IntoIterator<Item = RayBoxTest>) -> Option<Frustum> {
+        let mut rays = rays.into_iter().peekable();
+        let first = *rays.peek()?;
+        let mut f = Frustum {
+            origin_lo: first.origin,
+            origin_hi: first.origin,
+            inv_lo: first.inv_direction,
+            inv_hi: first.inv_direction,
+            negative: first.negative,
+            t_min: first.t_min,
+            pad_axes: [false; 3],
+        };
+        for ray in rays {
+            if !Frustum::can_join(&ray) || ray.negative != f.negative {
+                return None;
+            }
+            f.origin_lo = f.origin_lo.min(ray.origin);
+            f.origin_hi = f.origin_hi.max(ray.origin);
+            f.inv_lo = f.inv_lo.min(ray.inv_direction);
+            f.inv_hi = f.inv_hi.max(ray.inv_direction);
+            f.t_min = f.t_min.min(ray.t_min);
+            f.pad_axes[ray.dominant_axis] = true;
+        }
+        Some(f)
+    }
+
+    /// Whether a ray may be part of a packet: a finite origin and a finite, non-zero `1/d` on
+    /// every axis (so that no slab product is NaN).
+    #[inline]
+    pub fn can_join(ray: &RayBoxTest) -> bool {
+        ray.origin.is_finite()
+            && ray.inv_direction.is_finite()
+            && ray.inv_direction.cmpne(Vec3::ZERO).all()
+            && ray.t_min.is_finite()
+    }
+
+    /// The packet's entry distance into `bounds`, if some ray of the packet may enter it within
+    /// `[t_min, t_max]`; `t_max` must be at least every member's own limit.
+    ///
+    /// The scalar twin of the SIMD frustum kernels, which compute the same values in the same
+    /// order.
+    #[inline]
+    pub fn enter(&self, bounds: &Bounds, t_max: f32) -> Option<f32> {
+        let mut near = self.t_min;
+        let mut far = t_max;
+        let mut reach = 0.0f32;
+        for axis in 0..3 {
+            let (near_plane, far_plane) = if self.negative[axis] {
+                (bounds.max[axis], bounds.min[axis])
+            } else {
+                (bounds.min[axis], bounds.max[axis])
+            };
+            let (o_lo, o_hi) = (self.origin_lo[axis], self.origin_hi[axis]);
+            let (i_lo, i_hi) = (self.inv_lo[axis], self.inv_hi[axis]);
+            let (tn_lo, tn_hi) = interval_product(near_plane - o_hi, near_plane - o_lo, i_lo, i_hi);
+            let (tf_lo, tf_hi) = interval_product(far_plane - o_hi, far_plane - o_lo, i_lo, i_hi);
+            near = tn_lo.max(near);
+            far = (tf_hi * FAR_SCALE).min(far);
+            if self.pad_axes[axis] {
+                reach = reach.max(tn_lo.abs().max(tn_hi.abs()).max(tf_lo.abs().max(tf_hi.abs())));
+            }
+        }
+        let pad = reach * SLAB_PAD;
+        let (near, far) = (near - pad, far + pad);
+        (near <= far).then_some(near)
+    }
+}
+
+/// The least and greatest of the products of `[a_lo, a_hi]` and `[i_lo, i_hi]`: the bounds of
+/// a product over the two intervals (its extremes are at corners).
+#[inline(always)]
+fn interval_product(a_lo: f32, a_hi: f32, i_lo: f32, i_hi: f32) -> (f32, f32) {
+    let (p0, p1, p2, p3) = (a_lo * i_lo, a_lo * i_hi, a_hi * i_lo, a_hi * i_hi);
+    (p0.min(p1).min(p2.min(p3)), p0.max(p1).max(p2.max(p3)))
+}
+
 /// The relative margin, on the box's reach along the ray's dominant axis, by which box entry
 /// and exit are moved out.
 ///

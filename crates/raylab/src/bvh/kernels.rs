@@ -8,13 +8,14 @@
 //! which is how the scalar `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face
 //! plane): the tests in `bvh/tests.rs` check that all kernels agree bit for bit.
 
-use super::bounds::{FAR_SCALE, RayBoxTest, SLAB_PAD};
+use super::bounds::{Bounds, FAR_SCALE, Frustum, RayBoxTest, SLAB_PAD};
 use super::build::BLOCK;
-use super::wide::{WIDTH, WideNode};
+use super::packet::{PACKET, PacketRays, packet_leaf_scalar};
+use super::wide::{WIDTH, WideBvh, WideNode};
 use crate::triangle::{TriangleBlock, WatertightRay};
 
 /// Which children a ray enters, and where.
-pub(crate) trait NodeKernel {
+pub(crate) trait NodeKernel: Sized {
     /// The ray, prepared for this kernel once per ray.
     type Ray: Copy;
 
@@ -30,6 +31,50 @@ pub(crate) trait NodeKernel {
     /// # Safety
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
     unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]);
+
+    /// Tests the rays of a packet in `open` that enter `bounds` against the triangles of the
+    /// leaf inside it: for the closest hit (`occlusion` false: each ray's best hit is offered
+    /// every hit), or for occlusion (rays hit are taken out of `open`). Decides exactly as the
+    /// single-ray tests do; the scalar twin is [`packet_leaf_scalar`].
+    ///
+    /// # Safety
+    /// As for [`enter`](Self::enter).
+    #[inline(always)]
+    unsafe fn packet_leaf(
+        rays: &mut PacketRays,
+        open: &mut u64,
+        occlusion: bool,
+        bvh: &WideBvh,
+        bounds: &Bounds,
+        first_block: u32,
+        blocks: u32,
+    ) {
+        // SAFETY: the caller's guarantee.
+        unsafe {
+            packet_leaf_scalar::<Self>(rays, open, occlusion, bvh, bounds, first_block, blocks)
+        }
+    }
+
+    /// A packet's bound, prepared for this kernel once per packet.
+    type Frustum: Copy;
+
+    /// Prepares a packet's bound.
+    ///
+    /// # Safety
+    /// As for [`enter`](Self::enter).
+    unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum;
+
+    /// The mask of children that some ray of the packet may enter within `[t_min, t_limit]`,
+    /// and the packet's entry distance into each, as [`Frustum::enter`] (the scalar twin)
+    /// computes them.
+    ///
+    /// # Safety
+    /// As for [`enter`](Self::enter).
+    unsafe fn enter_frustum(
+        node: &WideNode,
+        frustum: &Self::Frustum,
+        t_limit: f32,
+    ) -> (u32, [f32; WIDTH]);
 
     /// The hits of a ray on the triangles of `block` below `t_max`, as
     /// [`WatertightRay::intersect`] decides them. The blocks must hold no zero-area triangles
@@ -89,9 +134,9 @@ pub(crate) fn block_hits_scalar(
 
 /// Plane rows of the near and far planes per axis: the box's min for a positive direction.
 #[inline(always)]
-fn plane_rows(ray: &RayBoxTest) -> ([usize; 3], [usize; 3]) {
-    let near = [0, 1, 2].map(|axis| if ray.negative[axis] { 3 + axis } else { axis });
-    let far = [0, 1, 2].map(|axis| if ray.negative[axis] { axis } else { 3 + axis });
+fn plane_rows(negative: [bool; 3]) -> ([usize; 3], [usize; 3]) {
+    let near = [0, 1, 2].map(|axis| if negative[axis] { 3 + axis } else { axis });
+    let far = [0, 1, 2].map(|axis| if negative[axis] { axis } else { 3 + axis });
     (near, far)
 }
 
@@ -112,6 +157,30 @@ impl NodeKernel for Scalar {
         let mut near = [0.0; WIDTH];
         for (k, slot) in near.iter_mut().enumerate() {
             if let Some(t) = ray.enter(&node.bounds(k), t_limit) {
+                mask |= 1 << k;
+                *slot = t;
+            }
+        }
+        (mask, near)
+    }
+
+    type Frustum = Frustum;
+
+    #[inline(always)]
+    unsafe fn prepare_frustum(frustum: &Frustum) -> Frustum {
+        *frustum
+    }
+
+    #[inline(always)]
+    unsafe fn enter_frustum(
+        node: &WideNode,
+        frustum: &Frustum,
+        t_limit: f32,
+    ) -> (u32, [f32; WIDTH]) {
+        let mut mask = 0;
+        let mut near = [0.0; WIDTH];
+        for (k, slot) in near.iter_mut().enumerate() {
+            if let Some(t) = frustum.enter(&node.bounds(k), t_limit) {
                 mask |= 1 << k;
                 *slot = t;
             }
@@ -145,8 +214,538 @@ mod x86 {
         dominant_axis: usize,
     }
 
+    /// The few vector operations the frustum kernel needs, for SSE's four lanes and AVX's eight,
+    /// so that one generic function serves both.
+    pub(crate) trait Lanes: Copy {
+        /// # Safety
+        /// The CPU must support the register's instruction set (for this whole trait).
+        unsafe fn splat(x: f32) -> Self;
+        /// # Safety
+        /// `p` must point to as many floats as a register holds, aligned to its size.
+        unsafe fn load(p: *const f32) -> Self;
+        /// # Safety
+        /// `p` must point to as many floats as a register holds.
+        unsafe fn loadu(p: *const f32) -> Self;
+        /// # Safety
+        /// `p` must point to as many writable floats as a register holds.
+        unsafe fn store(self, p: *mut f32);
+        unsafe fn add(self, o: Self) -> Self;
+        unsafe fn sub(self, o: Self) -> Self;
+        unsafe fn mul(self, o: Self) -> Self;
+        /// `minps`: the second operand where either is NaN.
+        unsafe fn min(self, o: Self) -> Self;
+        /// `maxps`: the second operand where either is NaN.
+        unsafe fn max(self, o: Self) -> Self;
+        unsafe fn abs(self) -> Self;
+        /// Bit `k` set where lane `k` of `self <= o` (false for NaN).
+        unsafe fn le_mask(self, o: Self) -> u32;
+        unsafe fn div(self, o: Self) -> Self;
+        /// Comparisons give all-ones lanes where true (ordered: false for NaN, except `nlt`
+        /// and `nle`, which are true for NaN).
+        unsafe fn eq(self, o: Self) -> Self;
+        unsafe fn ge(self, o: Self) -> Self;
+        unsafe fn le(self, o: Self) -> Self;
+        unsafe fn gt(self, o: Self) -> Self;
+        unsafe fn lt(self, o: Self) -> Self;
+        unsafe fn nlt(self, o: Self) -> Self;
+        unsafe fn nle(self, o: Self) -> Self;
+        unsafe fn and(self, o: Self) -> Self;
+        unsafe fn or(self, o: Self) -> Self;
+        /// `self & !o`.
+        unsafe fn andnot_of(self, o: Self) -> Self;
+        /// The lanes' sign bits as a mask.
+        unsafe fn bits(self) -> u32;
+    }
+
+    impl Lanes for __m128 {
+        #[inline(always)]
+        unsafe fn splat(x: f32) -> Self {
+            unsafe { _mm_set1_ps(x) }
+        }
+        #[inline(always)]
+        unsafe fn load(p: *const f32) -> Self {
+            unsafe { _mm_load_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn loadu(p: *const f32) -> Self {
+            unsafe { _mm_loadu_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut f32) {
+            unsafe { _mm_storeu_ps(p, self) }
+        }
+        #[inline(always)]
+        unsafe fn add(self, o: Self) -> Self {
+            unsafe { _mm_add_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn sub(self, o: Self) -> Self {
+            unsafe { _mm_sub_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn mul(self, o: Self) -> Self {
+            unsafe { _mm_mul_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn min(self, o: Self) -> Self {
+            unsafe { _mm_min_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn max(self, o: Self) -> Self {
+            unsafe { _mm_max_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn abs(self) -> Self {
+            unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), self) }
+        }
+        #[inline(always)]
+        unsafe fn le_mask(self, o: Self) -> u32 {
+            unsafe { _mm_movemask_ps(_mm_cmple_ps(self, o)) as u32 }
+        }
+        #[inline(always)]
+        unsafe fn div(self, o: Self) -> Self {
+            unsafe { _mm_div_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn eq(self, o: Self) -> Self {
+            unsafe { _mm_cmpeq_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn ge(self, o: Self) -> Self {
+            unsafe { _mm_cmpge_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn le(self, o: Self) -> Self {
+            unsafe { _mm_cmple_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn gt(self, o: Self) -> Self {
+            unsafe { _mm_cmpgt_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn lt(self, o: Self) -> Self {
+            unsafe { _mm_cmplt_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn nlt(self, o: Self) -> Self {
+            unsafe { _mm_cmpnlt_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn nle(self, o: Self) -> Self {
+            unsafe { _mm_cmpnle_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn and(self, o: Self) -> Self {
+            unsafe { _mm_and_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn or(self, o: Self) -> Self {
+            unsafe { _mm_or_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn andnot_of(self, o: Self) -> Self {
+            unsafe { _mm_andnot_ps(o, self) }
+        }
+        #[inline(always)]
+        unsafe fn bits(self) -> u32 {
+            unsafe { _mm_movemask_ps(self) as u32 }
+        }
+    }
+
+    impl Lanes for __m256 {
+        #[inline(always)]
+        unsafe fn splat(x: f32) -> Self {
+            unsafe { _mm256_set1_ps(x) }
+        }
+        #[inline(always)]
+        unsafe fn load(p: *const f32) -> Self {
+            unsafe { _mm256_load_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn loadu(p: *const f32) -> Self {
+            unsafe { _mm256_loadu_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut f32) {
+            unsafe { _mm256_storeu_ps(p, self) }
+        }
+        #[inline(always)]
+        unsafe fn add(self, o: Self) -> Self {
+            unsafe { _mm256_add_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn sub(self, o: Self) -> Self {
+            unsafe { _mm256_sub_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn mul(self, o: Self) -> Self {
+            unsafe { _mm256_mul_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn min(self, o: Self) -> Self {
+            unsafe { _mm256_min_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn max(self, o: Self) -> Self {
+            unsafe { _mm256_max_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn abs(self) -> Self {
+            unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self) }
+        }
+        #[inline(always)]
+        unsafe fn le_mask(self, o: Self) -> u32 {
+            unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self, o)) as u32 }
+        }
+        #[inline(always)]
+        unsafe fn div(self, o: Self) -> Self {
+            unsafe { _mm256_div_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn eq(self, o: Self) -> Self {
+            unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn ge(self, o: Self) -> Self {
+            unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn le(self, o: Self) -> Self {
+            unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn gt(self, o: Self) -> Self {
+            unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn lt(self, o: Self) -> Self {
+            unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn nlt(self, o: Self) -> Self {
+            unsafe { _mm256_cmp_ps::<_CMP_NLT_UQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn nle(self, o: Self) -> Self {
+            unsafe { _mm256_cmp_ps::<_CMP_NLE_UQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn and(self, o: Self) -> Self {
+            unsafe { _mm256_and_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn or(self, o: Self) -> Self {
+            unsafe { _mm256_or_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn andnot_of(self, o: Self) -> Self {
+            unsafe { _mm256_andnot_ps(o, self) }
+        }
+        #[inline(always)]
+        unsafe fn bits(self) -> u32 {
+            unsafe { _mm256_movemask_ps(self) as u32 }
+        }
+    }
+
+    /// The lanes of a packet row from `base` on.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set, and `base` plus the register's lanes must
+    /// not pass `PACKET`.
+    #[inline(always)]
+    unsafe fn lanes<V: Lanes>(row: &[f32; PACKET], base: usize) -> V {
+        debug_assert!(base < PACKET);
+        // SAFETY: the caller's guarantee.
+        unsafe { V::loadu(row.as_ptr().add(base)) }
+    }
+
+    /// [`NodeKernel::packet_leaf`] with `L` rays per register `V`: the slab test of the leaf's box
+    /// and the watertight test of each of its triangles, for `L` rays at a time, by the same
+    /// operations as the single-ray tests ([`RayBoxTest::enter`], [`watertight_lanes`]).
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set, which holds `L` (4 or 8) floats.
+    #[inline(always)]
+    unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
+        rays: &mut PacketRays,
+        open: &mut u64,
+        occlusion: bool,
+        bvh: &WideBvh,
+        bounds: &Bounds,
+        first_block: u32,
+        blocks: u32,
+    ) {
+        let negative = rays.negative;
+        let near_planes =
+            [0, 1, 2].map(|a| if negative[a] { bounds.max[a] } else { bounds.min[a] });
+        let far_planes = [0, 1, 2].map(|a| if negative[a] { bounds.min[a] } else { bounds.max[a] });
+        let [kx, ky, kz] = rays.k;
+        // SAFETY: the caller's guarantee; every load reads `L` lanes from `base`, and
+        // `base + L <= PACKET` because `PACKET` is a multiple of `L`.
+        unsafe {
+            for base in (0..rays.len).step_by(L) {
+                let mut active = (*open >> base) as u32 & ((1 << L) - 1);
+                if active == 0 {
+                    continue;
+                }
+                // The slab test, as `RayBoxTest::enter` per lane (no operand is NaN: packet
+                // rays have finite origins and `1/d`, and a leaf's box is finite).
+                let mut near = lanes::<V>(&rays.box_t_min, base);
+                let mut far = lanes::<V>(&rays.box_limit, base);
+                let mut reach = V::splat(0.0);
+                for axis in 0..3 {
+                    let o = lanes::<V>(&rays.origin[axis], base);
+                    let inv = lanes::<V>(&rays.inv_direction[axis], base);
+                    let t_near = V::splat(near_planes[axis]).sub(o).mul(inv);
+                    let t_far = V::splat(far_planes[axis]).sub(o).mul(inv);
+                    near = t_near.max(near);
+                    far = t_far.mul(V::splat(FAR_SCALE)).min(far);
+                    if axis == kz {
+                        reach = t_near.abs().max(t_far.abs());
+                    }
+                }
+                let pad = reach.mul(V::splat(SLAB_PAD));
+                active &= near.sub(pad).le_mask(far.add(pad));
+                if active == 0 {
+                    continue;
+                }
+
+                let shear = [
+                    lanes::<V>(&rays.shear[0], base),
+                    lanes::<V>(&rays.shear[1], base),
+                    lanes::<V>(&rays.shear[2], base),
+                ];
+                let origin = [
+                    lanes::<V>(&rays.origin[kx], base),
+                    lanes::<V>(&rays.origin[ky], base),
+                    lanes::<V>(&rays.origin[kz], base),
+                ];
+                let t_min = lanes::<V>(&rays.triangle_t_min, base);
+                'blocks: for b in first_block as usize..(first_block + blocks) as usize {
+                    let block = &bvh.blocks[b];
+                    for (lane, &id) in bvh.ids[b].iter().enumerate() {
+                        if id == u32::MAX {
+                            continue;
+                        }
+                        let [p0, p1, p2] = &block.vertices;
+                        let test = WatertightLanes {
+                            origin,
+                            shear,
+                            abs_shear: [shear[0].abs(), shear[1].abs()],
+                            t_min,
+                            t_max: lanes::<V>(&rays.triangle_limit, base),
+                            vertices: [
+                                [
+                                    V::splat(p0[kx][lane]),
+                                    V::splat(p0[ky][lane]),
+                                    V::splat(p0[kz][lane]),
+                                ],
+                                [
+                                    V::splat(p1[kx][lane]),
+                                    V::splat(p1[ky][lane]),
+                                    V::splat(p1[kz][lane]),
+                                ],
+                                [
+                                    V::splat(p2[kx][lane]),
+                                    V::splat(p2[ky][lane]),
+                                    V::splat(p2[kz][lane]),
+                                ],
+                            ],
+                        };
+                        let decided = watertight_lanes(&test, active);
+                        let mut hits = decided.hits;
+                        let (mut t, mut b1, mut b2) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
+                        if hits != 0 {
+                            decided.t.store(t.as_mut_ptr());
+                            decided.b1.store(b1.as_mut_ptr());
+                            decided.b2.store(b2.as_mut_ptr());
+                        }
+                        let mut undecided = decided.undecided;
+                        if undecided != 0 {
+                            let [v0, v1, v2] = block.triangle(lane);
+                            while undecided != 0 {
+                                let j = undecided.trailing_zeros() as usize;
+                                undecided &= undecided - 1;
+                                let i = base + j;
+                                let limit = rays.triangle_limit[i];
+                                if let Some(h) = rays.triangle_ray(i).intersect(v0, v1, v2, limit) {
+                                    hits |= 1 << j;
+                                    (t[j], b1[j], b2[j]) = (h.t, h.b1, h.b2);
+                                }
+                            }
+                        }
+                        if hits == 0 {
+                            continue;
+                        }
+                        if occlusion {
+                            *open &= !((hits as u64) << base);
+                            active &= !hits;
+                            if active == 0 {
+                                break 'blocks;
+                            }
+                        } else {
+                            while hits != 0 {
+                                let j = hits.trailing_zeros() as usize;
+                                hits &= hits - 1;
+                                rays.offer(base + j, t[j], id, b1[j], b2[j]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A vector in three registers of equal lanes.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    unsafe fn splat3<V: Lanes>(v: glam::Vec3) -> [V; 3] {
+        // SAFETY: the caller's guarantee.
+        unsafe { [V::splat(v.x), V::splat(v.y), V::splat(v.z)] }
+    }
+
+    /// The least and greatest products of two intervals, as `bounds::interval_product`.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    unsafe fn interval_product<V: Lanes>(a_lo: V, a_hi: V, i_lo: V, i_hi: V) -> (V, V) {
+        // SAFETY: the caller's guarantee.
+        unsafe {
+            let (p0, p1) = (a_lo.mul(i_lo), a_lo.mul(i_hi));
+            let (p2, p3) = (a_hi.mul(i_lo), a_hi.mul(i_hi));
+            (p0.min(p1).min(p2.min(p3)), p0.max(p1).max(p2.max(p3)))
+        }
+    }
+
+    /// A packet's bound broadcast into vector registers.
+    #[derive(Clone, Copy)]
+    pub(crate) struct FrustumBroadcast<V> {
+        origin_lo: [V; 3],
+        origin_hi: [V; 3],
+        inv_lo: [V; 3],
+        inv_hi: [V; 3],
+        t_min: V,
+        near_rows: [usize; 3],
+        far_rows: [usize; 3],
+        pad_axes: [bool; 3],
+    }
+
+    impl<V: Lanes> FrustumBroadcast<V> {
+        /// # Safety
+        /// The CPU must support `V`'s instruction set.
+        #[inline(always)]
+        unsafe fn new(f: &Frustum) -> Self {
+            let (near_rows, far_rows) = plane_rows(f.negative);
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                FrustumBroadcast {
+                    origin_lo: splat3(f.origin_lo),
+                    origin_hi: splat3(f.origin_hi),
+                    inv_lo: splat3(f.inv_lo),
+                    inv_hi: splat3(f.inv_hi),
+                    t_min: V::splat(f.t_min),
+                    near_rows,
+                    far_rows,
+                    pad_axes: f.pad_axes,
+                }
+            }
+        }
+
+        /// [`Frustum::enter`] for the children from `first` on that `V` holds: their mask (bit 0 for child
+        /// `first`), and their entries written to `out[first..]`.
+        ///
+        /// # Safety
+        /// The CPU must support `V`'s instruction set; `first` is 0, or 4 for a 4-lane `V`.
+        #[inline(always)]
+        unsafe fn enter(
+            &self,
+            node: &WideNode,
+            t_limit: f32,
+            first: usize,
+            out: &mut [f32],
+        ) -> u32 {
+            // SAFETY: the caller's guarantee; loads read one register of a 32-byte aligned row
+            // of 8 from `first`, which is aligned to the register size.
+            unsafe {
+                let scale = V::splat(FAR_SCALE);
+                let mut near = self.t_min;
+                let mut far = V::splat(t_limit);
+                let mut reach = V::splat(0.0);
+                for axis in 0..3 {
+                    let np = V::load(node.planes[self.near_rows[axis]][first..].as_ptr());
+                    let fp = V::load(node.planes[self.far_rows[axis]][first..].as_ptr());
+                    let (o_lo, o_hi) = (self.origin_lo[axis], self.origin_hi[axis]);
+                    let (i_lo, i_hi) = (self.inv_lo[axis], self.inv_hi[axis]);
+                    let (tn_lo, tn_hi) = interval_product(np.sub(o_hi), np.sub(o_lo), i_lo, i_hi);
+                    let (tf_lo, tf_hi) = interval_product(fp.sub(o_hi), fp.sub(o_lo), i_lo, i_hi);
+                    near = tn_lo.max(near);
+                    far = tf_hi.mul(scale).min(far);
+                    if self.pad_axes[axis] {
+                        let axis_reach =
+                            tn_lo.abs().max(tn_hi.abs()).max(tf_lo.abs().max(tf_hi.abs()));
+                        reach = reach.max(axis_reach);
+                    }
+                }
+                let pad = reach.mul(V::splat(SLAB_PAD));
+                let near = near.sub(pad);
+                let far = far.add(pad);
+                near.store(out[first..].as_mut_ptr());
+                near.le_mask(far) << first
+            }
+        }
+    }
+
     impl NodeKernel for Sse {
         type Ray = Broadcast<__m128>;
+        type Frustum = FrustumBroadcast<__m128>;
+
+        #[inline(always)]
+        unsafe fn packet_leaf(
+            rays: &mut PacketRays,
+            open: &mut u64,
+            occlusion: bool,
+            bvh: &WideBvh,
+            bounds: &Bounds,
+            first_block: u32,
+            blocks: u32,
+        ) {
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                packet_leaf_lanes::<__m128, 4>(
+                    rays,
+                    open,
+                    occlusion,
+                    bvh,
+                    bounds,
+                    first_block,
+                    blocks,
+                )
+            }
+        }
+
+        #[inline(always)]
+        unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum {
+            // SAFETY: SSE2 is part of x86-64.
+            unsafe { FrustumBroadcast::new(frustum) }
+        }
+
+        #[inline(always)]
+        unsafe fn enter_frustum(
+            node: &WideNode,
+            frustum: &Self::Frustum,
+            t_limit: f32,
+        ) -> (u32, [f32; WIDTH]) {
+            let mut out = [0.0; WIDTH];
+            // SAFETY: SSE2 is part of x86-64; 0 and 4 are the halves of a node.
+            unsafe {
+                let mask = frustum.enter(node, t_limit, 0, &mut out)
+                    | frustum.enter(node, t_limit, 4, &mut out);
+                (mask, out)
+            }
+        }
 
         #[inline(always)]
         unsafe fn block_hits(
@@ -159,7 +758,7 @@ mod x86 {
 
         #[inline(always)]
         unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
-            let (near_rows, far_rows) = plane_rows(ray);
+            let (near_rows, far_rows) = plane_rows(ray.negative);
             // SAFETY: SSE2 is part of x86-64.
             unsafe {
                 Broadcast {
@@ -212,137 +811,182 @@ mod x86 {
         }
     }
 
-    /// [`block_hits_scalar`] for four triangles with SSE2. Every value is computed by the same
-    /// operations in the same order as [`WatertightRay::block_candidates`] and
-    /// [`WatertightRay::intersect`] (no fused multiply-add), so every decision, `t` and
-    /// barycentric is the same bit for bit; lanes whose edge functions round to exactly zero are
-    /// left `undecided` for the scalar test's double-precision path.
+    /// The watertight test's inputs, one test per lane: the lanes are either four triangles
+    /// against one ray ([`block_hits_sse`]) or eight rays against one triangle (packets). Every
+    /// coordinate is already permuted to the ray's `(kx, ky, kz)`.
+    pub(crate) struct WatertightLanes<V> {
+        /// The ray origin's `kx`, `ky`, `kz` coordinates.
+        pub origin: [V; 3],
+        /// `shear_x`, `shear_y`, `shear_z`.
+        pub shear: [V; 3],
+        /// `|shear_x|`, `|shear_y|`.
+        pub abs_shear: [V; 2],
+        /// The ray's `t_min` (see [`WatertightRay::intersect`]).
+        pub t_min: V,
+        /// Hits are accepted below this.
+        pub t_max: V,
+        /// `vertices[j]`: vertex `j`'s `kx`, `ky`, `kz` coordinates.
+        pub vertices: [[V; 3]; 3],
+    }
+
+    /// What [`watertight_lanes`] decides per lane.
+    pub(crate) struct LaneHits<V> {
+        /// Lanes hit, with `t` and barycentrics below.
+        pub hits: u32,
+        /// Lanes that only [`WatertightRay::intersect`] can decide (an edge function is zero).
+        pub undecided: u32,
+        pub t: V,
+        pub b1: V,
+        pub b2: V,
+    }
+
+    /// [`WatertightRay::intersect`] lane by lane, for triangles of non-zero area (or NaN
+    /// vertices, which never hit). Every value is computed by the same operations in the same
+    /// order (no fused multiply-add), so every decision, `t` and barycentric is the same bit for
+    /// bit; lanes whose edge functions round to exactly zero are left `undecided` for the scalar
+    /// test's double-precision path. `lanes` masks the lanes that count.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    pub(crate) unsafe fn watertight_lanes<V: Lanes>(
+        x: &WatertightLanes<V>,
+        lanes: u32,
+    ) -> LaneHits<V> {
+        use crate::float::gamma;
+        // SAFETY: the caller's guarantee.
+        unsafe {
+            let [ox, oy, oz] = x.origin;
+            let [sx, sy, sz] = x.shear;
+            let [p0, p1, p2] = &x.vertices;
+            let (a_kx, a_ky, a_kz) = (p0[0].sub(ox), p0[1].sub(oy), p0[2].sub(oz));
+            let (b_kx, b_ky, b_kz) = (p1[0].sub(ox), p1[1].sub(oy), p1[2].sub(oz));
+            let (c_kx, c_ky, c_kz) = (p2[0].sub(ox), p2[1].sub(oy), p2[2].sub(oz));
+            let ax = a_kx.sub(sx.mul(a_kz));
+            let ay = a_ky.sub(sy.mul(a_kz));
+            let bx = b_kx.sub(sx.mul(b_kz));
+            let by = b_ky.sub(sy.mul(b_kz));
+            let cx = c_kx.sub(sx.mul(c_kz));
+            let cy = c_ky.sub(sy.mul(c_kz));
+            let e0 = bx.mul(cy).sub(by.mul(cx));
+            let e1 = cx.mul(ay).sub(cy.mul(ax));
+            let e2 = ax.mul(by).sub(ay.mul(bx));
+            let zero = V::splat(0.0);
+            let any_zero = e0.eq(zero).or(e1.eq(zero)).or(e2.eq(zero));
+            let all_ge = e0.ge(zero).and(e1.ge(zero)).and(e2.ge(zero));
+            let all_le = e0.le(zero).and(e1.le(zero)).and(e2.le(zero));
+            let inside = all_ge.or(all_le);
+            let det = e0.add(e1).add(e2);
+            let az = sz.mul(a_kz);
+            let bz = sz.mul(b_kz);
+            let cz = sz.mul(c_kz);
+            let t_scaled = e0.mul(az).add(e1.mul(bz)).add(e2.mul(cz));
+            let t_limit = x.t_max.mul(det).mul(V::splat(crate::triangle::T_LIMIT_SLACK));
+            let front = det.gt(zero).and(t_scaled.gt(zero)).and(t_scaled.lt(t_limit));
+            let back = det.lt(zero).and(t_scaled.lt(zero)).and(t_scaled.gt(t_limit));
+            let candidate = any_zero.or(inside.and(front.or(back)));
+            let candidates = candidate.bits() & lanes;
+            let undecided = candidates & any_zero.bits();
+            let decidable = candidates & !undecided;
+            if decidable == 0 {
+                return LaneHits { hits: 0, undecided, t: zero, b1: zero, b2: zero };
+            }
+
+            // The rest of `intersect`, for the lanes without a zero edge function.
+            let inv_det = V::splat(1.0).div(det);
+            let t = t_scaled.mul(inv_det);
+            // `t.is_nan() || t >= t_max` rejects: accept `t < t_max` (false for NaN).
+            let below_max = t.lt(x.t_max);
+            // With `t_min > 0`, `t < t_min` rejects; otherwise `t <= delta_t`.
+            let explicit = x.t_min.gt(zero);
+            let explicit_bits = explicit.bits() & decidable;
+            let mut accept = below_max.and(explicit).and(t.nlt(x.t_min));
+            if explicit_bits != decidable {
+                // The same expression as `conservative_delta_t`.
+                let max3 = |a: V, b: V, c: V| a.abs().max(b.abs()).max(c.abs());
+                let max_zt = max3(az, bz, cz);
+                let delta_z = V::splat(gamma(3)).mul(max_zt);
+                let max_xt = max3(ax, bx, cx);
+                let max_yt = max3(ay, by, cy);
+                let max_unsheared_z = max3(a_kz, b_kz, c_kz);
+                let delta_x =
+                    V::splat(gamma(5)).mul(max_xt.add(x.abs_shear[0].mul(max_unsheared_z)));
+                let delta_y =
+                    V::splat(gamma(5)).mul(max_yt.add(x.abs_shear[1].mul(max_unsheared_z)));
+                let delta_e = V::splat(2.0).mul(
+                    V::splat(gamma(2))
+                        .mul(max_xt)
+                        .mul(max_yt)
+                        .add(delta_y.mul(max_xt))
+                        .add(delta_x.mul(max_yt)),
+                );
+                let max_e = max3(e0, e1, e2);
+                let sum = V::splat(gamma(3))
+                    .mul(max_e)
+                    .mul(max_zt)
+                    .add(delta_e.mul(max_zt))
+                    .add(delta_z.mul(max_e));
+                let delta_t = V::splat(3.0).mul(sum).mul(inv_det.abs());
+                accept = accept.or(below_max.and(t.nle(delta_t)).andnot_of(explicit));
+            }
+            let hits = decidable & accept.bits();
+            LaneHits { hits, undecided, t, b1: e1.mul(inv_det), b2: e2.mul(inv_det) }
+        }
+    }
+
+    /// One row of a block.
+    ///
+    /// # Safety
+    /// As for [`Lanes::load`]: SSE2 is part of x86-64 and a block's rows are 16-byte aligned.
+    #[inline(always)]
+    unsafe fn row(r: &[f32; BLOCK]) -> __m128 {
+        // SAFETY: as above.
+        unsafe { __m128::load(r.as_ptr()) }
+    }
+
+    /// [`block_hits_scalar`] for four triangles with SSE2, by [`watertight_lanes`].
     #[inline(always)]
     pub(crate) fn block_hits_sse(
         ray: &WatertightRay,
         block: &TriangleBlock<BLOCK>,
         t_max: f32,
     ) -> BlockHits {
-        use crate::float::gamma;
         let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
-        let [p0, p1, p2] = &block.vertices;
         // SAFETY: SSE2 is part of x86-64; each load reads one row of 4 floats of the block,
         // which is 16-byte aligned (`repr(align(16))`); stores go to arrays of 4 floats.
         unsafe {
-            let splat = _mm_set1_ps;
-            let (ox, oy, oz) =
-                (splat(ray.origin[kx]), splat(ray.origin[ky]), splat(ray.origin[kz]));
-            let (sx, sy, sz) = (splat(ray.shear_x), splat(ray.shear_y), splat(ray.shear_z));
-            let load = |row: &[f32; BLOCK]| _mm_load_ps(row.as_ptr());
-            let a_kx = _mm_sub_ps(load(&p0[kx]), ox);
-            let a_ky = _mm_sub_ps(load(&p0[ky]), oy);
-            let a_kz = _mm_sub_ps(load(&p0[kz]), oz);
-            let b_kx = _mm_sub_ps(load(&p1[kx]), ox);
-            let b_ky = _mm_sub_ps(load(&p1[ky]), oy);
-            let b_kz = _mm_sub_ps(load(&p1[kz]), oz);
-            let c_kx = _mm_sub_ps(load(&p2[kx]), ox);
-            let c_ky = _mm_sub_ps(load(&p2[ky]), oy);
-            let c_kz = _mm_sub_ps(load(&p2[kz]), oz);
-            let ax = _mm_sub_ps(a_kx, _mm_mul_ps(sx, a_kz));
-            let ay = _mm_sub_ps(a_ky, _mm_mul_ps(sy, a_kz));
-            let bx = _mm_sub_ps(b_kx, _mm_mul_ps(sx, b_kz));
-            let by = _mm_sub_ps(b_ky, _mm_mul_ps(sy, b_kz));
-            let cx = _mm_sub_ps(c_kx, _mm_mul_ps(sx, c_kz));
-            let cy = _mm_sub_ps(c_ky, _mm_mul_ps(sy, c_kz));
-            let e0 = _mm_sub_ps(_mm_mul_ps(bx, cy), _mm_mul_ps(by, cx));
-            let e1 = _mm_sub_ps(_mm_mul_ps(cx, ay), _mm_mul_ps(cy, ax));
-            let e2 = _mm_sub_ps(_mm_mul_ps(ax, by), _mm_mul_ps(ay, bx));
-            let zero = _mm_setzero_ps();
-            let any_zero = _mm_or_ps(
-                _mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)),
-                _mm_cmpeq_ps(e2, zero),
-            );
-            let all_ge = _mm_and_ps(
-                _mm_and_ps(_mm_cmpge_ps(e0, zero), _mm_cmpge_ps(e1, zero)),
-                _mm_cmpge_ps(e2, zero),
-            );
-            let all_le = _mm_and_ps(
-                _mm_and_ps(_mm_cmple_ps(e0, zero), _mm_cmple_ps(e1, zero)),
-                _mm_cmple_ps(e2, zero),
-            );
-            let inside = _mm_or_ps(all_ge, all_le);
-            let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-            let az = _mm_mul_ps(sz, a_kz);
-            let bz = _mm_mul_ps(sz, b_kz);
-            let cz = _mm_mul_ps(sz, c_kz);
-            let t_scaled =
-                _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
-            let t_limit =
-                _mm_mul_ps(_mm_mul_ps(splat(t_max), det), splat(crate::triangle::T_LIMIT_SLACK));
-            let front = _mm_and_ps(
-                _mm_and_ps(_mm_cmpgt_ps(det, zero), _mm_cmpgt_ps(t_scaled, zero)),
-                _mm_cmplt_ps(t_scaled, t_limit),
-            );
-            let back = _mm_and_ps(
-                _mm_and_ps(_mm_cmplt_ps(det, zero), _mm_cmplt_ps(t_scaled, zero)),
-                _mm_cmpgt_ps(t_scaled, t_limit),
-            );
-            let candidate = _mm_or_ps(any_zero, _mm_and_ps(inside, _mm_or_ps(front, back)));
-            let candidates = _mm_movemask_ps(candidate) as u32;
-            let undecided = candidates & _mm_movemask_ps(any_zero) as u32;
-            let decidable = candidates & !undecided;
-            if decidable == 0 {
-                return BlockHits { undecided, ..BlockHits::default() };
+            let [p0, p1, p2] = &block.vertices;
+            let lanes = WatertightLanes {
+                origin: [
+                    __m128::splat(ray.origin[kx]),
+                    __m128::splat(ray.origin[ky]),
+                    __m128::splat(ray.origin[kz]),
+                ],
+                shear: [
+                    __m128::splat(ray.shear_x),
+                    __m128::splat(ray.shear_y),
+                    __m128::splat(ray.shear_z),
+                ],
+                abs_shear: [__m128::splat(ray.shear_x.abs()), __m128::splat(ray.shear_y.abs())],
+                t_min: __m128::splat(ray.t_min),
+                t_max: __m128::splat(t_max),
+                vertices: [
+                    [row(&p0[kx]), row(&p0[ky]), row(&p0[kz])],
+                    [row(&p1[kx]), row(&p1[ky]), row(&p1[kz])],
+                    [row(&p2[kx]), row(&p2[ky]), row(&p2[kz])],
+                ],
+            };
+            let decided = watertight_lanes(&lanes, 0xF);
+            let mut out = BlockHits {
+                hits: decided.hits,
+                undecided: decided.undecided,
+                ..BlockHits::default()
+            };
+            if decided.hits != 0 {
+                decided.t.store(out.t.as_mut_ptr());
+                decided.b1.store(out.b1.as_mut_ptr());
+                decided.b2.store(out.b2.as_mut_ptr());
             }
-
-            // The rest of `intersect`, lane by lane, for the lanes without a zero edge function.
-            let inv_det = _mm_div_ps(splat(1.0), det);
-            let t = _mm_mul_ps(t_scaled, inv_det);
-            // `t.is_nan() || t >= t_max` rejects: accept `t < t_max` (false for NaN).
-            let mut accept = _mm_cmplt_ps(t, splat(t_max));
-            if ray.t_min > 0.0 {
-                // `t < t_min` rejects.
-                accept = _mm_and_ps(accept, _mm_cmpnlt_ps(t, splat(ray.t_min)));
-            } else {
-                // `t <= delta_t` rejects; the same expression as `conservative_delta_t`.
-                let abs = |v: __m128| _mm_andnot_ps(splat(-0.0), v);
-                let max3 = |a: __m128, b: __m128, c: __m128| {
-                    _mm_max_ps(_mm_max_ps(abs(a), abs(b)), abs(c))
-                };
-                let max_zt = max3(az, bz, cz);
-                let delta_z = _mm_mul_ps(splat(gamma(3)), max_zt);
-                let max_xt = max3(ax, bx, cx);
-                let max_yt = max3(ay, by, cy);
-                let max_unsheared_z = max3(a_kz, b_kz, c_kz);
-                let delta_x = _mm_mul_ps(
-                    splat(gamma(5)),
-                    _mm_add_ps(max_xt, _mm_mul_ps(splat(ray.shear_x.abs()), max_unsheared_z)),
-                );
-                let delta_y = _mm_mul_ps(
-                    splat(gamma(5)),
-                    _mm_add_ps(max_yt, _mm_mul_ps(splat(ray.shear_y.abs()), max_unsheared_z)),
-                );
-                let delta_e = _mm_mul_ps(
-                    splat(2.0),
-                    _mm_add_ps(
-                        _mm_add_ps(
-                            _mm_mul_ps(_mm_mul_ps(splat(gamma(2)), max_xt), max_yt),
-                            _mm_mul_ps(delta_y, max_xt),
-                        ),
-                        _mm_mul_ps(delta_x, max_yt),
-                    ),
-                );
-                let max_e = max3(e0, e1, e2);
-                let sum = _mm_add_ps(
-                    _mm_add_ps(
-                        _mm_mul_ps(_mm_mul_ps(splat(gamma(3)), max_e), max_zt),
-                        _mm_mul_ps(delta_e, max_zt),
-                    ),
-                    _mm_mul_ps(delta_z, max_e),
-                );
-                let delta_t = _mm_mul_ps(_mm_mul_ps(splat(3.0), sum), abs(inv_det));
-                accept = _mm_and_ps(accept, _mm_cmpnle_ps(t, delta_t));
-            }
-            let hits = decidable & _mm_movemask_ps(accept) as u32;
-            let mut out = BlockHits { hits, undecided, ..BlockHits::default() };
-            _mm_storeu_ps(out.t.as_mut_ptr(), t);
-            _mm_storeu_ps(out.b1.as_mut_ptr(), _mm_mul_ps(e1, inv_det));
-            _mm_storeu_ps(out.b2.as_mut_ptr(), _mm_mul_ps(e2, inv_det));
             out
         }
     }
@@ -352,6 +996,51 @@ mod x86 {
 
     impl NodeKernel for Avx2 {
         type Ray = Broadcast<__m256>;
+        type Frustum = FrustumBroadcast<__m256>;
+
+        #[inline(always)]
+        unsafe fn packet_leaf(
+            rays: &mut PacketRays,
+            open: &mut u64,
+            occlusion: bool,
+            bvh: &WideBvh,
+            bounds: &Bounds,
+            first_block: u32,
+            blocks: u32,
+        ) {
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                packet_leaf_lanes::<__m256, 8>(
+                    rays,
+                    open,
+                    occlusion,
+                    bvh,
+                    bounds,
+                    first_block,
+                    blocks,
+                )
+            }
+        }
+
+        #[inline(always)]
+        unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum {
+            // SAFETY: the caller checked AVX2 support (this function's contract).
+            unsafe { FrustumBroadcast::new(frustum) }
+        }
+
+        #[inline(always)]
+        unsafe fn enter_frustum(
+            node: &WideNode,
+            frustum: &Self::Frustum,
+            t_limit: f32,
+        ) -> (u32, [f32; WIDTH]) {
+            let mut out = [0.0; WIDTH];
+            // SAFETY: the caller checked AVX2 support; 0 is the start of a node's rows.
+            unsafe {
+                let mask = frustum.enter(node, t_limit, 0, &mut out);
+                (mask, out)
+            }
+        }
 
         #[inline(always)]
         unsafe fn block_hits(
@@ -364,7 +1053,7 @@ mod x86 {
 
         #[inline(always)]
         unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
-            let (near_rows, far_rows) = plane_rows(ray);
+            let (near_rows, far_rows) = plane_rows(ray.negative);
             // SAFETY: the caller checked AVX2 support (this function's contract).
             unsafe {
                 Broadcast {

@@ -31,12 +31,13 @@
 mod bounds;
 mod build;
 mod kernels;
+mod packet;
 mod traverse;
 mod wide;
 
 use glam::Vec3;
 
-pub use bounds::{Bounds, RayBoxTest};
+pub use bounds::{Bounds, Frustum, RayBoxTest};
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;
@@ -244,8 +245,8 @@ impl Bvh {
 mod entry {
     //! One copy of each traversal per instruction set, compiled with that set enabled.
     use super::kernels::{Avx2, Sse};
-    use super::traverse;
     use super::wide::WideBvh;
+    use super::{packet, traverse};
     use crate::accel::Hit;
     use crate::ray::Ray;
 
@@ -275,6 +276,40 @@ mod entry {
     pub(super) unsafe fn closest_hit_avx512(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
         // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
         unsafe { traverse::closest_hit::<Avx2>(bvh, ray) }
+    }
+
+    pub(super) fn closest_hits_sse2(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe { packet::closest_hits::<Sse>(bvh, rays, out) }
+    }
+
+    pub(super) fn occluded_each_sse2(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe { packet::occluded_each::<Sse>(bvh, rays, out) }
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn closest_hits_avx2(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+        // SAFETY: this function's caller checked AVX2 support.
+        unsafe { packet::closest_hits::<Avx2>(bvh, rays, out) }
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn occluded_each_avx2(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+        // SAFETY: this function's caller checked AVX2 support.
+        unsafe { packet::occluded_each::<Avx2>(bvh, rays, out) }
+    }
+
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    pub(super) unsafe fn closest_hits_avx512(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
+        unsafe { packet::closest_hits::<Avx2>(bvh, rays, out) }
+    }
+
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    pub(super) unsafe fn occluded_each_avx512(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
+        unsafe { packet::occluded_each::<Avx2>(bvh, rays, out) }
     }
 
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
@@ -310,6 +345,39 @@ impl Accelerator for Bvh {
             Isa::Sse2 => entry::occluded_sse2(&self.wide, ray),
             // SAFETY: the scalar kernel needs no special instructions.
             _ => unsafe { traverse::occluded::<kernels::Scalar>(&self.wide, ray) },
+        }
+    }
+
+    /// Traces the rays in packets of up to 64 (see [`Frustum`]): best for coherent rays, such
+    /// as an 8×8 tile of camera rays or of shadow rays toward one light. The answers are exactly
+    /// those of [`closest_hit`](Self::closest_hit).
+    fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        match self.isa {
+            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { entry::closest_hits_avx512(&self.wide, rays, hits) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { entry::closest_hits_avx2(&self.wide, rays, hits) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => entry::closest_hits_sse2(&self.wide, rays, hits),
+            // SAFETY: the scalar kernel needs no special instructions.
+            _ => unsafe { packet::closest_hits::<kernels::Scalar>(&self.wide, rays, hits) },
+        }
+    }
+
+    /// Occlusion in packets of up to 64, as [`closest_hits`](Self::closest_hits); the answers
+    /// are exactly those of [`occluded`](Self::occluded).
+    fn occluded_each(&self, rays: &[Ray], occluded: &mut [bool]) {
+        match self.isa {
+            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { entry::occluded_each_avx512(&self.wide, rays, occluded) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { entry::occluded_each_avx2(&self.wide, rays, occluded) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => entry::occluded_each_sse2(&self.wide, rays, occluded),
+            // SAFETY: the scalar kernel needs no special instructions.
+            _ => unsafe { packet::occluded_each::<kernels::Scalar>(&self.wide, rays, occluded) },
         }
     }
 }

@@ -131,6 +131,100 @@ fn avx2_kernel_agrees_with_its_scalar_twin() {
     check_kernel::<Avx2>(|node, ray, t| unsafe { run(node, ray, t) });
 }
 
+/// Packets of rays around each hostile case's ray: from nearby origins (some on the box grid)
+/// with directions of the same signs.
+fn frustum_cases() -> Vec<(WideNode, Vec<RayBoxTest>, f32)> {
+    let mut rng = Lcg(11);
+    let mut cases = Vec::new();
+    for (node, ray, t_limit) in hostile_cases() {
+        let mut rays = Vec::new();
+        for k in 0..1 + (rng.next() * 12.0) as usize {
+            let spread = if k % 2 == 0 { 0.0 } else { rng.next() * 0.5 };
+            let origin = (ray.origin + (rng.vec() - 0.5) * spread).round() * 0.5;
+            // Zero components (which cannot join a packet) become small ones of the same sign.
+            let d = ray.direction.abs().max(Vec3::splat(1e-3)) * (0.5 + rng.vec());
+            let negative = glam::BVec3::new(
+                ray.direction.x.is_sign_negative(),
+                ray.direction.y.is_sign_negative(),
+                ray.direction.z.is_sign_negative(),
+            );
+            let d = Vec3::select(negative, -d, d);
+            let mut member = Ray::new(origin, d);
+            member.t_min = ray.t_min * rng.next();
+            rays.push(RayBoxTest::new(&member));
+        }
+        if rays.iter().all(Frustum::can_join) {
+            cases.push((node, rays, t_limit));
+        }
+    }
+    assert!(cases.len() > 1000, "only {} packets", cases.len());
+    cases
+}
+
+/// The packet test never prunes a box that one of its rays enters.
+#[test]
+fn the_frustum_test_contains_every_member_ray_test() {
+    let mut entered = 0;
+    for (node, rays, t_limit) in frustum_cases() {
+        let frustum = Frustum::of(rays.iter().copied()).expect("one octant");
+        for k in 0..8 {
+            let bounds = node.bounds(k);
+            let packet = frustum.enter(&bounds, t_limit);
+            for ray in &rays {
+                if let Some(t) = ray.enter(&bounds, t_limit) {
+                    entered += 1;
+                    let near = packet.unwrap_or_else(|| panic!("{ray:?} enters {bounds:?}"));
+                    assert!(near <= t, "packet entry {near} after the ray's {t}");
+                }
+            }
+        }
+    }
+    assert!(entered > 1000, "only {entered} boxes entered");
+}
+
+fn check_frustum_kernel<K: NodeKernel>(
+    run: impl Fn(&WideNode, &K::Frustum, f32) -> (u32, [f32; 8]),
+) {
+    for (node, rays, t_limit) in frustum_cases() {
+        let frustum = Frustum::of(rays.iter().copied()).expect("one octant");
+        // SAFETY: the scalar kernel needs nothing.
+        let (mask, near) = unsafe { Scalar::enter_frustum(&node, &frustum, t_limit) };
+        // SAFETY: `check_frustum_kernel` runs only kernels this CPU supports.
+        let (simd_mask, simd_near) = run(&node, &unsafe { K::prepare_frustum(&frustum) }, t_limit);
+        assert_eq!(mask, simd_mask, "{frustum:?} limit {t_limit}\n{node:?}");
+        for k in 0..8 {
+            if mask & (1 << k) != 0 {
+                assert_eq!(near[k], simd_near[k], "child {k} of {node:?}, {frustum:?}");
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn sse2_frustum_kernel_agrees_with_its_scalar_twin() {
+    use super::kernels::Sse;
+    // SAFETY: SSE2 is part of x86-64.
+    check_frustum_kernel::<Sse>(|node, f, t| unsafe { Sse::enter_frustum(node, f, t) });
+}
+
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn avx2_frustum_kernel_agrees_with_its_scalar_twin() {
+    use super::kernels::Avx2;
+    if !Isa::Avx2.is_supported() {
+        eprintln!("skipped: this CPU has no AVX2");
+        return;
+    }
+    #[target_feature(enable = "avx2")]
+    fn run(node: &WideNode, f: &<Avx2 as NodeKernel>::Frustum, t: f32) -> (u32, [f32; 8]) {
+        // SAFETY: compiled with AVX2, called only after detection.
+        unsafe { Avx2::enter_frustum(node, f, t) }
+    }
+    // SAFETY: AVX2 support was checked above.
+    check_frustum_kernel::<Avx2>(|node, f, t| unsafe { run(node, f, t) });
+}
+
 /// Walks the tree: every child box contains its subtree's triangles, every triangle with area
 /// appears exactly once.
 #[test]

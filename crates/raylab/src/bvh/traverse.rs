@@ -18,7 +18,7 @@ const STACK_SIZE: usize = 640;
 
 /// A traversal stack on the call stack, not initialized: zeroing 5 KB per ray would cost about as
 /// much as tracing it.
-struct Stack<T: Copy> {
+pub(super) struct Stack<T: Copy> {
     entries: [std::mem::MaybeUninit<T>; STACK_SIZE],
     /// Entries below this index have been written.
     written: usize,
@@ -26,7 +26,7 @@ struct Stack<T: Copy> {
 
 impl<T: Copy> Stack<T> {
     #[inline(always)]
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         // SAFETY: an array of `MaybeUninit` needs no initialization (the pattern of the
         // `MaybeUninit` documentation); `[MaybeUninit::uninit(); N]` compiles to a memset here.
         let entries = unsafe {
@@ -37,7 +37,7 @@ impl<T: Copy> Stack<T> {
 
     /// Writes entry `i`; entries are written in order, so `i <= written`. Panics past the end.
     #[inline(always)]
-    fn set(&mut self, i: usize, value: T) {
+    pub(super) fn set(&mut self, i: usize, value: T) {
         assert!(i <= self.written, "stack entries are written without gaps");
         self.entries[i] = std::mem::MaybeUninit::new(value);
         self.written = self.written.max(i + 1);
@@ -45,7 +45,7 @@ impl<T: Copy> Stack<T> {
 
     /// Reads an entry that was written.
     #[inline(always)]
-    fn get(&self, i: usize) -> T {
+    pub(super) fn get(&self, i: usize) -> T {
         assert!(i < self.written, "read of an unwritten stack entry");
         // SAFETY: every entry below `written` was initialized by `set` (entries are only ever
         // written at indices up to `written`, so there are no gaps).
@@ -57,11 +57,107 @@ impl<T: Copy> Stack<T> {
 /// or NaN direction never hit a triangle (the triangle test rejects them too); the slab kernels
 /// may then assume a finite origin and a finite `1/d` on the dominant axis.
 #[inline(always)]
-fn can_hit(ray: &Ray) -> bool {
+pub(super) fn can_hit(ray: &Ray) -> bool {
     ray.t_min <= ray.t_max
         && ray.origin.is_finite()
         && !ray.direction.is_nan()
         && ray.direction != glam::Vec3::ZERO
+}
+
+/// The search state of one ray's closest hit.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Closest {
+    pub best: Option<Hit>,
+    /// Triangles are accepted for `t < triangle_limit`: the ray's end, then just past the best
+    /// hit so that an equal `t` with a lower index can still win.
+    pub triangle_limit: f32,
+    /// Boxes are entered up to the best hit, conservatively: a box whose computed entry rounds
+    /// just past a hit inside it must still be visited.
+    pub box_limit: f32,
+}
+
+impl Closest {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        Closest { best: None, triangle_limit: ray.t_max, box_limit: ray.t_max * FAR_SCALE }
+    }
+
+    /// Tests the ray against the triangles of a leaf, keeping the closest hit (ties at equal `t`
+    /// to the lowest triangle index).
+    ///
+    /// # Safety
+    /// The CPU must support `K`'s instruction set.
+    #[inline(always)]
+    pub unsafe fn leaf<K: NodeKernel>(
+        &mut self,
+        bvh: &WideBvh,
+        first_block: u32,
+        blocks: u32,
+        triangle_ray: &WatertightRay,
+    ) {
+        for b in first_block as usize..(first_block + blocks) as usize {
+            let block = &bvh.blocks[b];
+            // SAFETY: the caller guarantees `K`'s instruction set.
+            let decided = unsafe { K::block_hits(triangle_ray, block, self.triangle_limit) };
+            let mut hits = decided.hits;
+            let mut undecided = decided.undecided;
+            while hits | undecided != 0 {
+                let lane = (hits | undecided).trailing_zeros() as usize;
+                let bit = 1 << lane;
+                let (t, b1, b2) = if hits & bit != 0 {
+                    hits &= !bit;
+                    (decided.t[lane], decided.b1[lane], decided.b2[lane])
+                } else {
+                    undecided &= !bit;
+                    let [v0, v1, v2] = block.triangle(lane);
+                    match triangle_ray.intersect(v0, v1, v2, self.triangle_limit) {
+                        Some(h) => (h.t, h.b1, h.b2),
+                        None => continue,
+                    }
+                };
+                let id = bvh.ids[b][lane];
+                // Lanes of one block are all tested against the limit at its start.
+                let better =
+                    self.best.is_none_or(|best| t < best.t || (t == best.t && id < best.triangle));
+                if better {
+                    self.best = Some(Hit { t, triangle: id, b1, b2 });
+                    self.triangle_limit = next_float_up(t);
+                    self.box_limit = t * FAR_SCALE;
+                }
+            }
+        }
+    }
+}
+
+/// Whether the ray hits any triangle of a leaf below `t_max`.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(super) unsafe fn leaf_occluded<K: NodeKernel>(
+    bvh: &WideBvh,
+    first_block: u32,
+    blocks: u32,
+    triangle_ray: &WatertightRay,
+    t_max: f32,
+) -> bool {
+    for block in &bvh.blocks[first_block as usize..(first_block + blocks) as usize] {
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        let decided = unsafe { K::block_hits(triangle_ray, block, t_max) };
+        if decided.hits != 0 {
+            return true;
+        }
+        let mut undecided = decided.undecided;
+        while undecided != 0 {
+            let lane = undecided.trailing_zeros() as usize;
+            undecided &= undecided - 1;
+            let [v0, v1, v2] = block.triangle(lane);
+            if triangle_ray.intersect(v0, v1, v2, t_max).is_some() {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// The closest hit; ties at equal `t` go to the lowest triangle index, as in
@@ -77,20 +173,15 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
     let triangle_ray = WatertightRay::new(ray);
     // SAFETY: the caller guarantees `K`'s instruction set.
     let box_ray = unsafe { K::prepare(&RayBoxTest::new(ray)) };
-    let mut best: Option<Hit> = None;
-    // Triangles are accepted for `t < triangle_limit`: the ray's end, then just past the best hit
-    // so that an equal `t` with a lower index can still win.
-    let mut triangle_limit = ray.t_max;
-    // Boxes are entered up to the best hit, conservatively: a box whose computed entry rounds just
-    // past a hit inside it must still be visited.
-    let mut box_limit = ray.t_max * FAR_SCALE;
+    let mut closest = Closest::new(ray);
 
     let mut stack = Stack::<(u32, f32)>::new();
     let mut top = 0;
     let mut node = 0u32;
     loop {
         // SAFETY: the caller guarantees `K`'s instruction set.
-        let (mut mask, near) = unsafe { K::enter(&bvh.nodes[node as usize], &box_ray, box_limit) };
+        let (mut mask, near) =
+            unsafe { K::enter(&bvh.nodes[node as usize], &box_ray, closest.box_limit) };
         let children = &bvh.nodes[node as usize].children;
         // One interior child entered (common deep in the tree): descend without the stack.
         if mask.count_ones() == 1 {
@@ -117,11 +208,11 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
         // Pop until an interior node is due; leaves are intersected on the way.
         loop {
             if top == 0 {
-                return best;
+                return closest.best;
             }
             top -= 1;
             let (child, near) = stack.get(top);
-            if near > box_limit {
+            if near > closest.box_limit {
                 continue;
             }
             match decode(child) {
@@ -130,40 +221,8 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
                     break;
                 }
                 Child::Leaf { first_block, blocks } => {
-                    for b in first_block as usize..(first_block + blocks) as usize {
-                        let block = &bvh.blocks[b];
-                        // SAFETY: the caller guarantees `K`'s instruction set.
-                        let decided =
-                            unsafe { K::block_hits(&triangle_ray, block, triangle_limit) };
-                        let mut hits = decided.hits;
-                        let mut undecided = decided.undecided;
-                        while hits | undecided != 0 {
-                            let lane = (hits | undecided).trailing_zeros() as usize;
-                            let bit = 1 << lane;
-                            let hit = if hits & bit != 0 {
-                                hits &= !bit;
-                                (decided.t[lane], decided.b1[lane], decided.b2[lane])
-                            } else {
-                                undecided &= !bit;
-                                let [v0, v1, v2] = block.triangle(lane);
-                                match triangle_ray.intersect(v0, v1, v2, triangle_limit) {
-                                    Some(h) => (h.t, h.b1, h.b2),
-                                    None => continue,
-                                }
-                            };
-                            let (t, b1, b2) = hit;
-                            let id = bvh.ids[b][lane];
-                            // Lanes of one block are all tested against the limit at its start.
-                            let better = best.is_none_or(|best| {
-                                t < best.t || (t == best.t && id < best.triangle)
-                            });
-                            if better {
-                                best = Some(Hit { t, triangle: id, b1, b2 });
-                                triangle_limit = next_float_up(t);
-                                box_limit = t * FAR_SCALE;
-                            }
-                        }
-                    }
+                    // SAFETY: the caller guarantees `K`'s instruction set.
+                    unsafe { closest.leaf::<K>(bvh, first_block, blocks, &triangle_ray) };
                 }
                 Child::Empty => {}
             }
@@ -202,22 +261,11 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
                     top += 1;
                 }
                 Child::Leaf { first_block, blocks } => {
-                    for block in &bvh.blocks[first_block as usize..(first_block + blocks) as usize]
-                    {
-                        // SAFETY: the caller guarantees `K`'s instruction set.
-                        let decided = unsafe { K::block_hits(&triangle_ray, block, ray.t_max) };
-                        if decided.hits != 0 {
-                            return true;
-                        }
-                        let mut undecided = decided.undecided;
-                        while undecided != 0 {
-                            let lane = undecided.trailing_zeros() as usize;
-                            undecided &= undecided - 1;
-                            let [v0, v1, v2] = block.triangle(lane);
-                            if triangle_ray.intersect(v0, v1, v2, ray.t_max).is_some() {
-                                return true;
-                            }
-                        }
+                    // SAFETY: the caller guarantees `K`'s instruction set.
+                    if unsafe {
+                        leaf_occluded::<K>(bvh, first_block, blocks, &triangle_ray, ray.t_max)
+                    } {
+                        return true;
                     }
                 }
                 Child::Empty => {}
