@@ -38,7 +38,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "DIR")]
     rays: Option<PathBuf>,
 
-    /// Image size of the primary rays for --generate.
+    /// Image size of the primary rays: written by --generate; with --rays, how the primary rays
+    /// are cut into 8×8 tiles for the packet figure (a square image needs no size).
     #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = crate::args::size)]
     size: crate::args::Size,
 
@@ -176,7 +177,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
     // The coherent path: primary rays in 8×8 tiles, traced as packets.
     let primary = &sets[0].2;
-    let tiles = tile_order(primary.len());
+    let width = if args.size.width as usize * args.size.height as usize == primary.len() {
+        args.size.width as usize
+    } else {
+        primary.len().isqrt()
+    };
+    let tiles = tile_order(primary.len(), width);
     let tiled: Vec<Ray> = tiles.iter().map(|&i| primary[i]).collect();
     let mut per_threads = Vec::new();
     for &n in &thread_counts {
@@ -375,17 +381,17 @@ fn trace_packets(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<HitRecord> {
     out
 }
 
-/// The order that visits a square image's pixels (row-major, `count` of them) in 8×8 tiles,
-/// tile rows first; consecutive rays for an image that is not square.
-fn tile_order(count: usize) -> Vec<usize> {
-    let width = count.isqrt();
-    if width * width != count {
+/// The order that visits the pixels of an image `width` wide (row-major, `count` of them) in 8×8
+/// tiles, tile rows first; the file's order if `count` is not a multiple of `width`.
+fn tile_order(count: usize, width: usize) -> Vec<usize> {
+    if width == 0 || count % width != 0 {
         return (0..count).collect();
     }
+    let height = count / width;
     let mut order = Vec::with_capacity(count);
-    for tile_y in (0..width).step_by(8) {
+    for tile_y in (0..height).step_by(8) {
         for tile_x in (0..width).step_by(8) {
-            for y in tile_y..(tile_y + 8).min(width) {
+            for y in tile_y..(tile_y + 8).min(height) {
                 for x in tile_x..(tile_x + 8).min(width) {
                     order.push(y * width + x);
                 }

@@ -282,6 +282,7 @@ fn bench_generates_traces_and_reports() {
         "\"build_ms\"",
         "\"bvh_bytes\"",
         "\"primary\": {\"closest\": {\"1\": ",
+        "\"packet\": {\"1\": ",
         "\"shadow\": {\"occluded\"",
         "\"diffuse\": {\"closest\"",
     ] {
@@ -297,11 +298,29 @@ fn bench_generates_traces_and_reports() {
     // One thread: every figure once, no duplicate keys.
     let out = raylab(
         dir.path(),
-        &["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1", "--json", "one.json"],
+        &[
+            "bench",
+            mesh,
+            "--rays",
+            "rays",
+            "--reps",
+            "1",
+            "--threads",
+            "1",
+            "--json",
+            "one.json",
+            "--size",
+            "32x24",
+        ],
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let json = std::fs::read_to_string(dir.path().join("one.json")).unwrap();
-    assert_eq!(json.matches("\"1\":").count(), 4, "{json}");
+    assert_eq!(json.matches("\"1\":").count(), 5, "{json}");
+    assert!(
+        text(&out.stdout).contains("primary packets: 768 of 768 answers identical to single rays"),
+        "{}",
+        text(&out.stdout)
+    );
     assert!(!text(&out.stdout).contains("1 threads"), "{}", text(&out.stdout));
     // With the answers in the ray folder, bench reports full agreement.
     std::fs::copy(dir.path().join("hits/primary.hits"), dir.path().join("rays/primary.hits"))
