@@ -1,17 +1,22 @@
 //! Rendering a frame: one camera ray per pixel, in parallel.
 //!
-//! The image is cut into bands of rows that rayon's threads take in any order. Every pixel
-//! depends only on its own coordinates, so the picture is the same for any thread count.
+//! The image is cut into bands of rows that rayon's threads take in any order, and each band
+//! into 8×8 tiles whose camera rays are traced together. Every pixel depends only on its own
+//! coordinates, so the picture is the same for any thread count or tiling.
 
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::film::{Film, FilmError};
 use crate::integrator::Integrator;
 
-/// Rows per unit of parallel work: small enough to balance two cores, large enough to keep the
-/// rays of a band coherent.
-const BAND_ROWS: usize = 4;
+/// Rows per unit of parallel work: small enough to balance two cores; a band is traced in
+/// tiles of `TILE`×`BAND_ROWS` pixels, whose rays are coherent (the accelerator traces them as
+/// packets).
+const BAND_ROWS: usize = 8;
+/// Tile width.
+const TILE: usize = 8;
 
 /// Renders the camera's whole image with one ray through each pixel's centre.
 ///
@@ -28,11 +33,28 @@ pub fn render(
     let rays = camera.rays();
     film.pixels_mut().par_chunks_mut(width * BAND_ROWS).enumerate().for_each(|(band, pixels)| {
         let first_row = band * BAND_ROWS;
-        for (i, pixel) in pixels.iter_mut().enumerate() {
-            let (x, y) = (i % width, first_row + i / width);
-            *pixel = integrator.radiance(&rays.pixel_ray(x as u32, y as u32));
+        let rows = pixels.len() / width;
+        let mut tile_rays = Vec::with_capacity(TILE * BAND_ROWS);
+        let mut colours = Vec::with_capacity(TILE * BAND_ROWS);
+        for tile_x in (0..width).step_by(TILE) {
+            let columns = tile_x..(tile_x + TILE).min(width);
+            tile_rays.clear();
+            for y in 0..rows {
+                for x in columns.clone() {
+                    tile_rays.push(rays.pixel_ray(x as u32, (first_row + y) as u32));
+                }
+            }
+            colours.clear();
+            colours.resize(tile_rays.len(), Vec3::ZERO);
+            integrator.radiance_each(&tile_rays, &mut colours);
+            let mut colour = colours.iter();
+            for y in 0..rows {
+                for x in columns.clone() {
+                    pixels[y * width + x] = *colour.next().expect("one colour per ray");
+                }
+            }
         }
-        progress((pixels.len() / width) as u32);
+        progress(rows as u32);
     });
     Ok(film)
 }

@@ -189,6 +189,28 @@ fn the_picture_is_the_same_for_any_thread_count() {
     }
 }
 
+/// Rendering traces camera rays and their shadow rays in tiles, through the BVH's packets; every
+/// pixel is still exactly the colour of its own ray traced alone, at every stage, for a camera
+/// turned so that tiles straddle direction axes (and with an odd size, so that tiles are cut).
+#[test]
+fn tiled_packets_give_each_pixel_its_own_rays_colour() {
+    let scene = cornell();
+    let bvh = raylab::bvh::Bvh::new(&scene.triangles);
+    for camera in [Camera::lab(64, 64), Camera { yaw: 0.3, ..Camera::lab(53, 37) }] {
+        for stage in Stage::ALL {
+            let lab = Lab::new(&scene, &bvh, stage);
+            let film = render(&camera, &lab, &|_| {}).unwrap();
+            let rays = camera.rays();
+            for y in 0..camera.height {
+                for x in 0..camera.width {
+                    let alone = lab.radiance(&rays.pixel_ray(x, y));
+                    assert_eq!(film.pixel(x, y), alone, "{stage} pixel ({x}, {y})");
+                }
+            }
+        }
+    }
+}
+
 /// The lab frame at 100×100, at every stage, against `tests/data/lab_100_<stage>.png`, which an
 /// independent float64 implementation of the lab (`tools/reference_lab.py`, Möller–Trumbore in
 /// numpy, no code shared) rendered.

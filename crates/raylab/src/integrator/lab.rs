@@ -16,7 +16,7 @@ use std::str::FromStr;
 use glam::Vec3;
 
 use super::Integrator;
-use crate::accel::Accelerator;
+use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;
 use crate::scene::Scene;
 
@@ -106,17 +106,26 @@ impl<'a, A: Accelerator + ?Sized> Lab<'a, A> {
     }
 }
 
-impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
-    fn radiance(&self, ray: &Ray) -> Vec3 {
-        let Some(hit) = self.accel.closest_hit(ray) else {
-            return Vec3::ZERO;
+/// What a camera ray sees before the shadow test: the colour, the light's `D` and the shadow
+/// ray that decides whether `D` counts.
+struct Shading {
+    albedo: Vec3,
+    direct: Vec3,
+    shadow_ray: Option<Ray>,
+}
+
+impl<A: Accelerator + ?Sized> Lab<'_, A> {
+    /// Shades a hit up to the shadow test.
+    #[inline]
+    fn shade(&self, ray: &Ray, hit: Option<Hit>) -> Shading {
+        let Some(hit) = hit else {
+            return Shading { albedo: Vec3::ZERO, direct: Vec3::ZERO, shadow_ray: None };
         };
         let triangle = &self.scene.triangles[hit.triangle as usize];
         let albedo = triangle.albedo;
         if self.stage == Stage::Flat {
-            return albedo;
+            return Shading { albedo, direct: Vec3::ZERO, shadow_ray: None };
         }
-
         let mut point = triangle.surface_point(hit.b0(), hit.b1, hit.b2);
         // Triangles are hit from both sides: light the side the ray sees. (With the lab's
         // one-sided normal, a wall seen from behind would be lit through itself by a light on
@@ -126,20 +135,54 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
         }
         let light = &self.scene.light;
         // Lab eq. (27): D = P max(r̂·n̂, 0) / (4πr²).
-        let mut direct = light.direct(point.p, point.normal);
+        let direct = light.direct(point.p, point.normal);
         let shadows = matches!(self.stage, Stage::Shadows | Stage::Ambient);
-        if shadows
-            && direct != Vec3::ZERO
-            && self.accel.occluded(&point.spawn_ray_to(light.position))
-        {
-            direct = Vec3::ZERO;
+        let shadow_ray =
+            (shadows && direct != Vec3::ZERO).then(|| point.spawn_ray_to(light.position));
+        Shading { albedo, direct, shadow_ray }
+    }
+
+    /// The colour of a shaded hit, given whether its shadow ray is blocked.
+    #[inline]
+    fn finish(&self, hit: bool, shading: &Shading, occluded: bool) -> Vec3 {
+        if !hit {
+            return Vec3::ZERO;
         }
+        let direct = if occluded { Vec3::ZERO } else { shading.direct };
         match self.stage {
-            Stage::Flat => unreachable!("returned above"),
+            Stage::Flat => shading.albedo,
             Stage::Direct => direct,
-            Stage::Reflected | Stage::Shadows => albedo * direct,
+            Stage::Reflected | Stage::Shadows => shading.albedo * direct,
             // Lab eq. (30): R = ρ ∗ (D + N).
-            Stage::Ambient => albedo * (direct + self.ambient),
+            Stage::Ambient => shading.albedo * (direct + self.ambient),
+        }
+    }
+}
+
+impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
+    fn radiance(&self, ray: &Ray) -> Vec3 {
+        let hit = self.accel.closest_hit(ray);
+        let shading = self.shade(ray, hit);
+        let occluded = shading.shadow_ray.is_some_and(|shadow| self.accel.occluded(&shadow));
+        self.finish(hit.is_some(), &shading, occluded)
+    }
+
+    /// Camera rays together, then their shadow rays together (toward one light, so they are
+    /// coherent too).
+    fn radiance_each(&self, rays: &[Ray], out: &mut [Vec3]) {
+        assert_eq!(rays.len(), out.len(), "one colour per ray");
+        let mut hits = vec![None; rays.len()];
+        self.accel.closest_hits(rays, &mut hits);
+        let shading: Vec<Shading> =
+            rays.iter().zip(&hits).map(|(ray, &hit)| self.shade(ray, hit)).collect();
+        let shadow_rays: Vec<Ray> = shading.iter().filter_map(|s| s.shadow_ray).collect();
+        let mut occluded = vec![false; shadow_rays.len()];
+        self.accel.occluded_each(&shadow_rays, &mut occluded);
+        let mut blocked = occluded.into_iter();
+        for ((colour, hit), s) in out.iter_mut().zip(&hits).zip(&shading) {
+            let occluded =
+                s.shadow_ray.is_some() && blocked.next().expect("one answer per shadow ray");
+            *colour = self.finish(hit.is_some(), s, occluded);
         }
     }
 }

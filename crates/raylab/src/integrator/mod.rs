@@ -15,4 +15,17 @@ use crate::ray::Ray;
 pub trait Integrator: Sync {
     /// The colour (linear, unclamped) seen along `ray`.
     fn radiance(&self, ray: &Ray) -> Vec3;
+
+    /// The colour seen along each ray, `out[i]` for `rays[i]`: exactly what
+    /// [`radiance`](Self::radiance) gives one ray at a time. Integrators override it to trace
+    /// coherent rays (a tile of camera rays) together.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    fn radiance_each(&self, rays: &[Ray], out: &mut [Vec3]) {
+        assert_eq!(rays.len(), out.len(), "one colour per ray");
+        for (ray, colour) in rays.iter().zip(out) {
+            *colour = self.radiance(ray);
+        }
+    }
 }
