@@ -320,11 +320,11 @@ struct SetResult {
 }
 
 /// Runs `f` over `rays` on `threads` threads that take chunks of [`CHUNK`] rays from a shared
-/// counter, writing each answer into its ray's slot.
+/// counter; `f` writes each chunk's answers into its slots.
 fn trace<T: Copy + Default + Send>(
     rays: &[Ray],
     threads: usize,
-    f: impl Fn(&Ray) -> T + Sync,
+    f: impl Fn(&[Ray], &mut [T]) + Sync,
 ) -> Vec<T> {
     let mut out = vec![T::default(); rays.len()];
     let chunks: Vec<Mutex<&mut [T]>> = out.chunks_mut(CHUNK).map(Mutex::new).collect();
@@ -334,9 +334,8 @@ fn trace<T: Copy + Default + Send>(
             let k = next.fetch_add(1, Ordering::Relaxed);
             let Some(chunk) = chunks.get(k) else { break };
             let mut chunk = chunk.lock().expect("no thread panics while holding a chunk");
-            for (slot, ray) in chunk.iter_mut().zip(&rays[k * CHUNK..]) {
-                *slot = f(ray);
-            }
+            let len = chunk.len();
+            f(&rays[k * CHUNK..k * CHUNK + len], &mut chunk);
         }
     };
     std::thread::scope(|scope| {
@@ -350,35 +349,22 @@ fn trace<T: Copy + Default + Send>(
 }
 
 fn trace_closest(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<HitRecord> {
-    trace(rays, threads, |ray| HitRecord::from_hit(bvh.closest_hit(ray)))
+    trace(rays, threads, |rays, out| {
+        for (slot, ray) in out.iter_mut().zip(rays) {
+            *slot = HitRecord::from_hit(bvh.closest_hit(ray));
+        }
+    })
 }
 
 /// Closest hits through [`Accelerator::closest_hits`], a chunk at a time.
 fn trace_packets(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<HitRecord> {
-    let mut out = vec![HitRecord::default(); rays.len()];
-    let chunks: Vec<Mutex<&mut [HitRecord]>> = out.chunks_mut(CHUNK).map(Mutex::new).collect();
-    let next = AtomicUsize::new(0);
-    let work = || {
-        let mut hits = vec![None; CHUNK];
-        loop {
-            let k = next.fetch_add(1, Ordering::Relaxed);
-            let Some(chunk) = chunks.get(k) else { break };
-            let mut chunk = chunk.lock().expect("no thread panics while holding a chunk");
-            let rays = &rays[k * CHUNK..k * CHUNK + chunk.len()];
-            bvh.closest_hits(rays, &mut hits[..rays.len()]);
-            for (slot, hit) in chunk.iter_mut().zip(&hits) {
-                *slot = HitRecord::from_hit(*hit);
-            }
+    trace(rays, threads, |rays, out| {
+        let mut hits = vec![None; rays.len()];
+        bvh.closest_hits(rays, &mut hits);
+        for (slot, hit) in out.iter_mut().zip(hits) {
+            *slot = HitRecord::from_hit(hit);
         }
-    };
-    std::thread::scope(|scope| {
-        for _ in 1..threads {
-            scope.spawn(work);
-        }
-        work();
-    });
-    drop(chunks);
-    out
+    })
 }
 
 /// The order that visits the pixels of an image `width` wide (row-major, `count` of them) in 8×8
@@ -402,7 +388,11 @@ fn tile_order(count: usize, width: usize) -> Vec<usize> {
 }
 
 fn trace_occluded(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<bool> {
-    trace(rays, threads, |ray| bvh.occluded(ray))
+    trace(rays, threads, |rays, out| {
+        for (slot, ray) in out.iter_mut().zip(rays) {
+            *slot = bvh.occluded(ray);
+        }
+    })
 }
 
 /// One untimed warm-up, then the median wall time of `reps` runs, in seconds.

@@ -327,14 +327,8 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
         while mask != 0 {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            let entry = (children[k], near[k], 8 * node + k as u32);
-            let mut i = top;
-            while i > first && stack.get(i - 1).1 < entry.1 {
-                stack.set(i, stack.get(i - 1));
-                i -= 1;
-            }
-            stack.set(i, entry);
-            top += 1;
+            stack
+                .push_sorted(&mut top, first, (children[k], near[k], 8 * node + k as u32), |e| e.1);
         }
         loop {
             if top == 0 {

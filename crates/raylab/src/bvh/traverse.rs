@@ -43,6 +43,25 @@ impl<T: Copy> Stack<T> {
         self.written = self.written.max(i + 1);
     }
 
+    /// Pushes `entry` at `*top`, moving it down past the entries pushed since `first` that are
+    /// nearer (by `distance`), so that the run stays sorted with the nearest on top.
+    #[inline(always)]
+    pub(super) fn push_sorted(
+        &mut self,
+        top: &mut usize,
+        first: usize,
+        entry: T,
+        distance: impl Fn(T) -> f32,
+    ) {
+        let mut i = *top;
+        while i > first && distance(self.get(i - 1)) < distance(entry) {
+            self.set(i, self.get(i - 1));
+            i -= 1;
+        }
+        self.set(i, entry);
+        *top += 1;
+    }
+
     /// Reads an entry that was written.
     #[inline(always)]
     pub(super) fn get(&self, i: usize) -> T {
@@ -195,15 +214,7 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
         while mask != 0 {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            let entry = (children[k], near[k]);
-            // Insertion into the pushed run, kept sorted by decreasing distance.
-            let mut i = top;
-            while i > first && stack.get(i - 1).1 < entry.1 {
-                stack.set(i, stack.get(i - 1));
-                i -= 1;
-            }
-            stack.set(i, entry);
-            top += 1;
+            stack.push_sorted(&mut top, first, (children[k], near[k]), |e| e.1);
         }
         // Pop until an interior node is due; leaves are intersected on the way.
         loop {
