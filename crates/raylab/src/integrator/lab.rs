@@ -114,12 +114,17 @@ struct Shading {
     shadow_ray: Option<Ray>,
 }
 
+impl Shading {
+    /// Nothing seen.
+    const NONE: Shading = Shading { albedo: Vec3::ZERO, direct: Vec3::ZERO, shadow_ray: None };
+}
+
 impl<A: Accelerator + ?Sized> Lab<'_, A> {
     /// Shades a hit up to the shadow test.
     #[inline]
     fn shade(&self, ray: &Ray, hit: Option<Hit>) -> Shading {
         let Some(hit) = hit else {
-            return Shading { albedo: Vec3::ZERO, direct: Vec3::ZERO, shadow_ray: None };
+            return Shading::NONE;
         };
         let triangle = &self.scene.triangles[hit.triangle as usize];
         let albedo = triangle.albedo;
@@ -171,18 +176,31 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
     /// coherent too).
     fn radiance_each(&self, rays: &[Ray], out: &mut [Vec3]) {
         assert_eq!(rays.len(), out.len(), "one colour per ray");
-        let mut hits = vec![None; rays.len()];
-        self.accel.closest_hits(rays, &mut hits);
-        let shading: Vec<Shading> =
-            rays.iter().zip(&hits).map(|(ray, &hit)| self.shade(ray, hit)).collect();
-        let shadow_rays: Vec<Ray> = shading.iter().filter_map(|s| s.shadow_ray).collect();
-        let mut occluded = vec![false; shadow_rays.len()];
-        self.accel.occluded_each(&shadow_rays, &mut occluded);
-        let mut blocked = occluded.into_iter();
-        for ((colour, hit), s) in out.iter_mut().zip(&hits).zip(&shading) {
-            let occluded =
-                s.shadow_ray.is_some() && blocked.next().expect("one answer per shadow ray");
-            *colour = self.finish(hit.is_some(), s, occluded);
+        // A tile at a time, in arrays on the stack: no allocation per tile.
+        const TILE: usize = 64;
+        for (rays, out) in rays.chunks(TILE).zip(out.chunks_mut(TILE)) {
+            let n = rays.len();
+            let mut hits = [None; TILE];
+            self.accel.closest_hits(rays, &mut hits[..n]);
+            let shading: [Shading; TILE] = std::array::from_fn(|i| {
+                if i < n { self.shade(&rays[i], hits[i]) } else { Shading::NONE }
+            });
+            let mut shadow_rays = [Ray::new(Vec3::ZERO, Vec3::Z); TILE];
+            let mut shadows = 0;
+            for s in &shading[..n] {
+                if let Some(ray) = s.shadow_ray {
+                    shadow_rays[shadows] = ray;
+                    shadows += 1;
+                }
+            }
+            let mut occluded = [false; TILE];
+            self.accel.occluded_each(&shadow_rays[..shadows], &mut occluded[..shadows]);
+            let mut blocked = occluded[..shadows].iter();
+            for ((colour, hit), s) in out.iter_mut().zip(&hits).zip(&shading) {
+                let occluded =
+                    s.shadow_ray.is_some() && *blocked.next().expect("one answer per shadow ray");
+                *colour = self.finish(hit.is_some(), s, occluded);
+            }
         }
     }
 }
