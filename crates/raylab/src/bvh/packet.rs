@@ -177,11 +177,55 @@ impl PacketRays {
         limit
     }
 
+    /// The packet's frustum: what [`Frustum::of`] gives for its rays, computed from the lanes
+    /// (the rays were checked by [`Frustum::can_join`] and share their octant and dominant axis).
+    #[inline(always)]
+    fn frustum(&self) -> Frustum {
+        let n = self.len;
+        let mut pad_axes = [false; 3];
+        pad_axes[self.k[2]] = true;
+        Frustum {
+            origin_lo: Vec3::from_array([0, 1, 2].map(|a| lowest(&self.origin[a][..n]))),
+            origin_hi: Vec3::from_array([0, 1, 2].map(|a| highest(&self.origin[a][..n]))),
+            inv_lo: Vec3::from_array([0, 1, 2].map(|a| lowest(&self.inv_direction[a][..n]))),
+            inv_hi: Vec3::from_array([0, 1, 2].map(|a| highest(&self.inv_direction[a][..n]))),
+            negative: self.negative,
+            t_min: lowest(&self.box_t_min[..n]),
+            pad_axes,
+        }
+    }
+
     /// The mask of all rays of the packet.
     #[inline(always)]
     fn all(&self) -> u64 {
         if self.len == PACKET { u64::MAX } else { (1 << self.len) - 1 }
     }
+}
+
+/// The least of finite values, eight lanes at a time (a form the compiler vectorizes).
+#[inline(always)]
+fn lowest(values: &[f32]) -> f32 {
+    reduce(values, f32::INFINITY, |a, b| if b < a { b } else { a })
+}
+
+/// The greatest of finite values.
+#[inline(always)]
+fn highest(values: &[f32]) -> f32 {
+    reduce(values, f32::NEG_INFINITY, |a, b| if b > a { b } else { a })
+}
+
+/// Folds `values` by `pick` in eight columns, then the columns and the rest.
+#[inline(always)]
+fn reduce(values: &[f32], start: f32, pick: impl Fn(f32, f32) -> f32 + Copy) -> f32 {
+    let mut columns = [start; 8];
+    let chunks = values.chunks_exact(8);
+    let rest = chunks.remainder();
+    for chunk in chunks {
+        for (c, &v) in columns.iter_mut().zip(chunk) {
+            *c = pick(*c, v);
+        }
+    }
+    columns.into_iter().chain(rest.iter().copied()).fold(start, pick)
 }
 
 /// The scalar twin of [`NodeKernel::packet_leaf`]: ray by ray, the single-ray tests.
@@ -302,8 +346,8 @@ pub(crate) unsafe fn closest_hits<K: NodeKernel>(
 #[inline(always)]
 unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let all = rays.all();
-    let frustum = Frustum::of((0..rays.len).map(|i| rays.box_ray(i)))
-        .expect("the rays of a packet share an octant and can join one");
+    let frustum = rays.frustum();
+    debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
     let mut limit = rays.limit(all);
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };
@@ -392,8 +436,8 @@ pub(crate) unsafe fn occluded_each<K: NodeKernel>(bvh: &WideBvh, rays: &[Ray], o
 #[inline(always)]
 unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
     let mut open = rays.all();
-    let frustum = Frustum::of((0..rays.len).map(|i| rays.box_ray(i)))
-        .expect("the rays of a packet share an octant and can join one");
+    let frustum = rays.frustum();
+    debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
     let mut limit = rays.limit(open);
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };
