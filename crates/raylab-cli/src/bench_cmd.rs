@@ -370,7 +370,7 @@ fn trace_packets(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<HitRecord> {
 /// The order that visits the pixels of an image `width` wide (row-major, `count` of them) in 8×8
 /// tiles, tile rows first; the file's order if `count` is not a multiple of `width`.
 fn tile_order(count: usize, width: usize) -> Vec<usize> {
-    if width == 0 || count % width != 0 {
+    if width == 0 || !count.is_multiple_of(width) {
         return (0..count).collect();
     }
     let height = count / width;

@@ -119,14 +119,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     image_io::check_writable(&args.output)?;
     let needed = Film::bytes_needed(width, height);
-    if let Some(available) = system::available_memory_bytes() {
-        if needed > available {
-            bail!(
-                "image size {width}×{height} needs {} of memory, but only {} is available",
-                format_bytes(needed),
-                format_bytes(available)
-            );
-        }
+    if let Some(available) = system::available_memory_bytes()
+        && needed > available
+    {
+        bail!(
+            "image size {width}×{height} needs {} of memory, but only {} is available",
+            format_bytes(needed),
+            format_bytes(available)
+        );
     }
     let threads = match args.threads {
         None | Some(0) => system::cores(),

@@ -134,14 +134,14 @@ fn output_format(path: &Path) -> Result<ImageFormat, ImageIoError> {
 /// an existing folder that accepts new files, and not a folder or read-only file in the way.
 pub fn check_writable(path: &Path) -> Result<ImageFormat, ImageIoError> {
     let format = output_format(path)?;
-    if let Ok(meta) = fs::metadata(path) {
-        if meta.permissions().readonly() {
-            return Err(ImageIoError::Io {
-                action: "write",
-                path: path.to_path_buf(),
-                source: io::Error::new(io::ErrorKind::PermissionDenied, "the file is read-only"),
-            });
-        }
+    if let Ok(meta) = fs::metadata(path)
+        && meta.permissions().readonly()
+    {
+        return Err(ImageIoError::Io {
+            action: "write",
+            path: path.to_path_buf(),
+            source: io::Error::new(io::ErrorKind::PermissionDenied, "the file is read-only"),
+        });
     }
     // Creating (and at once deleting) a file is the only reliable test of permission.
     drop(temporary_file_beside(path)?);

@@ -192,7 +192,7 @@ impl NodeKernel for Scalar {
 #[cfg(all(test, target_arch = "x86_64"))]
 pub(crate) use x86::block_hits_sse;
 #[cfg(target_arch = "x86_64")]
-pub(crate) use x86::{Avx2, Sse};
+pub(crate) use x86::{Avx2, Avx512, Sse};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
@@ -240,24 +240,55 @@ mod x86 {
         /// Bit `k` set where lane `k` of `self <= o` (false for NaN).
         unsafe fn le_mask(self, o: Self) -> u32;
         unsafe fn div(self, o: Self) -> Self;
-        /// Comparisons give all-ones lanes where true (ordered: false for NaN, except `nlt`
-        /// and `nle`, which are true for NaN).
-        unsafe fn eq(self, o: Self) -> Self;
-        unsafe fn ge(self, o: Self) -> Self;
-        unsafe fn le(self, o: Self) -> Self;
-        unsafe fn gt(self, o: Self) -> Self;
-        unsafe fn lt(self, o: Self) -> Self;
-        unsafe fn nlt(self, o: Self) -> Self;
-        unsafe fn nle(self, o: Self) -> Self;
+        /// Comparisons give a mask of the lanes where they hold (ordered: false for NaN, except
+        /// `nlt` and `nle`, which are true for NaN).
+        unsafe fn eq(self, o: Self) -> Self::Mask;
+        unsafe fn ge(self, o: Self) -> Self::Mask;
+        unsafe fn le(self, o: Self) -> Self::Mask;
+        unsafe fn gt(self, o: Self) -> Self::Mask;
+        unsafe fn lt(self, o: Self) -> Self::Mask;
+        unsafe fn nlt(self, o: Self) -> Self::Mask;
+        unsafe fn nle(self, o: Self) -> Self::Mask;
+        /// A comparison's lanes: all-ones registers for SSE and AVX, a mask register for
+        /// AVX-512.
+        type Mask: LaneMask;
+    }
+
+    /// The lanes where a comparison holds.
+    pub(crate) trait LaneMask: Copy {
+        /// # Safety
+        /// The CPU must support the mask's instruction set (for this whole trait).
         unsafe fn and(self, o: Self) -> Self;
         unsafe fn or(self, o: Self) -> Self;
         /// `self & !o`.
         unsafe fn andnot_of(self, o: Self) -> Self;
-        /// The lanes' sign bits as a mask.
+        /// Bit `k` set where lane `k` holds.
         unsafe fn bits(self) -> u32;
     }
 
+    /// AVX-512's mask registers: one bit per lane already.
+    impl LaneMask for __mmask16 {
+        #[inline(always)]
+        unsafe fn and(self, o: Self) -> Self {
+            self & o
+        }
+        #[inline(always)]
+        unsafe fn or(self, o: Self) -> Self {
+            self | o
+        }
+        #[inline(always)]
+        unsafe fn andnot_of(self, o: Self) -> Self {
+            self & !o
+        }
+        #[inline(always)]
+        unsafe fn bits(self) -> u32 {
+            self as u32
+        }
+    }
+
     impl Lanes for __m128 {
+        type Mask = __m128;
+
         #[inline(always)]
         unsafe fn splat(x: f32) -> Self {
             unsafe { _mm_set1_ps(x) }
@@ -307,33 +338,36 @@ mod x86 {
             unsafe { _mm_div_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn eq(self, o: Self) -> Self {
+        unsafe fn eq(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmpeq_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn ge(self, o: Self) -> Self {
+        unsafe fn ge(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmpge_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn le(self, o: Self) -> Self {
+        unsafe fn le(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmple_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn gt(self, o: Self) -> Self {
+        unsafe fn gt(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmpgt_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn lt(self, o: Self) -> Self {
+        unsafe fn lt(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmplt_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn nlt(self, o: Self) -> Self {
+        unsafe fn nlt(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmpnlt_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn nle(self, o: Self) -> Self {
+        unsafe fn nle(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmpnle_ps(self, o) }
         }
+    }
+
+    impl LaneMask for __m128 {
         #[inline(always)]
         unsafe fn and(self, o: Self) -> Self {
             unsafe { _mm_and_ps(self, o) }
@@ -353,6 +387,8 @@ mod x86 {
     }
 
     impl Lanes for __m256 {
+        type Mask = __m256;
+
         #[inline(always)]
         unsafe fn splat(x: f32) -> Self {
             unsafe { _mm256_set1_ps(x) }
@@ -402,33 +438,36 @@ mod x86 {
             unsafe { _mm256_div_ps(self, o) }
         }
         #[inline(always)]
-        unsafe fn eq(self, o: Self) -> Self {
+        unsafe fn eq(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self, o) }
         }
         #[inline(always)]
-        unsafe fn ge(self, o: Self) -> Self {
+        unsafe fn ge(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self, o) }
         }
         #[inline(always)]
-        unsafe fn le(self, o: Self) -> Self {
+        unsafe fn le(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self, o) }
         }
         #[inline(always)]
-        unsafe fn gt(self, o: Self) -> Self {
+        unsafe fn gt(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self, o) }
         }
         #[inline(always)]
-        unsafe fn lt(self, o: Self) -> Self {
+        unsafe fn lt(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self, o) }
         }
         #[inline(always)]
-        unsafe fn nlt(self, o: Self) -> Self {
+        unsafe fn nlt(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_NLT_UQ>(self, o) }
         }
         #[inline(always)]
-        unsafe fn nle(self, o: Self) -> Self {
+        unsafe fn nle(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_NLE_UQ>(self, o) }
         }
+    }
+
+    impl LaneMask for __m256 {
         #[inline(always)]
         unsafe fn and(self, o: Self) -> Self {
             unsafe { _mm256_and_ps(self, o) }
@@ -444,6 +483,88 @@ mod x86 {
         #[inline(always)]
         unsafe fn bits(self) -> u32 {
             unsafe { _mm256_movemask_ps(self) as u32 }
+        }
+    }
+
+    /// Sixteen lanes, for packets on AVX-512: comparisons give mask registers.
+    impl Lanes for __m512 {
+        type Mask = __mmask16;
+
+        #[inline(always)]
+        unsafe fn splat(x: f32) -> Self {
+            unsafe { _mm512_set1_ps(x) }
+        }
+        #[inline(always)]
+        unsafe fn load(p: *const f32) -> Self {
+            unsafe { _mm512_load_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn loadu(p: *const f32) -> Self {
+            unsafe { _mm512_loadu_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut f32) {
+            unsafe { _mm512_storeu_ps(p, self) }
+        }
+        #[inline(always)]
+        unsafe fn add(self, o: Self) -> Self {
+            unsafe { _mm512_add_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn sub(self, o: Self) -> Self {
+            unsafe { _mm512_sub_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn mul(self, o: Self) -> Self {
+            unsafe { _mm512_mul_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn min(self, o: Self) -> Self {
+            unsafe { _mm512_min_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn max(self, o: Self) -> Self {
+            unsafe { _mm512_max_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn abs(self) -> Self {
+            unsafe { _mm512_abs_ps(self) }
+        }
+        #[inline(always)]
+        unsafe fn le_mask(self, o: Self) -> u32 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self, o) as u32 }
+        }
+        #[inline(always)]
+        unsafe fn div(self, o: Self) -> Self {
+            unsafe { _mm512_div_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn eq(self, o: Self) -> Self::Mask {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn ge(self, o: Self) -> Self::Mask {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_GE_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn le(self, o: Self) -> Self::Mask {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn gt(self, o: Self) -> Self::Mask {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn lt(self, o: Self) -> Self::Mask {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn nlt(self, o: Self) -> Self::Mask {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_NLT_UQ>(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn nle(self, o: Self) -> Self::Mask {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_NLE_UQ>(self, o) }
         }
     }
 
@@ -464,7 +585,7 @@ mod x86 {
     /// operations as the single-ray tests ([`RayBoxTest::enter`], [`watertight_lanes`]).
     ///
     /// # Safety
-    /// The CPU must support `V`'s instruction set, which holds `L` (4 or 8) floats.
+    /// The CPU must support `V`'s instruction set, which holds `L` (4, 8 or 16) floats.
     #[inline(always)]
     unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
         rays: &mut PacketRays,
@@ -554,7 +675,7 @@ mod x86 {
                         };
                         let decided = watertight_lanes(&test, active);
                         let mut hits = decided.hits;
-                        let (mut t, mut b1, mut b2) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
+                        let (mut t, mut b1, mut b2) = ([0.0f32; L], [0.0f32; L], [0.0f32; L]);
                         if hits != 0 {
                             decided.t.store(t.as_mut_ptr());
                             decided.b1.store(b1.as_mut_ptr());
@@ -1096,6 +1217,76 @@ mod x86 {
                 _mm256_storeu_ps(out.as_mut_ptr(), near);
                 (_mm256_movemask_ps(hit) as u32, out)
             }
+        }
+    }
+
+    /// AVX2's node and block kernels, and packet leaves 16 rays per instruction with AVX-512.
+    pub(crate) struct Avx512;
+
+    impl NodeKernel for Avx512 {
+        type Ray = <Avx2 as NodeKernel>::Ray;
+        type Frustum = <Avx2 as NodeKernel>::Frustum;
+
+        #[inline(always)]
+        unsafe fn packet_leaf(
+            rays: &mut PacketRays,
+            open: &mut u64,
+            occlusion: bool,
+            bvh: &WideBvh,
+            bounds: &Bounds,
+            first_block: u32,
+            blocks: u32,
+        ) {
+            // SAFETY: the caller checked AVX-512 F support (this function's contract).
+            unsafe {
+                packet_leaf_lanes::<__m512, 16>(
+                    rays,
+                    open,
+                    occlusion,
+                    bvh,
+                    bounds,
+                    first_block,
+                    blocks,
+                )
+            }
+        }
+
+        #[inline(always)]
+        unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum {
+            // SAFETY: AVX-512 implies AVX2 (this function's contract).
+            unsafe { Avx2::prepare_frustum(frustum) }
+        }
+
+        #[inline(always)]
+        unsafe fn enter_frustum(
+            node: &WideNode,
+            frustum: &Self::Frustum,
+            t_limit: f32,
+        ) -> (u32, [f32; WIDTH]) {
+            // SAFETY: as above.
+            unsafe { Avx2::enter_frustum(node, frustum, t_limit) }
+        }
+
+        #[inline(always)]
+        unsafe fn block_hits(
+            ray: &WatertightRay,
+            block: &TriangleBlock<BLOCK>,
+            t_max: f32,
+        ) -> BlockHits {
+            // SAFETY: as above.
+            unsafe { Avx2::block_hits(ray, block, t_max) }
+        }
+
+        #[inline(always)]
+        unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
+            // SAFETY: as above.
+            unsafe { Avx2::prepare(ray) }
+        }
+
+        #[inline(always)]
+        unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
+            // SAFETY: as above.
+            unsafe { Avx2::enter(node, ray, t_limit) }
         }
     }
 }

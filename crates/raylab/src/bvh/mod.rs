@@ -244,7 +244,7 @@ impl Bvh {
 #[cfg(target_arch = "x86_64")]
 mod entry {
     //! One copy of each traversal per instruction set, compiled with that set enabled.
-    use super::kernels::{Avx2, Sse};
+    use super::kernels::{Avx2, Avx512, Sse};
     use super::wide::WideBvh;
     use super::{packet, traverse};
     use crate::accel::Hit;
@@ -275,7 +275,7 @@ mod entry {
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     pub(super) unsafe fn closest_hit_avx512(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
         // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { traverse::closest_hit::<Avx2>(bvh, ray) }
+        unsafe { traverse::closest_hit::<Avx512>(bvh, ray) }
     }
 
     pub(super) fn closest_hits_sse2(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
@@ -303,19 +303,19 @@ mod entry {
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     pub(super) unsafe fn closest_hits_avx512(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
         // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { packet::closest_hits::<Avx2>(bvh, rays, out) }
+        unsafe { packet::closest_hits::<Avx512>(bvh, rays, out) }
     }
 
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     pub(super) unsafe fn occluded_each_avx512(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
         // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { packet::occluded_each::<Avx2>(bvh, rays, out) }
+        unsafe { packet::occluded_each::<Avx512>(bvh, rays, out) }
     }
 
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     pub(super) unsafe fn occluded_avx512(bvh: &WideBvh, ray: &Ray) -> bool {
         // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { traverse::occluded::<Avx2>(bvh, ray) }
+        unsafe { traverse::occluded::<Avx512>(bvh, ray) }
     }
 }
 

@@ -30,7 +30,7 @@ pub(crate) const PACKET: usize = 64;
 /// The rays of one packet, lane by lane (structure of arrays), with their search state.
 /// Lanes from `len` on hold stale values and are never counted.
 #[derive(Clone)]
-#[repr(C, align(32))]
+#[repr(C, align(64))]
 pub(crate) struct PacketRays {
     /// Origins, per world axis.
     pub origin: [[f32; PACKET]; 3],
@@ -81,33 +81,48 @@ impl PacketRays {
         }
     }
 
-    /// Makes the packet of `members` of `rays` (at least one; all of one octant and dominant
-    /// axis, and able to join a packet).
+    /// Prepares `ray` in lane `i`, and returns its group (direction octant and dominant axis,
+    /// `0..24`) with what the group's rays share, or `None` if it cannot join a packet.
     #[inline(always)]
-    fn fill(&mut self, rays: &[Ray], members: &[u8]) {
-        self.len = members.len();
-        for (i, &m) in members.iter().enumerate() {
-            let ray = &rays[m as usize];
-            let box_ray = RayBoxTest::new(ray);
-            let triangle_ray = WatertightRay::new(ray);
-            for axis in 0..3 {
-                self.origin[axis][i] = box_ray.origin[axis];
-                self.inv_direction[axis][i] = box_ray.inv_direction[axis];
-            }
-            self.box_t_min[i] = box_ray.t_min;
-            self.shear[0][i] = triangle_ray.shear_x;
-            self.shear[1][i] = triangle_ray.shear_y;
-            self.shear[2][i] = triangle_ray.shear_z;
-            self.triangle_t_min[i] = triangle_ray.t_min;
-            self.triangle_limit[i] = ray.t_max;
-            self.box_limit[i] = ray.t_max * FAR_SCALE;
-            self.best_t[i] = f32::INFINITY;
-            self.best_triangle[i] = u32::MAX;
-            if i == 0 {
-                self.negative = box_ray.negative;
-                self.k = [triangle_ray.kx, triangle_ray.ky, triangle_ray.kz];
-            }
+    fn set_lane(&mut self, i: usize, ray: &Ray) -> Option<(usize, Shared)> {
+        let box_ray = RayBoxTest::new(ray);
+        if !can_hit(ray) || !Frustum::can_join(&box_ray) {
+            return None;
         }
+        let triangle_ray = WatertightRay::new(ray);
+        for axis in 0..3 {
+            self.origin[axis][i] = box_ray.origin[axis];
+            self.inv_direction[axis][i] = box_ray.inv_direction[axis];
+        }
+        self.box_t_min[i] = box_ray.t_min;
+        self.shear[0][i] = triangle_ray.shear_x;
+        self.shear[1][i] = triangle_ray.shear_y;
+        self.shear[2][i] = triangle_ray.shear_z;
+        self.triangle_t_min[i] = triangle_ray.t_min;
+        self.triangle_limit[i] = ray.t_max;
+        self.box_limit[i] = ray.t_max * FAR_SCALE;
+        self.best_t[i] = f32::INFINITY;
+        self.best_triangle[i] = u32::MAX;
+        let n = box_ray.negative;
+        let group = (n[0] as usize | (n[1] as usize) << 1 | (n[2] as usize) << 2) * 3
+            + box_ray.dominant_axis;
+        Some((group, (n, [triangle_ray.kx, triangle_ray.ky, triangle_ray.kz])))
+    }
+
+    /// Copies lane `j` of `from` (before tracing) into lane `i`.
+    #[inline(always)]
+    fn copy_lane(&mut self, i: usize, from: &PacketRays, j: usize) {
+        for axis in 0..3 {
+            self.origin[axis][i] = from.origin[axis][j];
+            self.inv_direction[axis][i] = from.inv_direction[axis][j];
+            self.shear[axis][i] = from.shear[axis][j];
+        }
+        self.box_t_min[i] = from.box_t_min[j];
+        self.triangle_t_min[i] = from.triangle_t_min[j];
+        self.triangle_limit[i] = from.triangle_limit[j];
+        self.box_limit[i] = from.box_limit[j];
+        self.best_t[i] = from.best_t[j];
+        self.best_triangle[i] = from.best_triangle[j];
     }
 
     /// Ray `i`'s slab test.
@@ -165,16 +180,20 @@ impl PacketRays {
         }
     }
 
-    /// The greatest box limit of the rays in `open`: the packet's.
+    /// The greatest box limit of the rays: the packet's. (Rays that are done have their limit
+    /// set to `-∞` by [`close`](Self::close).)
     #[inline(always)]
-    fn limit(&self, open: u64) -> f32 {
-        let mut limit = f32::NEG_INFINITY;
-        for (i, &l) in self.box_limit[..self.len].iter().enumerate() {
-            if open & (1 << i) != 0 {
-                limit = limit.max(l);
-            }
+    fn limit(&self) -> f32 {
+        highest(&self.box_limit[..self.len])
+    }
+
+    /// Takes the rays in `done` out of the packet's limit.
+    #[inline(always)]
+    fn close(&mut self, mut done: u64) {
+        while done != 0 {
+            self.box_limit[done.trailing_zeros() as usize] = f32::NEG_INFINITY;
+            done &= done - 1;
         }
-        limit
     }
 
     /// The packet's frustum: what [`Frustum::of`] gives for its rays, computed from the lanes
@@ -271,37 +290,178 @@ pub(crate) unsafe fn packet_leaf_scalar<K: NodeKernel>(
     }
 }
 
-/// The rays of a chunk grouped by direction octant and dominant axis; rays that cannot join a
-/// packet are left out.
-struct Groups {
-    members: [[u8; PACKET]; 24],
-    counts: [usize; 24],
+/// What the rays of a group share: their direction signs and the watertight test's
+/// `kx, ky, kz`.
+type Shared = ([bool; 3], [usize; 3]);
+
+/// A chunk of up to [`PACKET`] rays, prepared once (lane `i` for ray `i`) and sorted into
+/// groups of one direction octant and dominant axis: the rays that can be traced together.
+struct Chunk {
+    lanes: PacketRays,
+    /// The rays of each group, as bit masks.
+    groups: [u64; 24],
+    /// The groups with rays in them.
+    present: u32,
+    /// What each group's rays share.
+    shared: [Shared; 24],
+    /// The rays that must be traced alone (nothing to hit, or a zero direction component).
+    alone: u64,
+    /// A second packet for a group that is not the whole chunk, made when first needed.
+    gathered: Option<PacketRays>,
 }
 
-impl Groups {
-    /// Groups `rays` (at most [`PACKET`]); calls `alone(i)` for each ray that must be traced
-    /// alone.
-    #[inline(always)]
-    fn of(rays: &[Ray], mut alone: impl FnMut(usize)) -> Groups {
-        let mut groups = Groups { members: [[0; PACKET]; 24], counts: [0; 24] };
-        for (i, ray) in rays.iter().enumerate() {
-            let box_ray = RayBoxTest::new(ray);
-            if !can_hit(ray) || !Frustum::can_join(&box_ray) {
-                alone(i);
-                continue;
-            }
-            let n = box_ray.negative;
-            let key = (n[0] as usize | (n[1] as usize) << 1 | (n[2] as usize) << 2) * 3
-                + box_ray.dominant_axis;
-            groups.members[key][groups.counts[key]] = i as u8;
-            groups.counts[key] += 1;
+/// The indices of the bits set in `mask`, lowest first.
+#[inline(always)]
+fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            i
+        })
+    })
+}
+
+impl Chunk {
+    fn new() -> Chunk {
+        Chunk {
+            lanes: PacketRays::new(),
+            groups: [0; 24],
+            present: 0,
+            shared: [([false; 3], [0, 1, 2]); 24],
+            alone: 0,
+            gathered: None,
         }
-        groups
     }
 
-    /// The non-empty groups.
-    fn each(&self) -> impl Iterator<Item = &[u8]> {
-        (0..24).map(|g| &self.members[g][..self.counts[g]]).filter(|m| !m.is_empty())
+    /// Prepares `rays` (at most [`PACKET`]).
+    #[inline(always)]
+    fn prepare(&mut self, rays: &[Ray]) {
+        self.groups = [0; 24];
+        self.present = 0;
+        self.alone = 0;
+        self.lanes.len = rays.len();
+        for (i, ray) in rays.iter().enumerate() {
+            match self.lanes.set_lane(i, ray) {
+                Some((group, shared)) => {
+                    self.groups[group] |= 1 << i;
+                    self.present |= 1 << group;
+                    self.shared[group] = shared;
+                }
+                None => self.alone |= 1 << i,
+            }
+        }
+    }
+
+    /// Answers every ray of the chunk in `out`, by `Q`: alone or in packets.
+    ///
+    /// # Safety
+    /// The CPU must support `K`'s instruction set.
+    #[inline(always)]
+    unsafe fn trace<K: NodeKernel, Q: Query>(
+        &mut self,
+        bvh: &WideBvh,
+        rays: &[Ray],
+        out: &mut [Q::Answer],
+    ) {
+        // SAFETY (all calls below): the caller guarantees `K`'s instruction set.
+        for i in bits(self.alone) {
+            out[i] = unsafe { Q::alone::<K>(bvh, &rays[i]) };
+        }
+        let all = self.lanes.all();
+        for group in bits(self.present as u64) {
+            let members = self.groups[group];
+            if members.count_ones() == 1 {
+                let i = members.trailing_zeros() as usize;
+                out[i] = unsafe { Q::alone::<K>(bvh, &rays[i]) };
+                continue;
+            }
+            let (negative, k) = self.shared[group];
+            if members == all {
+                // The common case for camera and shadow rays: the whole chunk is one packet.
+                self.lanes.negative = negative;
+                self.lanes.k = k;
+                let traced = unsafe { Q::packet::<K>(bvh, &mut self.lanes) };
+                for (i, out) in out.iter_mut().enumerate() {
+                    *out = Q::answer(&self.lanes, traced, i);
+                }
+                continue;
+            }
+            let gathered = self.gathered.get_or_insert_with(PacketRays::new);
+            for (j, i) in bits(members).enumerate() {
+                gathered.copy_lane(j, &self.lanes, i);
+            }
+            gathered.len = members.count_ones() as usize;
+            gathered.negative = negative;
+            gathered.k = k;
+            let traced = unsafe { Q::packet::<K>(bvh, gathered) };
+            for (j, i) in bits(members).enumerate() {
+                out[i] = Q::answer(gathered, traced, j);
+            }
+        }
+    }
+}
+
+/// A query traced in packets: closest hit or occlusion. (A trait rather than closures, so that
+/// everything inlines into the instruction set's entry point.)
+trait Query {
+    type Answer;
+    /// # Safety
+    /// The CPU must support `K`'s instruction set (for this whole trait).
+    unsafe fn alone<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Self::Answer;
+    /// Traces a packet of at least two rays; returns what [`answer`](Self::answer) needs.
+    unsafe fn packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64;
+    /// The answer of lane `j` of a traced packet.
+    fn answer(rays: &PacketRays, traced: u64, j: usize) -> Self::Answer;
+}
+
+/// [`closest_hits`].
+struct ClosestHits;
+
+impl Query for ClosestHits {
+    type Answer = Option<Hit>;
+
+    #[inline(always)]
+    unsafe fn alone<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+        // SAFETY: the caller's guarantee.
+        unsafe { closest_hit::<K>(bvh, ray) }
+    }
+
+    #[inline(always)]
+    unsafe fn packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+        // SAFETY: the caller's guarantee.
+        unsafe { closest_packet::<K>(bvh, rays) };
+        0
+    }
+
+    #[inline(always)]
+    fn answer(rays: &PacketRays, _: u64, j: usize) -> Option<Hit> {
+        rays.best(j)
+    }
+}
+
+/// [`occluded_each`].
+struct OccludedEach;
+
+impl Query for OccludedEach {
+    type Answer = bool;
+
+    #[inline(always)]
+    unsafe fn alone<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
+        // SAFETY: the caller's guarantee.
+        unsafe { occluded::<K>(bvh, ray) }
+    }
+
+    /// The rays still open: not occluded.
+    #[inline(always)]
+    unsafe fn packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+        // SAFETY: the caller's guarantee.
+        unsafe { occluded_packet::<K>(bvh, rays) }
+    }
+
+    #[inline(always)]
+    fn answer(_: &PacketRays, open: u64, j: usize) -> bool {
+        open & (1 << j) == 0
     }
 }
 
@@ -320,22 +480,11 @@ pub(crate) unsafe fn closest_hits<K: NodeKernel>(
     out: &mut [Option<Hit>],
 ) {
     assert_eq!(rays.len(), out.len(), "one answer per ray");
-    let mut packet = PacketRays::new();
+    let mut chunk = Chunk::new();
     for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-        // SAFETY (all three): the caller guarantees `K`'s instruction set.
-        let groups = Groups::of(rays, |i| out[i] = unsafe { closest_hit::<K>(bvh, &rays[i]) });
-        for members in groups.each() {
-            if let [single] = members {
-                let i = *single as usize;
-                out[i] = unsafe { closest_hit::<K>(bvh, &rays[i]) };
-            } else {
-                packet.fill(rays, members);
-                unsafe { closest_packet::<K>(bvh, &mut packet) };
-                for (i, &m) in members.iter().enumerate() {
-                    out[m as usize] = packet.best(i);
-                }
-            }
-        }
+        chunk.prepare(rays);
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        unsafe { chunk.trace::<K, ClosestHits>(bvh, rays, out) };
     }
 }
 
@@ -348,7 +497,7 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let all = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
-    let mut limit = rays.limit(all);
+    let mut limit = rays.limit();
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };
 
@@ -360,11 +509,11 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
         let (mut mask, near) =
             unsafe { K::enter_frustum(&bvh.nodes[node as usize], &frustum, limit) };
         let children = &bvh.nodes[node as usize].children;
-        if mask.count_ones() == 1 {
-            if let Child::Node(index) = decode(children[mask.trailing_zeros() as usize]) {
-                node = index;
-                continue;
-            }
+        if mask.count_ones() == 1
+            && let Child::Node(index) = decode(children[mask.trailing_zeros() as usize])
+        {
+            node = index;
+            continue;
         }
         // Nearest entry on top, as in single-ray traversal.
         let first = top;
@@ -395,7 +544,7 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
                     unsafe {
                         K::packet_leaf(rays, &mut open, false, bvh, &bounds, first_block, blocks)
                     };
-                    limit = rays.limit(all);
+                    limit = rays.limit();
                 }
                 Child::Empty => {}
             }
@@ -410,22 +559,11 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
 #[inline(always)]
 pub(crate) unsafe fn occluded_each<K: NodeKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
     assert_eq!(rays.len(), out.len(), "one answer per ray");
-    let mut packet = PacketRays::new();
+    let mut chunk = Chunk::new();
     for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-        // SAFETY (all three): the caller guarantees `K`'s instruction set.
-        let groups = Groups::of(rays, |i| out[i] = unsafe { occluded::<K>(bvh, &rays[i]) });
-        for members in groups.each() {
-            if let [single] = members {
-                let i = *single as usize;
-                out[i] = unsafe { occluded::<K>(bvh, &rays[i]) };
-            } else {
-                packet.fill(rays, members);
-                let open = unsafe { occluded_packet::<K>(bvh, &mut packet) };
-                for (i, &m) in members.iter().enumerate() {
-                    out[m as usize] = open & (1 << i) == 0;
-                }
-            }
-        }
+        chunk.prepare(rays);
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        unsafe { chunk.trace::<K, OccludedEach>(bvh, rays, out) };
     }
 }
 
@@ -438,7 +576,7 @@ unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -
     let mut open = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
-    let mut limit = rays.limit(open);
+    let mut limit = rays.limit();
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };
 
@@ -477,7 +615,8 @@ unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -
                         return 0;
                     }
                     if open != before {
-                        limit = rays.limit(open);
+                        rays.close(before & !open);
+                        limit = rays.limit();
                     }
                 }
                 Child::Empty => {}

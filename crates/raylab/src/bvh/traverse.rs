@@ -203,11 +203,11 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
             unsafe { K::enter(&bvh.nodes[node as usize], &box_ray, closest.box_limit) };
         let children = &bvh.nodes[node as usize].children;
         // One interior child entered (common deep in the tree): descend without the stack.
-        if mask.count_ones() == 1 {
-            if let Child::Node(index) = decode(children[mask.trailing_zeros() as usize]) {
-                node = index;
-                continue;
-            }
+        if mask.count_ones() == 1
+            && let Child::Node(index) = decode(children[mask.trailing_zeros() as usize])
+        {
+            node = index;
+            continue;
         }
         // Push the entered children farthest first, so that the nearest is on top.
         let first = top;
