@@ -99,6 +99,13 @@ impl Camera {
             half_width: self.width as f32 / 2.0,
             half_height: self.height as f32 / 2.0,
             focal_length_px: self.focal_length_px,
+            // Film coordinates are scaled by the largest of the image's half-sizes and the focal
+            // length before normalizing, so that huge focal lengths do not overflow |d|².
+            scale: 1.0
+                / (self.width as f32 / 2.0)
+                    .max(self.height as f32 / 2.0)
+                    .max(self.focal_length_px.abs())
+                    .max(f32::MIN_POSITIVE),
         }
     }
 
@@ -142,6 +149,7 @@ pub struct RayGenerator {
     half_width: f32,
     half_height: f32,
     focal_length_px: f32,
+    scale: f32,
 }
 
 impl RayGenerator {
@@ -150,9 +158,7 @@ impl RayGenerator {
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         // d = R(yaw)·(x − W/2, y − H/2, f), normalized.
         let local = Vec3::new(x - self.half_width, y - self.half_height, self.focal_length_px);
-        // Scale before normalizing, so that huge focal lengths do not overflow |d|².
-        let local = local / local.abs().max_element();
-        Ray::new(self.position, (self.rotation * local).normalize())
+        Ray::new(self.position, (self.rotation * (local * self.scale)).normalize())
     }
 
     /// The ray through the centre of pixel `(x, y)`.

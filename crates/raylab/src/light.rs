@@ -29,7 +29,7 @@ impl PointLight {
             return Vec3::ZERO;
         }
         let cos = (to_light.dot(normal) / r2.sqrt()).max(0.0);
-        self.power * cos / (4.0 * PI * r2)
+        self.power * (cos / (4.0 * PI * r2))
     }
 }
 

@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::film::{Film, FilmError};
 use crate::integrator::Integrator;
+use crate::ray::Ray;
 
 /// Rows per unit of parallel work: small enough to balance two cores; a band is traced in
 /// tiles of `TILE`×`BAND_ROWS` pixels, whose rays are coherent (the accelerator traces them as
@@ -34,19 +35,20 @@ pub fn render(
     film.pixels_mut().par_chunks_mut(width * BAND_ROWS).enumerate().for_each(|(band, pixels)| {
         let first_row = band * BAND_ROWS;
         let rows = pixels.len() / width;
-        let mut tile_rays = Vec::with_capacity(TILE * BAND_ROWS);
-        let mut colours = Vec::with_capacity(TILE * BAND_ROWS);
+        // A tile's rays and colours, on the stack.
+        let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); TILE * BAND_ROWS];
+        let mut colours = [Vec3::ZERO; TILE * BAND_ROWS];
         for tile_x in (0..width).step_by(TILE) {
             let columns = tile_x..(tile_x + TILE).min(width);
-            tile_rays.clear();
+            let n = columns.len() * rows;
+            let mut ray = tile_rays.iter_mut();
             for y in 0..rows {
                 for x in columns.clone() {
-                    tile_rays.push(rays.pixel_ray(x as u32, (first_row + y) as u32));
+                    *ray.next().expect("a tile's rays fit") =
+                        rays.pixel_ray(x as u32, (first_row + y) as u32);
                 }
             }
-            colours.clear();
-            colours.resize(tile_rays.len(), Vec3::ZERO);
-            integrator.radiance_each(&tile_rays, &mut colours);
+            integrator.radiance_each(&tile_rays[..n], &mut colours[..n]);
             let mut colour = colours.iter();
             for y in 0..rows {
                 for x in columns.clone() {

@@ -63,7 +63,7 @@ impl BuildSettings {
         BuildSettings { bins: 8, max_leaf_size: 8, traversal_cost: 1.0, block_cost: 1.0 };
     /// The default: 16 bins, leaves of up to 8 triangles.
     pub const MEDIUM: BuildSettings =
-        BuildSettings { bins: 16, max_leaf_size: 8, traversal_cost: 1.0, block_cost: 1.0 };
+        BuildSettings { bins: 16, max_leaf_size: 4, traversal_cost: 1.0, block_cost: 1.0 };
     /// Best trees: 32 bins.
     pub const HIGH: BuildSettings =
         BuildSettings { bins: 32, max_leaf_size: 8, traversal_cost: 1.0, block_cost: 1.0 };
