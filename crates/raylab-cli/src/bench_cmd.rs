@@ -55,8 +55,9 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", default_value = "7")]
     reps: usize,
 
-    /// BVH build preset: fast, medium or high.
-    #[arg(long, value_name = "PRESET", default_value = "medium")]
+    /// BVH build preset: fast, medium or high, or auto: what `raylab render` builds (medium,
+    /// with leaves of up to 4 triangles below 4096 triangles).
+    #[arg(long, value_name = "PRESET", default_value = "auto")]
     build: String,
 
     /// Node-kernel instruction set: scalar, sse2, avx2 or avx512 [default: the best this CPU has].
@@ -74,13 +75,19 @@ pub struct BenchArgs {
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
-    let settings = BuildSettings::PRESETS
-        .iter()
-        .find(|(name, _)| *name == args.build)
-        .map(|(_, s)| *s)
-        .with_context(|| {
-            format!("unknown build preset '{}': use fast, medium or high", args.build)
-        })?;
+    // `None` for auto, chosen by the mesh's size.
+    let preset = match args.build.as_str() {
+        "auto" => None,
+        name => Some(
+            BuildSettings::PRESETS
+                .iter()
+                .find(|(preset, _)| *preset == name)
+                .map(|(_, s)| *s)
+                .with_context(|| {
+                    format!("unknown build preset '{name}': use auto, fast, medium or high")
+                })?,
+        ),
+    };
     let threads = args.threads.unwrap_or_else(system::cores);
     if threads == 0 || threads > MAX_THREADS {
         bail!("--threads must be between 1 and {MAX_THREADS}, not {threads}");
@@ -94,6 +101,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let mesh = loaded.mesh;
     let triangles: Vec<_> = mesh.triangle_vertices().collect();
+    let settings = match preset {
+        Some(settings) => settings,
+        None => BuildSettings::for_triangles(triangles.len()),
+    };
 
     if let Some(dir) = &args.generate {
         return generate(args, &mesh, &triangles, dir, &settings);
@@ -133,11 +144,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let stats = bvh.stats();
 
     println!(
-        "{}: {} triangles ({} in the BVH), BVH {} preset, {} kernels",
+        "{}: {} triangles ({} in the BVH), BVH {} preset ({} bins, leaves of up to {}), {} kernels",
         args.mesh.display(),
         stats.triangles,
         stats.indexed_triangles,
         args.build,
+        settings.bins,
+        settings.max_leaf_size,
         bvh.isa().name()
     );
     println!(

@@ -7,10 +7,11 @@ use proptest::prelude::*;
 use raylab::bvh::{BuildSettings, Bvh, Isa};
 use raylab::{Accelerator, BruteForce, Ray, Triangle};
 
-/// Every BVH variant over `triangles`.
+/// Every BVH variant over `triangles`: each preset, and small-scene leaves (one block).
 fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
     let mut all = Vec::new();
-    for (preset, settings) in BuildSettings::PRESETS {
+    let small = ("small-scene", BuildSettings::for_triangles(0));
+    for (preset, settings) in BuildSettings::PRESETS.into_iter().chain([small]) {
         for isa in Isa::ALL {
             if let Some(bvh) = Bvh::build(triangles, &settings).with_isa(isa) {
                 all.push((format!("{preset} {}", isa.name()), bvh));
