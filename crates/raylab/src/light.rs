@@ -28,8 +28,9 @@ impl PointLight {
         if r2 == 0.0 {
             return Vec3::ZERO;
         }
-        let cos = (to_light.dot(normal) / r2.sqrt()).max(0.0);
-        self.power * (cos / (4.0 * PI * r2))
+        // max(r̂·n̂, 0)/(4πr²) = max(r·n, 0)/(4πr³): one square root and one division.
+        let r_dot_n = to_light.dot(normal).max(0.0);
+        self.power * (r_dot_n / (4.0 * PI * r2 * r2.sqrt()))
     }
 }
 
