@@ -203,7 +203,8 @@ mod x86 {
     /// Eight children with two 4-wide SSE halves: every x86-64 CPU has SSE2.
     pub(crate) struct Sse;
 
-    /// A ray broadcast into vector registers.
+    /// A ray broadcast into vector registers, its axes in the order dominant axis first (so that
+    /// the node kernels take the box's reach from axis 0 without a branch), then the other two.
     #[derive(Clone, Copy)]
     pub(crate) struct Broadcast<V> {
         origin: [V; 3],
@@ -211,7 +212,37 @@ mod x86 {
         t_min: V,
         near_rows: [usize; 3],
         far_rows: [usize; 3],
-        dominant_axis: usize,
+    }
+
+    impl<V: Lanes> Broadcast<V> {
+        /// Broadcasts `ray`.
+        ///
+        /// # Safety
+        /// The CPU must support `V`'s instruction set.
+        #[inline(always)]
+        unsafe fn new(ray: &RayBoxTest) -> Self {
+            let (near_rows, far_rows) = plane_rows(ray.negative);
+            let kz = ray.dominant_axis;
+            let axes = [kz, (kz + 1) % 3, (kz + 2) % 3];
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                Broadcast {
+                    origin: [
+                        V::splat(ray.origin[axes[0]]),
+                        V::splat(ray.origin[axes[1]]),
+                        V::splat(ray.origin[axes[2]]),
+                    ],
+                    inv: [
+                        V::splat(ray.inv_direction[axes[0]]),
+                        V::splat(ray.inv_direction[axes[1]]),
+                        V::splat(ray.inv_direction[axes[2]]),
+                    ],
+                    t_min: V::splat(ray.t_min),
+                    near_rows: [near_rows[axes[0]], near_rows[axes[1]], near_rows[axes[2]]],
+                    far_rows: [far_rows[axes[0]], far_rows[axes[1]], far_rows[axes[2]]],
+                }
+            }
+        }
     }
 
     /// The few vector operations the frustum kernel needs, for SSE's four lanes and AVX's eight,
@@ -879,18 +910,8 @@ mod x86 {
 
         #[inline(always)]
         unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
-            let (near_rows, far_rows) = plane_rows(ray.negative);
             // SAFETY: SSE2 is part of x86-64.
-            unsafe {
-                Broadcast {
-                    origin: [0, 1, 2].map(|a| _mm_set1_ps(ray.origin[a])),
-                    inv: [0, 1, 2].map(|a| _mm_set1_ps(ray.inv_direction[a])),
-                    t_min: _mm_set1_ps(ray.t_min),
-                    near_rows,
-                    far_rows,
-                    dominant_axis: ray.dominant_axis,
-                }
-            }
+            unsafe { Broadcast::new(ray) }
         }
 
         #[inline(always)]
@@ -904,7 +925,6 @@ mod x86 {
                 let mut mask = 0u32;
                 let pad_scale = _mm_set1_ps(SLAB_PAD);
                 let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
-                let kz = ray.dominant_axis;
                 for half in 0..2 {
                     let mut near = ray.t_min;
                     let mut far = limit;
@@ -916,7 +936,8 @@ mod x86 {
                         let tf = _mm_mul_ps(_mm_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
                         near = _mm_max_ps(tn, near);
                         far = _mm_min_ps(_mm_mul_ps(tf, scale), far);
-                        if axis == kz {
+                        // Axis 0 is the dominant axis (see `Broadcast`).
+                        if axis == 0 {
                             reach = _mm_max_ps(abs(tn), abs(tf));
                         }
                     }
@@ -1174,18 +1195,8 @@ mod x86 {
 
         #[inline(always)]
         unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
-            let (near_rows, far_rows) = plane_rows(ray.negative);
             // SAFETY: the caller checked AVX2 support (this function's contract).
-            unsafe {
-                Broadcast {
-                    origin: [0, 1, 2].map(|a| _mm256_set1_ps(ray.origin[a])),
-                    inv: [0, 1, 2].map(|a| _mm256_set1_ps(ray.inv_direction[a])),
-                    t_min: _mm256_set1_ps(ray.t_min),
-                    near_rows,
-                    far_rows,
-                    dominant_axis: ray.dominant_axis,
-                }
-            }
+            unsafe { Broadcast::new(ray) }
         }
 
         #[inline(always)]
@@ -1205,7 +1216,8 @@ mod x86 {
                     let tf = _mm256_mul_ps(_mm256_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
                     near = _mm256_max_ps(tn, near);
                     far = _mm256_min_ps(_mm256_mul_ps(tf, scale), far);
-                    if axis == ray.dominant_axis {
+                    // Axis 0 is the dominant axis (see `Broadcast`).
+                    if axis == 0 {
                         reach = _mm256_max_ps(abs(tn), abs(tf));
                     }
                 }

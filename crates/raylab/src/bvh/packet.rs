@@ -502,7 +502,6 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let frustum = unsafe { K::prepare_frustum(&frustum) };
 
     let mut stack = Stack::<Entry>::new();
-    let mut top = 0;
     let mut node = 0u32;
     loop {
         // SAFETY: the caller guarantees `K`'s instruction set.
@@ -516,19 +515,16 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
             continue;
         }
         // Nearest entry on top, as in single-ray traversal.
-        let first = top;
+        let first = stack.len();
         while mask != 0 {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            stack
-                .push_sorted(&mut top, first, (children[k], near[k], 8 * node + k as u32), |e| e.1);
+            stack.push_sorted(first, (children[k], near[k], 8 * node + k as u32), |e| e.1);
         }
         loop {
-            if top == 0 {
+            let Some((child, near, place)) = stack.pop() else {
                 return;
-            }
-            top -= 1;
-            let (child, near, place) = stack.get(top);
+            };
             if near > limit {
                 continue;
             }
@@ -581,22 +577,16 @@ unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -
     let frustum = unsafe { K::prepare_frustum(&frustum) };
 
     let mut stack = Stack::<u32>::new();
-    let mut top = 0;
-    stack.set(top, 0);
-    top += 1;
-    while top > 0 {
-        top -= 1;
-        let node = &bvh.nodes[stack.get(top) as usize];
+    stack.push(0);
+    while let Some(index) = stack.pop() {
+        let node = &bvh.nodes[index as usize];
         // SAFETY: the caller guarantees `K`'s instruction set.
         let (mut mask, _) = unsafe { K::enter_frustum(node, &frustum, limit) };
         while mask != 0 {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
             match decode(node.children[k]) {
-                Child::Node(index) => {
-                    stack.set(top, index);
-                    top += 1;
-                }
+                Child::Node(index) => stack.push(index),
                 Child::Leaf { first_block, blocks } => {
                     let before = open;
                     // SAFETY: the caller guarantees `K`'s instruction set.

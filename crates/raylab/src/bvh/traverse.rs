@@ -18,10 +18,13 @@ const STACK_SIZE: usize = 640;
 
 /// A traversal stack on the call stack, not initialized: zeroing 5 KB per ray would cost about as
 /// much as tracing it.
+///
+/// Invariant: the entries below `len` are initialized. `push` writes entry `len` before counting
+/// it, `pop` and `push_sorted` only move or read entries below `len`, so reads never see an
+/// uninitialized entry and no other bookkeeping is needed.
 pub(super) struct Stack<T: Copy> {
     entries: [std::mem::MaybeUninit<T>; STACK_SIZE],
-    /// Entries below this index have been written.
-    written: usize,
+    len: usize,
 }
 
 impl<T: Copy> Stack<T> {
@@ -32,43 +35,50 @@ impl<T: Copy> Stack<T> {
         let entries = unsafe {
             std::mem::MaybeUninit::<[std::mem::MaybeUninit<T>; STACK_SIZE]>::uninit().assume_init()
         };
-        Stack { entries, written: 0 }
+        Stack { entries, len: 0 }
     }
 
-    /// Writes entry `i`; entries are written in order, so `i <= written`. Panics past the end.
+    /// The number of entries.
     #[inline(always)]
-    pub(super) fn set(&mut self, i: usize, value: T) {
-        assert!(i <= self.written, "stack entries are written without gaps");
-        self.entries[i] = std::mem::MaybeUninit::new(value);
-        self.written = self.written.max(i + 1);
+    pub(super) fn len(&self) -> usize {
+        self.len
     }
 
-    /// Pushes `entry` at `*top`, moving it down past the entries pushed since `first` that are
-    /// nearer (by `distance`), so that the run stays sorted with the nearest on top.
+    /// Pushes `value` on top. Panics when the stack is full (the builder bounds the depth so that
+    /// it never is).
     #[inline(always)]
-    pub(super) fn push_sorted(
-        &mut self,
-        top: &mut usize,
-        first: usize,
-        entry: T,
-        distance: impl Fn(T) -> f32,
-    ) {
-        let mut i = *top;
-        while i > first && distance(self.get(i - 1)) < distance(entry) {
-            self.set(i, self.get(i - 1));
+    pub(super) fn push(&mut self, value: T) {
+        self.entries[self.len] = std::mem::MaybeUninit::new(value);
+        self.len += 1;
+    }
+
+    /// Removes and returns the top entry.
+    #[inline(always)]
+    pub(super) fn pop(&mut self) -> Option<T> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: entries below the old `len` are initialized (the invariant).
+        Some(unsafe { self.entries[self.len].assume_init() })
+    }
+
+    /// Pushes `entry`, moving it down past the entries above index `first` that are nearer (by
+    /// `distance`), so that the run from `first` stays sorted with the nearest on top.
+    #[inline(always)]
+    pub(super) fn push_sorted(&mut self, first: usize, entry: T, distance: impl Fn(T) -> f32) {
+        let top = self.len;
+        // Bounds-checks the write at `top` before anything moves.
+        self.entries[top] = std::mem::MaybeUninit::new(entry);
+        let mut i = top;
+        // SAFETY (both reads): `first <= i - 1 < top`, below `len`, so initialized.
+        while i > first && distance(unsafe { self.entries[i - 1].assume_init() }) < distance(entry)
+        {
+            self.entries[i] = self.entries[i - 1];
             i -= 1;
         }
-        self.set(i, entry);
-        *top += 1;
-    }
-
-    /// Reads an entry that was written.
-    #[inline(always)]
-    pub(super) fn get(&self, i: usize) -> T {
-        assert!(i < self.written, "read of an unwritten stack entry");
-        // SAFETY: every entry below `written` was initialized by `set` (entries are only ever
-        // written at indices up to `written`, so there are no gaps).
-        unsafe { self.entries[i].assume_init() }
+        self.entries[i] = std::mem::MaybeUninit::new(entry);
+        self.len = top + 1;
     }
 }
 
@@ -195,7 +205,6 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
     let mut closest = Closest::new(ray);
 
     let mut stack = Stack::<(u32, f32)>::new();
-    let mut top = 0;
     let mut node = 0u32;
     loop {
         // SAFETY: the caller guarantees `K`'s instruction set.
@@ -210,19 +219,17 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
             continue;
         }
         // Push the entered children farthest first, so that the nearest is on top.
-        let first = top;
+        let first = stack.len();
         while mask != 0 {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            stack.push_sorted(&mut top, first, (children[k], near[k]), |e| e.1);
+            stack.push_sorted(first, (children[k], near[k]), |e| e.1);
         }
         // Pop until an interior node is due; leaves are intersected on the way.
         loop {
-            if top == 0 {
+            let Some((child, near)) = stack.pop() else {
                 return closest.best;
-            }
-            top -= 1;
-            let (child, near) = stack.get(top);
+            };
             if near > closest.box_limit {
                 continue;
             }
@@ -255,22 +262,16 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
     let box_ray = unsafe { K::prepare(&RayBoxTest::new(ray)) };
     let box_limit = ray.t_max * FAR_SCALE;
     let mut stack = Stack::<u32>::new();
-    let mut top = 0;
-    stack.set(top, 0);
-    top += 1;
-    while top > 0 {
-        top -= 1;
-        let node = &bvh.nodes[stack.get(top) as usize];
+    stack.push(0);
+    while let Some(index) = stack.pop() {
+        let node = &bvh.nodes[index as usize];
         // SAFETY: the caller guarantees `K`'s instruction set.
         let (mut mask, _) = unsafe { K::enter(node, &box_ray, box_limit) };
         while mask != 0 {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
             match decode(node.children[k]) {
-                Child::Node(index) => {
-                    stack.set(top, index);
-                    top += 1;
-                }
+                Child::Node(index) => stack.push(index),
                 Child::Leaf { first_block, blocks } => {
                     // SAFETY: the caller guarantees `K`'s instruction set.
                     if unsafe {
