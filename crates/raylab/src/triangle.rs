@@ -107,7 +107,11 @@ impl<const N: usize> TriangleBlock<N> {
     /// The vertices of the triangle in `lane`.
     #[inline]
     pub fn triangle(&self, lane: usize) -> [Vec3; 3] {
-        self.vertices.map(|v| Vec3::new(v[0][lane], v[1][lane], v[2][lane]))
+        let vertex = |j: usize| {
+            let v = &self.vertices[j];
+            Vec3::new(v[0][lane], v[1][lane], v[2][lane])
+        };
+        [vertex(0), vertex(1), vertex(2)]
     }
 }
 
@@ -162,6 +166,20 @@ impl WatertightRay {
     /// Prepares `ray` for triangle tests.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
+        let kz = dominant_axis(ray.direction);
+        Self::with_shear_z(ray, 1.0 / ray.direction[kz])
+    }
+
+    /// [`new`](Self::new) for a ray whose `1/d` is already computed (`inv_direction` must be
+    /// exactly `1.0 / ray.direction`, per axis): no division.
+    #[inline]
+    pub(crate) fn with_inverse(ray: &Ray, inv_direction: Vec3) -> Self {
+        Self::with_shear_z(ray, inv_direction[dominant_axis(ray.direction)])
+    }
+
+    /// The test's setup given `shear_z = 1/d[kz]`.
+    #[inline(always)]
+    fn with_shear_z(ray: &Ray, shear_z: f32) -> Self {
         let d = ray.direction;
         let kz = dominant_axis(d);
         let mut kx = (kz + 1) % 3;
@@ -170,7 +188,6 @@ impl WatertightRay {
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let shear_z = 1.0 / d[kz];
         WatertightRay {
             origin: ray.origin,
             // A NaN range start admits no hit.
@@ -294,7 +311,8 @@ impl WatertightRay {
     ) -> f32 {
         let kz = self.kz;
         let max3 = |p: [f32; 3]| p[0].abs().max(p[1].abs()).max(p[2].abs());
-        let max_zt = max3(v.map(|p| self.shear_z * p[kz]));
+        let max_zt =
+            max3([self.shear_z * v[0][kz], self.shear_z * v[1][kz], self.shear_z * v[2][kz]]);
         let delta_z = gamma(3) * max_zt;
         let max_xt = max3(x);
         let max_yt = max3(y);
@@ -302,7 +320,7 @@ impl WatertightRay {
         // by the sheared z, which is too loose for short directions (it rejects real hits, e.g.
         // of a 10⁻⁶-sized scene's rays) and too tight for long ones; bounding it directly keeps
         // the bound conservative and tight for directions of any length.
-        let max_unsheared_z = max3(v.map(|p| p[kz]));
+        let max_unsheared_z = max3([v[0][kz], v[1][kz], v[2][kz]]);
         let delta_x = gamma(5) * (max_xt + self.shear_x.abs() * max_unsheared_z);
         let delta_y = gamma(5) * (max_yt + self.shear_y.abs() * max_unsheared_z);
         let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);

@@ -1,6 +1,6 @@
 //! Axis-aligned bounding boxes and the robust ray/box slab test.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use crate::float::gamma;
 use crate::ray::Ray;
@@ -112,7 +112,8 @@ impl RayBoxTest {
         let d = ray.direction;
         RayBoxTest {
             origin: ray.origin,
-            inv_direction: d.recip(),
+            // One division instruction for the three axes (`1.0 / d` exactly, per axis).
+            inv_direction: Vec3::from(Vec3A::from(d).recip()),
             negative: [d.x.is_sign_negative(), d.y.is_sign_negative(), d.z.is_sign_negative()],
             t_min: ray.t_min.max(0.0),
             dominant_axis: crate::triangle::dominant_axis(d),

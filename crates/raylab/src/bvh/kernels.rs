@@ -135,9 +135,11 @@ pub(crate) fn block_hits_scalar(
 /// Plane rows of the near and far planes per axis: the box's min for a positive direction.
 #[inline(always)]
 fn plane_rows(negative: [bool; 3]) -> ([usize; 3], [usize; 3]) {
-    let near = [0, 1, 2].map(|axis| if negative[axis] { 3 + axis } else { axis });
-    let far = [0, 1, 2].map(|axis| if negative[axis] { axis } else { 3 + axis });
-    (near, far)
+    // Written out rather than `[0, 1, 2].map(..)`, whose closure is not inlined into the
+    // instruction sets' entry points (it lacks their target features).
+    let near = |axis: usize| if negative[axis] { 3 + axis } else { axis };
+    let far = |axis: usize| if negative[axis] { axis } else { 3 + axis };
+    ([near(0), near(1), near(2)], [far(0), far(1), far(2)])
 }
 
 /// The scalar twin: [`RayBoxTest::enter`] per child.
@@ -628,9 +630,18 @@ mod x86 {
         blocks: u32,
     ) {
         let negative = rays.negative;
-        let near_planes =
-            [0, 1, 2].map(|a| if negative[a] { bounds.max[a] } else { bounds.min[a] });
-        let far_planes = [0, 1, 2].map(|a| if negative[a] { bounds.min[a] } else { bounds.max[a] });
+        // Per axis, not `[0, 1, 2].map(..)` (see `plane_rows`).
+        let (lo, hi) = (bounds.min, bounds.max);
+        let near_planes = [
+            if negative[0] { hi.x } else { lo.x },
+            if negative[1] { hi.y } else { lo.y },
+            if negative[2] { hi.z } else { lo.z },
+        ];
+        let far_planes = [
+            if negative[0] { lo.x } else { hi.x },
+            if negative[1] { lo.y } else { hi.y },
+            if negative[2] { lo.z } else { hi.z },
+        ];
         let [kx, ky, kz] = rays.k;
         // SAFETY: the caller's guarantee; every load reads `L` lanes from `base`, and
         // `base + L <= PACKET` because `PACKET` is a multiple of `L`.

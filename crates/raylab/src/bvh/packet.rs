@@ -89,7 +89,7 @@ impl PacketRays {
         if !can_hit(ray) || !Frustum::can_join(&box_ray) {
             return None;
         }
-        let triangle_ray = WatertightRay::new(ray);
+        let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
         for axis in 0..3 {
             self.origin[axis][i] = box_ray.origin[axis];
             self.inv_direction[axis][i] = box_ray.inv_direction[axis];
@@ -203,11 +203,14 @@ impl PacketRays {
         let n = self.len;
         let mut pad_axes = [false; 3];
         pad_axes[self.k[2]] = true;
+        // Written out axis by axis: `[0, 1, 2].map(..)` is not inlined into the instruction
+        // set's entry point (its closure is compiled without the entry's target features).
+        let (o, inv) = (&self.origin, &self.inv_direction);
         Frustum {
-            origin_lo: Vec3::from_array([0, 1, 2].map(|a| lowest(&self.origin[a][..n]))),
-            origin_hi: Vec3::from_array([0, 1, 2].map(|a| highest(&self.origin[a][..n]))),
-            inv_lo: Vec3::from_array([0, 1, 2].map(|a| lowest(&self.inv_direction[a][..n]))),
-            inv_hi: Vec3::from_array([0, 1, 2].map(|a| highest(&self.inv_direction[a][..n]))),
+            origin_lo: Vec3::new(lowest(&o[0][..n]), lowest(&o[1][..n]), lowest(&o[2][..n])),
+            origin_hi: Vec3::new(highest(&o[0][..n]), highest(&o[1][..n]), highest(&o[2][..n])),
+            inv_lo: Vec3::new(lowest(&inv[0][..n]), lowest(&inv[1][..n]), lowest(&inv[2][..n])),
+            inv_hi: Vec3::new(highest(&inv[0][..n]), highest(&inv[1][..n]), highest(&inv[2][..n])),
             negative: self.negative,
             t_min: lowest(&self.box_t_min[..n]),
             pad_axes,

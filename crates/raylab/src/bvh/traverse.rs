@@ -199,9 +199,10 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
     if !can_hit(ray) {
         return None;
     }
-    let triangle_ray = WatertightRay::new(ray);
+    let box_ray = RayBoxTest::new(ray);
+    let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
     // SAFETY: the caller guarantees `K`'s instruction set.
-    let box_ray = unsafe { K::prepare(&RayBoxTest::new(ray)) };
+    let box_ray = unsafe { K::prepare(&box_ray) };
     let mut closest = Closest::new(ray);
 
     let mut stack = Stack::<(u32, f32)>::new();
@@ -257,9 +258,10 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
     if !can_hit(ray) {
         return false;
     }
-    let triangle_ray = WatertightRay::new(ray);
+    let box_ray = RayBoxTest::new(ray);
+    let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
     // SAFETY: the caller guarantees `K`'s instruction set.
-    let box_ray = unsafe { K::prepare(&RayBoxTest::new(ray)) };
+    let box_ray = unsafe { K::prepare(&box_ray) };
     let box_limit = ray.t_max * FAR_SCALE;
     let mut stack = Stack::<u32>::new();
     stack.push(0);
