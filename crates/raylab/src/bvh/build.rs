@@ -43,6 +43,10 @@ pub(crate) struct BinaryBvh {
     pub order: Vec<u32>,
 }
 
+/// The most bins a build uses ([`BuildSettings::bins`] is clamped to it).
+pub(crate) const MAX_BINS: usize = 256;
+/// Nodes of up to this many bins bin on the stack.
+const STACK_BINS: usize = 32;
 /// Nodes with more primitives than this bin and build their children in parallel.
 const PARALLEL_MIN: usize = 16 * 1024;
 /// Beyond this depth nodes are split in the middle, which bounds the depth (and so the traversal
@@ -52,17 +56,38 @@ const MAX_SAH_DEPTH: usize = 48;
 /// Builds over `prims` (the bounds of each primitive; primitives whose index is not in `indices`
 /// are left out).
 pub(crate) fn build(prims: &[Bounds], indices: Vec<u32>, settings: &BuildSettings) -> BinaryBvh {
-    let boxes: Vec<Aabb> =
-        prims.iter().map(|b| Aabb { min: b.min.into(), max: b.max.into() }).collect();
-    let centroids: Vec<Vec3A> = boxes.iter().map(|b| 0.5 * (b.min + b.max)).collect();
-    let builder = Builder { prims: &boxes, centroids: &centroids, settings };
-    let mut order = indices;
-    let mut nodes = Vec::with_capacity(2 * order.len() / settings.max_leaf_size.max(1) + 1);
-    if !order.is_empty() {
-        let (bounds, centroid_bounds) = builder.bounds_of(&order);
-        builder.build_node(&mut order, 0, bounds, centroid_bounds, 0, &mut nodes);
+    // The build moves the primitives' boxes themselves, not indices into them: binning and
+    // partitioning then read memory in order (on the 871k-triangle dragon, indirection through
+    // shuffled indices made most reads cache misses).
+    let mut refs: Vec<PrimRef> = indices
+        .iter()
+        .map(|&id| {
+            let b = prims[id as usize];
+            PrimRef { bounds: Aabb { min: b.min.into(), max: b.max.into() }, id }
+        })
+        .collect();
+    drop(indices);
+    let builder = Builder { settings };
+    let mut nodes = Vec::with_capacity(2 * refs.len() / settings.max_leaf_size.max(1) + 1);
+    if !refs.is_empty() {
+        let (bounds, centroid_bounds) = builder.bounds_of(&refs);
+        builder.build_node(&mut refs, 0, bounds, centroid_bounds, 0, &mut nodes);
     }
-    BinaryBvh { nodes, order }
+    BinaryBvh { nodes, order: refs.iter().map(|r| r.id).collect() }
+}
+
+/// A primitive during the build: its box and its index.
+#[derive(Clone, Copy, Debug)]
+struct PrimRef {
+    bounds: Aabb,
+    id: u32,
+}
+
+impl PrimRef {
+    #[inline]
+    fn centroid(&self) -> Vec3A {
+        0.5 * (self.bounds.min + self.bounds.max)
+    }
 }
 
 /// A box in SIMD-friendly form, for the build only.
@@ -96,6 +121,14 @@ impl Aabb {
         self.bounds().half_area()
     }
 
+    /// [`half_area`](Self::half_area) of a box known not to be empty (it holds a primitive):
+    /// no emptiness test.
+    #[inline]
+    fn half_area_nonempty(&self) -> f32 {
+        let d = self.max - self.min;
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
     #[inline]
     fn bounds(&self) -> Bounds {
         Bounds { min: self.min.into(), max: self.max.into() }
@@ -103,8 +136,6 @@ impl Aabb {
 }
 
 struct Builder<'a> {
-    prims: &'a [Aabb],
-    centroids: &'a [Vec3A],
     settings: &'a BuildSettings,
 }
 
@@ -175,33 +206,30 @@ impl Binning {
 }
 
 impl Builder<'_> {
-    fn bounds_of(&self, indices: &[u32]) -> (Aabb, Aabb) {
-        let fold = |(b, c): (Aabb, Aabb), &i: &u32| {
-            (b.union(self.prims[i as usize]), c.grow(self.centroids[i as usize]))
-        };
+    fn bounds_of(&self, refs: &[PrimRef]) -> (Aabb, Aabb) {
+        let fold = |(b, c): (Aabb, Aabb), r: &PrimRef| (b.union(r.bounds), c.grow(r.centroid()));
         let empty = (Aabb::EMPTY, Aabb::EMPTY);
-        if indices.len() >= PARALLEL_MIN {
+        if refs.len() >= PARALLEL_MIN {
             use rayon::prelude::*;
-            indices
-                .par_chunks(4096)
+            refs.par_chunks(4096)
                 .map(|chunk| chunk.iter().fold(empty, fold))
                 .reduce(|| empty, |(a, b), (c, d)| (a.union(c), b.union(d)))
         } else {
-            indices.iter().fold(empty, fold)
+            refs.iter().fold(empty, fold)
         }
     }
 
-    /// Builds the subtree over `indices` (which start at `first` in the final order) into `out`.
+    /// Builds the subtree over `refs` (which start at `first` in the final order) into `out`.
     fn build_node(
         &self,
-        indices: &mut [u32],
+        refs: &mut [PrimRef],
         first: u32,
         bounds: Aabb,
         centroid_bounds: Aabb,
         depth: usize,
         out: &mut Vec<BinaryNode>,
     ) {
-        let n = indices.len();
+        let n = refs.len();
         let leaf = BinaryNode { bounds: bounds.bounds(), first_or_right: first, count: n as u32 };
         if n <= 1 {
             out.push(leaf);
@@ -209,7 +237,7 @@ impl Builder<'_> {
         }
         let max_leaf = self.settings.max_leaf_size;
         let split = if depth < MAX_SAH_DEPTH {
-            self.best_split(indices, &bounds, &centroid_bounds)
+            self.best_split(refs, &bounds, &centroid_bounds)
         } else {
             None
         };
@@ -221,7 +249,7 @@ impl Builder<'_> {
                     return;
                 }
                 let (mid, left_centroids, right_centroids) =
-                    self.partition(indices, &split, &centroid_bounds);
+                    self.partition(refs, &split, &centroid_bounds);
                 (mid, (split.left, left_centroids), (split.right, right_centroids))
             }
             None => {
@@ -232,98 +260,123 @@ impl Builder<'_> {
                     return;
                 }
                 let mid = n / 2;
-                (mid, self.bounds_of(&indices[..mid]), self.bounds_of(&indices[mid..]))
+                (mid, self.bounds_of(&refs[..mid]), self.bounds_of(&refs[mid..]))
             }
         };
 
         let node_index = out.len();
         out.push(BinaryNode { bounds: bounds.bounds(), first_or_right: 0, count: 0 });
-        let (left_indices, right_indices) = indices.split_at_mut(mid);
+        let (left_refs, right_refs) = refs.split_at_mut(mid);
         let right_first = first + mid as u32;
         if n >= PARALLEL_MIN {
             let (mut left_nodes, mut right_nodes) = (Vec::new(), Vec::new());
             rayon::join(
-                || self.build_node(left_indices, first, left.0, left.1, depth + 1, &mut left_nodes),
+                || self.build_node(left_refs, first, left.0, left.1, depth + 1, &mut left_nodes),
                 || {
                     let (b, c) = right;
-                    self.build_node(right_indices, right_first, b, c, depth + 1, &mut right_nodes)
+                    self.build_node(right_refs, right_first, b, c, depth + 1, &mut right_nodes)
                 },
             );
             append_relocated(out, &left_nodes);
             out[node_index].first_or_right = out.len() as u32;
             append_relocated(out, &right_nodes);
         } else {
-            self.build_node(left_indices, first, left.0, left.1, depth + 1, out);
+            self.build_node(left_refs, first, left.0, left.1, depth + 1, out);
             out[node_index].first_or_right = out.len() as u32;
-            self.build_node(right_indices, right_first, right.0, right.1, depth + 1, out);
+            self.build_node(right_refs, right_first, right.0, right.1, depth + 1, out);
         }
     }
 
-    fn best_split(&self, indices: &[u32], bounds: &Aabb, centroid_bounds: &Aabb) -> Option<Split> {
+    fn best_split(&self, refs: &[PrimRef], bounds: &Aabb, centroid_bounds: &Aabb) -> Option<Split> {
         let bins = self.settings.bins;
         let binning = Binning::new(centroid_bounds, bins);
         let extent = centroid_bounds.max - centroid_bounds.min;
-        let fill = |mut acc: Vec<[Bin; 3]>, &i: &u32| {
-            let b = self.prims[i as usize];
-            let k = binning.bins(self.centroids[i as usize]);
+        let add = |acc: &mut [[Bin; 3]], r: &PrimRef| {
+            let b = r.bounds;
+            let k = binning.bins(r.centroid());
             for (axis, bin) in [k.x, k.y, k.z].into_iter().enumerate() {
                 let bin = &mut acc[bin as usize][axis];
                 bin.bounds = bin.bounds.union(b);
                 bin.count += 1;
             }
-            acc
         };
-        let merge = |mut a: Vec<[Bin; 3]>, b: Vec<[Bin; 3]>| {
-            for (x, y) in a.iter_mut().zip(&b) {
-                for axis in 0..3 {
-                    x[axis].bounds = x[axis].bounds.union(y[axis].bounds);
-                    x[axis].count += y[axis].count;
-                }
-            }
-            a
-        };
-        let empty = || vec![[Bin::default(); 3]; bins];
-        let binned = if indices.len() >= PARALLEL_MIN {
+        // Small nodes (nearly all of them) bin into an array on the stack; large ones into
+        // vectors, in parallel.
+        let mut on_stack = [[Bin::default(); 3]; STACK_BINS];
+        let heap: Vec<[Bin; 3]>;
+        let binned: &[[Bin; 3]] = if refs.len() >= PARALLEL_MIN || bins > STACK_BINS {
             use rayon::prelude::*;
-            indices
+            let empty = || vec![[Bin::default(); 3]; bins];
+            let merge = |mut a: Vec<[Bin; 3]>, b: Vec<[Bin; 3]>| {
+                for (x, y) in a.iter_mut().zip(&b) {
+                    for axis in 0..3 {
+                        x[axis].bounds = x[axis].bounds.union(y[axis].bounds);
+                        x[axis].count += y[axis].count;
+                    }
+                }
+                a
+            };
+            heap = refs
                 .par_chunks(8192)
-                .map(|chunk| chunk.iter().fold(empty(), fill))
-                .reduce(empty, merge)
+                .map(|chunk| {
+                    let mut acc = empty();
+                    for r in chunk {
+                        add(&mut acc, r);
+                    }
+                    acc
+                })
+                .reduce(empty, merge);
+            &heap
         } else {
-            indices.iter().fold(empty(), fill)
+            for r in refs {
+                add(&mut on_stack[..bins], r);
+            }
+            &on_stack[..bins]
         };
 
         // A flat node has zero area; its splits are then compared among themselves only.
         let parent_area = bounds.half_area().max(f32::MIN_POSITIVE);
         let mut best: Option<Split> = None;
-        let mut right_sweep = vec![(Aabb::EMPTY, 0u32); bins];
+        // The right side's cost term `area · blocks` for each split position; zero where the
+        // right side is empty (such splits are skipped).
+        let mut right_cost = [0.0f32; MAX_BINS];
+        let mut right_count = [0u32; MAX_BINS];
         for axis in 0..3 {
             if extent[axis] <= 0.0 {
                 continue;
             }
-            // Sweep from the right: right_sweep[k] covers bins k..bins.
-            let mut acc = (Aabb::EMPTY, 0u32);
+            // Sweep from the right: position k covers bins k..bins.
+            let (mut bounds, mut count) = (Aabb::EMPTY, 0u32);
             for k in (1..bins).rev() {
                 let bin = &binned[k][axis];
-                acc = (acc.0.union(bin.bounds), acc.1 + bin.count);
-                right_sweep[k] = acc;
+                bounds = bounds.union(bin.bounds);
+                count += bin.count;
+                right_count[k] = count;
+                right_cost[k] =
+                    if count > 0 { bounds.half_area_nonempty() * blocks(count) } else { 0.0 };
             }
-            let mut left = (Aabb::EMPTY, 0u32);
+            let (mut left, mut left_count) = (Aabb::EMPTY, 0u32);
             for k in 1..bins {
                 let bin = &binned[k - 1][axis];
-                left = (left.0.union(bin.bounds), left.1 + bin.count);
-                let right = right_sweep[k];
-                if left.1 == 0 || right.1 == 0 {
+                left = left.union(bin.bounds);
+                left_count += bin.count;
+                if left_count == 0 || right_count[k] == 0 {
                     continue;
                 }
                 let cost = self.settings.traversal_cost
-                    + (left.0.half_area() * blocks(left.1) + right.0.half_area() * blocks(right.1))
+                    + (left.half_area_nonempty() * blocks(left_count) + right_cost[k])
                         * self.settings.block_cost
                         / parent_area;
                 if best.as_ref().is_none_or(|b| cost < b.cost) {
-                    best = Some(Split { axis, bin: k, cost, left: left.0, right: right.0 });
+                    best = Some(Split { axis, bin: k, cost, left, right: Aabb::EMPTY });
                 }
             }
+        }
+        // The winner's right box, from its bins (not kept for every candidate).
+        if let Some(split) = best.as_mut() {
+            split.right = binned[split.bin..]
+                .iter()
+                .fold(Aabb::EMPTY, |b, bins| b.union(bins[split.axis].bounds));
         }
         best
     }
@@ -332,22 +385,22 @@ impl Builder<'_> {
     /// the bounds of the two sides' centroids.
     fn partition(
         &self,
-        indices: &mut [u32],
+        refs: &mut [PrimRef],
         split: &Split,
         centroid_bounds: &Aabb,
     ) -> (usize, Aabb, Aabb) {
         let binning = Binning::new(centroid_bounds, self.settings.bins);
         let (mut left, mut right) = (Aabb::EMPTY, Aabb::EMPTY);
-        let (mut lo, mut hi) = (0, indices.len());
+        let (mut lo, mut hi) = (0, refs.len());
         while lo < hi {
-            let c = self.centroids[indices[lo] as usize];
+            let c = refs[lo].centroid();
             if (binning.bins(c)[split.axis] as usize) < split.bin {
                 left = left.grow(c);
                 lo += 1;
             } else {
                 right = right.grow(c);
                 hi -= 1;
-                indices.swap(lo, hi);
+                refs.swap(lo, hi);
             }
         }
         (lo, left, right)

@@ -93,7 +93,7 @@ impl BuildSettings {
     /// The settings with every field clamped to its valid range.
     fn clamped(&self) -> BuildSettings {
         BuildSettings {
-            bins: self.bins.clamp(2, 256),
+            bins: self.bins.clamp(2, build::MAX_BINS),
             max_leaf_size: self.max_leaf_size.clamp(1, 4 * wide::MAX_LEAF_BLOCKS),
             traversal_cost: if self.traversal_cost.is_finite() {
                 self.traversal_cost.max(0.0)
