@@ -174,7 +174,14 @@ impl WatertightRay {
     /// exactly `1.0 / ray.direction`, per axis): no division.
     #[inline]
     pub(crate) fn with_inverse(ray: &Ray, inv_direction: Vec3) -> Self {
-        Self::with_shear_z(ray, inv_direction[dominant_axis(ray.direction)])
+        let kz = dominant_axis(ray.direction);
+        let shear_z = inv_direction[kz];
+        // The answers must be exactly those of `new`, which divides.
+        debug_assert!(
+            shear_z.to_bits() == (1.0 / ray.direction[kz]).to_bits() || shear_z.is_nan(),
+            "inv_direction is not 1/d"
+        );
+        Self::with_shear_z(ray, shear_z)
     }
 
     /// The test's setup given `shear_z = 1/d[kz]`.

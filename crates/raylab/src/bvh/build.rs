@@ -300,8 +300,9 @@ impl Builder<'_> {
                 bin.count += 1;
             }
         };
-        // Small nodes (nearly all of them) bin into an array on the stack; large ones into
-        // vectors, in parallel.
+        // Nodes binned on one thread with at most `STACK_BINS` bins (nearly all of them) use an
+        // array on the stack; large nodes bin into vectors in parallel, and so do builds with
+        // more bins than the array holds (on a node below `PARALLEL_MIN` that is one chunk).
         let mut on_stack = [[Bin::default(); 3]; STACK_BINS];
         let heap: Vec<[Bin; 3]>;
         let binned: &[[Bin; 3]] = if refs.len() >= PARALLEL_MIN || bins > STACK_BINS {
