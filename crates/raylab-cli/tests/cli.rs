@@ -78,6 +78,7 @@ fn options_give_the_same_pixels_as_the_library() {
     let camera = Camera {
         position: Vec3::new(0.1, -0.2, -2.5),
         yaw: (-10f32).to_radians(),
+        pitch: 0.0,
         focal_length_px: Camera::focal_length_for_fov(64, 60.0),
         width: 64,
         height: 48,

@@ -1,9 +1,12 @@
 //! The lab's pinhole camera.
 //!
 //! Axes as in the lab: x right, y **down**, z forward. A camera has a position, a yaw (rotation
-//! about the vertical axis) and a focal length in pixels. Pixel `(x, y)` of a `W×H` image casts
-//! the ray with direction `R(yaw)·(x + ½ − W/2, y + ½ − H/2, f)`, where
-//! `R(y) = [[cos y, 0, sin y], [0, 1, 0], [−sin y, 0, cos y]]` (lab §"Moving the camera").
+//! about the vertical axis), a pitch (beyond the lab: looking up or down) and a focal length in
+//! pixels. Pixel `(x, y)` of a `W×H` image casts the ray with direction
+//! `R(yaw)·P(pitch)·(x + ½ − W/2, y + ½ − H/2, f)`, where
+//! `R(y) = [[cos y, 0, sin y], [0, 1, 0], [−sin y, 0, cos y]]` (lab §"Moving the camera") and
+//! `P(p) = [[1, 0, 0], [0, cos p, −sin p], [0, sin p, cos p]]` tilts the view up for `p > 0`
+//! (y is down). With the lab's pitch of 0, `P` is the identity.
 //!
 //! The field of view follows from the focal length by `2·atan(W / 2f)`: with the lab's `f = W`
 //! that is 53.13°, not the 90° that `tan` arithmetic suggests.
@@ -21,6 +24,9 @@ pub struct Camera {
     pub position: Vec3,
     /// Rotation about the vertical (y) axis, in radians; positive turns toward +x.
     pub yaw: f32,
+    /// Rotation about the camera's horizontal axis, in radians; positive looks up (toward −y).
+    /// The lab's camera has none.
+    pub pitch: f32,
     /// Focal length in pixels: the distance from the pinhole to the image plane.
     pub focal_length_px: f32,
     /// Image width in pixels.
@@ -36,6 +42,7 @@ impl Camera {
         Camera {
             position: Vec3::new(0.0, 0.0, -3.0),
             yaw: 0.0,
+            pitch: 0.0,
             focal_length_px: width as f32,
             width,
             height,
@@ -58,11 +65,20 @@ impl Camera {
         2.0 * (self.height as f32 / (2.0 * self.focal_length_px)).atan().to_degrees()
     }
 
-    /// The lab's `R(yaw)`, mapping camera space to world space.
+    /// `R(yaw)·P(pitch)`, mapping camera space to world space: the lab's `R(yaw)` when the
+    /// pitch is 0.
     pub fn rotation(&self) -> Mat3 {
         let (sin, cos) = self.yaw.sin_cos();
         // Columns of [[cos, 0, sin], [0, 1, 0], [−sin, 0, cos]].
-        Mat3::from_cols(Vec3::new(cos, 0.0, -sin), Vec3::Y, Vec3::new(sin, 0.0, cos))
+        let yaw = Mat3::from_cols(Vec3::new(cos, 0.0, -sin), Vec3::Y, Vec3::new(sin, 0.0, cos));
+        if self.pitch == 0.0 {
+            // Exactly the lab's matrix, without a product with the identity's rounding.
+            return yaw;
+        }
+        let (sin, cos) = self.pitch.sin_cos();
+        // Columns of [[1, 0, 0], [0, cos, −sin], [0, sin, cos]].
+        let pitch = Mat3::from_cols(Vec3::X, Vec3::new(0.0, cos, sin), Vec3::new(0.0, -sin, cos));
+        yaw * pitch
     }
 
     /// The unit vector the camera looks along.
@@ -129,11 +145,18 @@ impl fmt::Display for Camera {
         let p = self.position;
         write!(
             f,
-            "camera at ({}, {}, {}), yaw {}°, focal length {} px: field of view {:.2}° × {:.2}°",
+            "camera at ({}, {}, {}), yaw {}°",
             tidy(p.x),
             tidy(p.y),
             tidy(p.z),
-            tidy(self.yaw.to_degrees()),
+            tidy(self.yaw.to_degrees())
+        )?;
+        if self.pitch != 0.0 {
+            write!(f, ", pitch {}°", tidy(self.pitch.to_degrees()))?;
+        }
+        write!(
+            f,
+            ", focal length {} px: field of view {:.2}° × {:.2}°",
             tidy(self.focal_length_px),
             self.fov_x_deg(),
             self.fov_y_deg()
@@ -236,9 +259,28 @@ mod tests {
     }
 
     #[test]
+    fn pitch_looks_up_and_keeps_the_horizon_level() {
+        let camera = Camera { pitch: 30f32.to_radians(), ..Camera::lab(2, 2) };
+        let forward = camera.forward();
+        // Up is −y in the lab's axes.
+        assert!((forward - Vec3::new(0.0, -0.5, 3f32.sqrt() / 2.0)).length() < 1e-6, "{forward}");
+        // Pitch tilts about the camera's right axis, which stays horizontal.
+        let turned = Camera { yaw: 1.0, ..camera };
+        assert!(turned.right().y.abs() < 1e-7);
+        assert!((turned.forward().length() - 1.0).abs() < 1e-6);
+        assert!(turned.to_string().contains("yaw 57.2958°, pitch 30°"), "{turned}");
+        let level = Camera { pitch: 0.0, ..turned };
+        assert!(!level.to_string().contains("pitch"));
+    }
+
+    #[test]
     fn project_inverts_ray() {
-        let camera =
-            Camera { yaw: -0.7, position: Vec3::new(0.3, -0.2, -2.0), ..Camera::lab(320, 200) };
+        let camera = Camera {
+            yaw: -0.7,
+            pitch: 0.2,
+            position: Vec3::new(0.3, -0.2, -2.0),
+            ..Camera::lab(320, 200)
+        };
         let ray = camera.ray(123.25, 77.5);
         let film = camera.project(ray.at(3.0)).unwrap();
         assert!((film - Vec2::new(123.25, 77.5)).length() < 1e-3, "{film}");

@@ -1,14 +1,22 @@
-//! Rendering a frame: one camera ray per pixel, in parallel.
+//! Rendering a frame: camera rays through every pixel, in parallel, one or more samples each.
 //!
 //! The image is cut into bands of rows that rayon's threads take in any order, and each band
 //! into 8×8 tiles whose camera rays are traced together. Every pixel depends only on its own
-//! coordinates, so the picture is the same for any thread count or tiling.
+//! coordinates and the sample's number, so the picture is the same for any thread count or
+//! tiling.
+//!
+//! Sample 0 of a pixel goes through its centre, which is the lab's one ray per pixel; samples
+//! 1, 2, … are spread over the pixel (anti-aliasing) by [`sample_offset`]. An [`Accumulator`]
+//! adds samples one pass at a time, which is how `raylab view` refines a still picture; a render
+//! of `N` samples at once ([`render_samples`]) is the same passes in the same order, so it gives
+//! the same pixels bit for bit.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use image::RgbImage;
 use rayon::prelude::*;
 
 use crate::camera::Camera;
-use crate::film::{Film, FilmError};
+use crate::film::{Film, FilmError, to_8bit_clamped};
 use crate::integrator::Integrator;
 use crate::ray::Ray;
 
@@ -30,9 +38,74 @@ pub fn render(
     progress: &(dyn Fn(u32) + Sync),
 ) -> Result<Film, FilmError> {
     let mut film = Film::new(camera.width, camera.height)?;
+    add_pass(camera, integrator, 0, film.pixels_mut(), progress);
+    Ok(film)
+}
+
+/// Renders `samples` samples per pixel (at least 1) and returns their mean: sample 0 through
+/// each pixel's centre, then spread over the pixel. `progress` gets rows finished, `height` per
+/// sample. Exactly the pixels of an [`Accumulator`] given the same samples.
+pub fn render_samples(
+    camera: &Camera,
+    integrator: &impl Integrator,
+    samples: u32,
+    progress: &(dyn Fn(u32) + Sync),
+) -> Result<Film, FilmError> {
+    let mut accumulator = Accumulator::new(camera.width, camera.height)?;
+    for _ in 0..samples.max(1) {
+        accumulator.add_sample_with_progress(camera, integrator, progress);
+    }
+    accumulator.mean()
+}
+
+/// Where sample `index` of pixel `(x, y)` goes through the pixel, in `[0, 1)²` from its top-left
+/// corner.
+///
+/// Sample 0 is the centre `(½, ½)`. Later samples follow the R₂ low-discrepancy sequence
+/// (Roberts 2018: `{s + k·(1/φ₂, 1/φ₂²)}` with φ₂ the plastic number), shifted per pixel by a
+/// hash of its coordinates so that neighbouring pixels do not share one pattern. Any prefix of
+/// the sequence covers the pixel evenly, so a picture refined one sample at a time improves at
+/// every step.
+pub fn sample_offset(x: u32, y: u32, index: u32) -> Vec2 {
+    if index == 0 {
+        return Vec2::splat(0.5);
+    }
+    // 1/φ₂ and 1/φ₂², where φ₂ ≈ 1.3247 solves x³ = x + 1.
+    const ALPHA: [f64; 2] = [0.754_877_666_246_692_7, 0.569_840_290_998_053_3];
+    let hash = pixel_hash(x, y);
+    let shift = [
+        (hash >> 40) as f64 / (1u64 << 24) as f64,
+        (hash & 0xff_ffff) as f64 / (1u64 << 24) as f64,
+    ];
+    let k = index as f64;
+    let coordinate = |i: usize| {
+        let value = (shift[i] + k * ALPHA[i]).fract() as f32;
+        // Rounding to f32 can give exactly 1.0; keep the sample inside its pixel.
+        value.min(1.0 - f32::EPSILON / 2.0)
+    };
+    Vec2::new(coordinate(0), coordinate(1))
+}
+
+/// A well-mixed 64-bit hash of a pixel's coordinates (SplitMix64's finalizer).
+fn pixel_hash(x: u32, y: u32) -> u64 {
+    let mut z = ((x as u64) << 32 | y as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Adds sample `sample` of every pixel to `pixels` (the camera's image, row by row).
+fn add_pass(
+    camera: &Camera,
+    integrator: &impl Integrator,
+    sample: u32,
+    pixels: &mut [Vec3],
+    progress: &(dyn Fn(u32) + Sync),
+) {
     let width = camera.width as usize;
+    debug_assert_eq!(pixels.len(), width * camera.height as usize);
     let rays = camera.rays();
-    film.pixels_mut().par_chunks_mut(width * BAND_ROWS).enumerate().for_each(|(band, pixels)| {
+    pixels.par_chunks_mut(width * BAND_ROWS).enumerate().for_each(|(band, pixels)| {
         let first_row = band * BAND_ROWS;
         let rows = pixels.len() / width;
         // A tile's rays and colours, on the stack.
@@ -42,21 +115,177 @@ pub fn render(
             let columns = tile_x..(tile_x + TILE).min(width);
             let n = columns.len() * rows;
             let mut ray = tile_rays.iter_mut();
-            for y in 0..rows {
+            for y in first_row..first_row + rows {
                 for x in columns.clone() {
+                    let offset = sample_offset(x as u32, y as u32, sample);
                     *ray.next().expect("a tile's rays fit") =
-                        rays.pixel_ray(x as u32, (first_row + y) as u32);
+                        rays.ray(x as f32 + offset.x, y as f32 + offset.y);
                 }
             }
             integrator.radiance_each(&tile_rays[..n], &mut colours[..n]);
             let mut colour = colours.iter();
             for y in 0..rows {
                 for x in columns.clone() {
-                    pixels[y * width + x] = *colour.next().expect("one colour per ray");
+                    pixels[y * width + x] += *colour.next().expect("one colour per ray");
                 }
             }
         }
         progress(rows as u32);
     });
-    Ok(film)
+}
+
+/// Samples added up pass by pass: a picture that refines while the camera stands still.
+#[derive(Clone, Debug)]
+pub struct Accumulator {
+    sum: Film,
+    samples: u32,
+}
+
+impl Accumulator {
+    /// An empty accumulator for a `width×height` image.
+    pub fn new(width: u32, height: u32) -> Result<Accumulator, FilmError> {
+        Ok(Accumulator { sum: Film::new(width, height)?, samples: 0 })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.sum.width()
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.sum.height()
+    }
+
+    /// Samples per pixel so far.
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// Forgets every sample (the camera moved).
+    pub fn clear(&mut self) {
+        self.sum.pixels_mut().fill(Vec3::ZERO);
+        self.samples = 0;
+    }
+
+    /// Renders the next sample of every pixel and adds it in.
+    ///
+    /// # Panics
+    /// If the camera's image size is not the accumulator's.
+    pub fn add_sample(&mut self, camera: &Camera, integrator: &impl Integrator) {
+        self.add_sample_with_progress(camera, integrator, &|_| {});
+    }
+
+    fn add_sample_with_progress(
+        &mut self,
+        camera: &Camera,
+        integrator: &impl Integrator,
+        progress: &(dyn Fn(u32) + Sync),
+    ) {
+        assert_eq!(
+            (camera.width, camera.height),
+            (self.width(), self.height()),
+            "the camera's image size must be the accumulator's"
+        );
+        add_pass(camera, integrator, self.samples, self.sum.pixels_mut(), progress);
+        self.samples += 1;
+    }
+
+    /// The mean of the samples of pixel `index` (row by row); black before the first sample.
+    #[inline]
+    fn mean_at(&self, index: usize) -> Vec3 {
+        self.sum.pixels()[index] * (1.0 / self.samples.max(1) as f32)
+    }
+
+    /// The mean of the samples so far, as a film.
+    pub fn mean(&self) -> Result<Film, FilmError> {
+        let mut film = Film::new(self.width(), self.height())?;
+        for (i, pixel) in film.pixels_mut().iter_mut().enumerate() {
+            *pixel = self.mean_at(i);
+        }
+        Ok(film)
+    }
+
+    /// The mean as 8-bit RGB, shown as the lab shows it (see [`Film::to_rgb8_clamped`]).
+    pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {
+        self.mean()?.to_rgb8_clamped()
+    }
+
+    /// Writes the mean into a `width×height` window buffer of `0x00RRGGBB` words, scaled to fill
+    /// it by nearest neighbour (a picture rendered at a fraction of the window's resolution fills
+    /// the window). Channels as in [`Film::to_rgb8_clamped`].
+    ///
+    /// # Panics
+    /// If `out` does not hold `width×height` words.
+    pub fn write_0rgb(&self, out: &mut [u32], width: u32, height: u32) {
+        assert_eq!(out.len(), width as usize * height as usize, "a word per window pixel");
+        let (source_width, source_height) = (self.width() as usize, self.height() as usize);
+        let columns: Vec<usize> = (0..width as usize)
+            .map(|x| (x * source_width / width as usize).min(source_width - 1))
+            .collect();
+        for (y, row) in out.chunks_exact_mut(width as usize).enumerate() {
+            let source_row = (y * source_height / height as usize).min(source_height - 1);
+            for (word, &x) in row.iter_mut().zip(&columns) {
+                let [r, g, b] =
+                    self.mean_at(source_row * source_width + x).to_array().map(to_8bit_clamped);
+                *word = (r as u32) << 16 | (g as u32) << 8 | b as u32;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sample_zero_is_the_pixel_centre_and_the_rest_stay_inside_the_pixel() {
+        assert_eq!(sample_offset(3, 4, 0), Vec2::splat(0.5));
+        for (x, y) in [(0, 0), (1, 0), (499, 499), (u32::MAX, 7)] {
+            for k in [1, 2, 3, 100, 65_535, u32::MAX] {
+                let o = sample_offset(x, y, k);
+                assert!(o.cmpge(Vec2::ZERO).all() && o.cmplt(Vec2::ONE).all(), "{o}");
+            }
+        }
+        // Neighbouring pixels do not share a pattern.
+        assert_ne!(sample_offset(0, 0, 1), sample_offset(1, 0, 1));
+        assert_ne!(sample_offset(0, 0, 1), sample_offset(0, 1, 1));
+    }
+
+    #[test]
+    fn samples_cover_the_pixel_evenly() {
+        // n² consecutive samples leave at most a fifth of the pixel's n×n cells empty and put at
+        // most 3 in any; n² uniform random points would leave about n²/e (37 %) of them empty.
+        for (x, y) in [(0, 0), (17, 230), (499, 3)] {
+            for n in [4usize, 8] {
+                let mut cells = vec![0u32; n * n];
+                for k in 1..=(n * n) as u32 {
+                    let o = sample_offset(x, y, k) * n as f32;
+                    cells[o.y as usize * n + o.x as usize] += 1;
+                }
+                let empty = cells.iter().filter(|&&c| c == 0).count();
+                assert!(empty <= n * n / 5 && cells.iter().all(|&c| c <= 3), "{n}: {cells:?}");
+            }
+            let mean = (1..=1024).map(|k| sample_offset(x, y, k)).sum::<Vec2>() / 1024.0;
+            assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.01, "{mean}");
+        }
+    }
+
+    #[test]
+    fn window_words_are_nearest_neighbour_and_clamped() {
+        let mut accumulator = Accumulator::new(2, 1).unwrap();
+        accumulator
+            .sum
+            .pixels_mut()
+            .copy_from_slice(&[Vec3::new(2.0, 1.0, 0.5), Vec3::new(-1.0, 0.0, 0.25)]);
+        accumulator.samples = 2;
+        let mut out = [0u32; 4 * 2];
+        accumulator.write_0rgb(&mut out, 4, 2);
+        let left = 255 << 16 | 128 << 8 | 64; // (1, 0.5, 0.25)
+        let right = 32; // (0, 0, 0.125)
+        assert_eq!(out, [left, left, right, right, left, left, right, right]);
+        let mut one = [0u32; 1];
+        accumulator.write_0rgb(&mut one, 1, 1);
+        assert_eq!(one, [left]);
+    }
 }

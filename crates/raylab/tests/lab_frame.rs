@@ -7,7 +7,9 @@ use std::path::Path;
 use glam::Vec3;
 use image::RgbImage;
 use raylab::image_compare::{compare_rgb8, save_failure_images};
-use raylab::{BruteForce, Camera, Film, Integrator, Lab, Ray, Scene, Stage, image_io, render};
+use raylab::{
+    BruteForce, Camera, Film, Integrator, Lab, Ray, Scene, Stage, image_io, render, render_samples,
+};
 
 fn cornell() -> Scene {
     Scene::built_in("cornell").unwrap()
@@ -187,6 +189,63 @@ fn the_picture_is_the_same_for_any_thread_count() {
     for film in &films[1..] {
         assert!(film == &films[0]);
     }
+}
+
+/// Anti-aliasing: several samples per pixel are the same for any thread count, one sample is
+/// the lab's one ray through the pixel centre, and more samples come closer to the true pixel
+/// colours, the mean over each pixel's area, here a 12×12-times-finer render averaged down.
+#[test]
+fn samples_per_pixel_anti_alias_deterministically() {
+    let scene = cornell();
+    let accel = BruteForce::new(&scene.triangles);
+    let lab = Lab::new(&scene, &accel, Stage::Ambient);
+    let camera = Camera { yaw: 0.1, ..Camera::lab(40, 30) };
+    let films: Vec<Film> = [1, 2, 5]
+        .into_iter()
+        .map(|threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| render_samples(&camera, &lab, 7, &|_| {}).unwrap())
+        })
+        .collect();
+    assert!(films.iter().all(|film| film == &films[0]));
+    assert!(
+        render_samples(&camera, &lab, 1, &|_| {}).unwrap()
+            == render(&camera, &lab, &|_| {}).unwrap()
+    );
+
+    const FINE: u32 = 12;
+    let fine_camera = Camera {
+        width: camera.width * FINE,
+        height: camera.height * FINE,
+        focal_length_px: camera.focal_length_px * FINE as f32,
+        ..camera
+    };
+    let fine = render(&fine_camera, &lab, &|_| {}).unwrap();
+    let truth = |x: u32, y: u32| {
+        let mut sum = Vec3::ZERO;
+        for j in 0..FINE {
+            for i in 0..FINE {
+                sum += fine.pixel(x * FINE + i, y * FINE + j);
+            }
+        }
+        sum / (FINE * FINE) as f32
+    };
+    let error = |film: &Film| {
+        let mut total = 0.0;
+        for y in 0..camera.height {
+            for x in 0..camera.width {
+                total += (film.pixel(x, y) - truth(x, y)).abs().element_sum();
+            }
+        }
+        total / (camera.width * camera.height) as f32
+    };
+    let errors: Vec<f32> = [1, 4, 16, 64]
+        .into_iter()
+        .map(|spp| error(&render_samples(&camera, &lab, spp, &|_| {}).unwrap()))
+        .collect();
+    // Edges carry the error: it must fall with every step, to well under half of one sample's.
+    assert!(errors.windows(2).all(|pair| pair[1] < pair[0]), "{errors:?}");
+    assert!(errors[3] < 0.25 * errors[0], "{errors:?}");
 }
 
 /// Rendering traces camera rays and their shadow rays in tiles, through the BVH's packets; every

@@ -17,6 +17,7 @@ use glam::Vec3;
 
 use super::Integrator;
 use crate::accel::{Accelerator, Hit};
+use crate::light::PointLight;
 use crate::ray::Ray;
 use crate::scene::Scene;
 
@@ -95,14 +96,16 @@ pub struct Lab<'a, A: ?Sized> {
     scene: &'a Scene,
     accel: &'a A,
     stage: Stage,
+    /// The point light: the scene's, unless moved (as `raylab view` moves it).
+    pub light: PointLight,
     /// The constant indirect light `N` of eq. (30).
     pub ambient: Vec3,
 }
 
 impl<'a, A: Accelerator + ?Sized> Lab<'a, A> {
-    /// The lab's model at `stage`, with the lab's ambient light `N = 0.5`.
+    /// The lab's model at `stage`, with the scene's light and the lab's ambient light `N = 0.5`.
     pub fn new(scene: &'a Scene, accel: &'a A, stage: Stage) -> Self {
-        Lab { scene, accel, stage, ambient: Vec3::splat(0.5) }
+        Lab { scene, accel, stage, light: scene.light, ambient: Vec3::splat(0.5) }
     }
 }
 
@@ -138,7 +141,7 @@ impl<A: Accelerator + ?Sized> Lab<'_, A> {
         if point.normal.dot(ray.direction) > 0.0 {
             point.normal = -point.normal;
         }
-        let light = &self.scene.light;
+        let light = &self.light;
         // Lab eq. (27): D = P max(r̂·n̂, 0) / (4πr²).
         let direct = light.direct(point.p, point.normal);
         let shadows = matches!(self.stage, Stage::Shadows | Stage::Ambient);

@@ -1,0 +1,292 @@
+//! The frame function: one frame of `raylab view`, with or without a window.
+//!
+//! A frame renders one sample per pixel. While the view changes from frame to frame (the camera
+//! or the light moves) each frame starts afresh, at a reduced resolution if the full one would
+//! miss the frame-time budget; while it stands still, frames add samples to the same picture
+//! (progressive anti-aliasing) up to a limit.
+
+use std::time::{Duration, Instant};
+
+use image::RgbImage;
+
+use super::Pose;
+use crate::accel::Accelerator;
+use crate::camera::Camera;
+use crate::film::FilmError;
+use crate::integrator::{Lab, Stage};
+use crate::render::Accumulator;
+use crate::scene::Scene;
+
+/// Everything a frame shows: the pose, the lab's stage and the window's size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// The camera's position and direction, and the light's position.
+    pub pose: Pose,
+    /// The lab's stage to show.
+    pub stage: Stage,
+    /// Window width in pixels, at least 1.
+    pub width: u32,
+    /// Window height in pixels, at least 1.
+    pub height: u32,
+    /// The focal length as a fraction of the width: 1 is the lab's `f = W` (53.13°). Kept as a
+    /// ratio so that the field of view stays when the window is resized.
+    pub focal_per_width: f32,
+}
+
+impl View {
+    /// The camera for this view, rendering at `1/scale` of the window's resolution (at least one
+    /// pixel) with the same field of view.
+    pub fn camera(&self, scale: u32) -> Camera {
+        let scale = scale.max(1);
+        let width = self.width.div_ceil(scale).max(1);
+        let height = self.height.div_ceil(scale).max(1);
+        Camera {
+            position: self.pose.position,
+            yaw: self.pose.yaw,
+            pitch: self.pose.pitch,
+            focal_length_px: self.focal_per_width * width as f32,
+            width,
+            height,
+        }
+    }
+}
+
+/// What a frame did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameInfo {
+    /// The view changed since the previous frame, so this frame started a new picture.
+    pub moving: bool,
+    /// Samples per pixel in the picture now.
+    pub samples: u32,
+    /// The picture's resolution is `1/scale` of the window's.
+    pub scale: u32,
+    /// Time spent rendering the frame.
+    pub render_time: Duration,
+}
+
+/// Frames that fit their budget while moving: the resolution divides by this much at most.
+pub const MAX_SCALE: u32 = 8;
+
+/// The resolution scale for the next moving frame, given that this one, at `scale`, took
+/// `elapsed` against a `budget`: coarser when over budget, finer when the finer resolution's
+/// estimated time (which grows with the pixel count) fits in ¾ of the budget.
+pub fn next_scale(scale: u32, elapsed: Duration, budget: Duration) -> u32 {
+    if elapsed > budget {
+        return (scale + 1).min(MAX_SCALE);
+    }
+    if scale > 1 {
+        let growth = (scale as f64 / (scale - 1) as f64).powi(2);
+        if elapsed.as_secs_f64() * growth < budget.as_secs_f64() * 0.75 {
+            return scale - 1;
+        }
+    }
+    scale
+}
+
+/// Renders the frames of a view that changes or stands still.
+#[derive(Debug)]
+pub struct FrameRenderer {
+    picture: Option<(View, u32, Accumulator)>,
+    scale: u32,
+    /// A moving frame should take at most this long; `None` renders every frame at full
+    /// resolution (for benchmarks).
+    pub budget: Option<Duration>,
+    /// A still picture stops refining at this many samples per pixel.
+    pub max_samples: u32,
+}
+
+impl FrameRenderer {
+    /// A renderer with a moving-frame budget (`None`: always full resolution) that refines a
+    /// still picture up to `max_samples` samples per pixel.
+    pub fn new(budget: Option<Duration>, max_samples: u32) -> FrameRenderer {
+        FrameRenderer { picture: None, scale: 1, budget, max_samples: max_samples.max(1) }
+    }
+
+    /// Whether `view` is already shown with every sample it will get: no frame is needed.
+    pub fn is_done(&self, view: &View) -> bool {
+        matches!(&self.picture, Some((shown, 1, picture))
+            if shown == view && picture.samples() >= self.max_samples)
+    }
+
+    /// Renders one frame of `view` of `scene`, whose triangles `accel` holds, on the current
+    /// rayon pool: a new picture if the view changed, else one more sample of the same one.
+    pub fn frame<A: Accelerator + ?Sized>(
+        &mut self,
+        scene: &Scene,
+        accel: &A,
+        view: &View,
+    ) -> Result<FrameInfo, FilmError> {
+        let start = Instant::now();
+        let refining = matches!(&self.picture, Some((shown, 1, _)) if shown == view);
+        let moving = !refining && self.picture.as_ref().is_some_and(|(shown, ..)| shown != view);
+        let scale = if moving && self.budget.is_some() { self.scale } else { 1 };
+        let camera = view.camera(scale);
+        if !refining {
+            // A new picture, in the old one's memory when the size is the same.
+            match &mut self.picture {
+                Some((shown, shown_scale, picture))
+                    if (picture.width(), picture.height()) == (camera.width, camera.height) =>
+                {
+                    picture.clear();
+                    (*shown, *shown_scale) = (*view, scale);
+                }
+                _ => {
+                    self.picture = None;
+                    let picture = Accumulator::new(camera.width, camera.height)?;
+                    self.picture = Some((*view, scale, picture));
+                }
+            }
+        }
+        let (_, _, picture) = self.picture.as_mut().expect("a picture was just made");
+        let mut lab = Lab::new(scene, accel, view.stage);
+        lab.light.position = view.pose.light;
+        picture.add_sample(&camera, &lab);
+        let render_time = start.elapsed();
+        if moving && let Some(budget) = self.budget {
+            self.scale = next_scale(scale, render_time, budget);
+        }
+        Ok(FrameInfo { moving, samples: picture.samples(), scale, render_time })
+    }
+
+    /// Writes the picture into a `width×height` window buffer of `0x00RRGGBB` words, scaled to
+    /// fill it; black before the first frame.
+    ///
+    /// # Panics
+    /// If `out` does not hold `width×height` words.
+    pub fn write_0rgb(&self, out: &mut [u32], width: u32, height: u32) {
+        match &self.picture {
+            Some((_, _, picture)) => picture.write_0rgb(out, width, height),
+            None => out.fill(0),
+        }
+    }
+}
+
+/// An RGB image of a window buffer of `0x00RRGGBB` words, `width×height` of them.
+///
+/// # Panics
+/// If `words` does not hold `width×height` words.
+pub fn rgb8_from_0rgb(words: &[u32], width: u32, height: u32) -> RgbImage {
+    assert_eq!(words.len(), width as usize * height as usize, "a word per pixel");
+    let bytes = words.iter().flat_map(|w| [(w >> 16) as u8, (w >> 8) as u8, *w as u8]).collect();
+    RgbImage::from_raw(width, height, bytes).expect("three bytes per pixel")
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::{BruteForce, render_samples};
+
+    fn lab_view(width: u32, height: u32) -> View {
+        View {
+            pose: Pose {
+                position: Vec3::new(0.0, 0.0, -3.0),
+                yaw: 0.0,
+                pitch: 0.0,
+                light: Vec3::new(0.0, -0.5, -0.7),
+            },
+            stage: Stage::Ambient,
+            width,
+            height,
+            focal_per_width: 1.0,
+        }
+    }
+
+    #[test]
+    fn scales_follow_the_budget() {
+        let ms = Duration::from_millis;
+        assert_eq!(next_scale(1, ms(40), ms(33)), 2);
+        assert_eq!(next_scale(1, ms(20), ms(33)), 1);
+        assert_eq!(next_scale(MAX_SCALE, ms(400), ms(33)), MAX_SCALE);
+        // At scale 2 a frame of 5 ms would take about 20 ms at full resolution: fits.
+        assert_eq!(next_scale(2, ms(5), ms(33)), 1);
+        // 8 ms would be about 32 ms: too close to the budget, stay.
+        assert_eq!(next_scale(2, ms(8), ms(33)), 2);
+    }
+
+    #[test]
+    fn views_keep_their_field_of_view_at_any_scale() {
+        let view = lab_view(500, 300);
+        assert_eq!(view.camera(1), Camera { width: 500, height: 300, ..Camera::lab(500, 300) });
+        let coarse = view.camera(3);
+        assert_eq!((coarse.width, coarse.height), (167, 100));
+        assert!((coarse.fov_x_deg() - view.camera(1).fov_x_deg()).abs() < 1e-4);
+        assert_eq!(lab_view(1, 1).camera(8).width, 1);
+    }
+
+    #[test]
+    fn still_frames_refine_moving_frames_restart() {
+        let scene = Scene::built_in("cornell").unwrap();
+        let accel = BruteForce::new(&scene.triangles);
+        let view = lab_view(24, 16);
+        let mut renderer = FrameRenderer::new(None, 3);
+        for n in 1..=3 {
+            assert!(!renderer.is_done(&view));
+            let info = renderer.frame(&scene, &accel, &view).unwrap();
+            assert_eq!((info.moving, info.samples, info.scale), (false, n, 1));
+        }
+        assert!(renderer.is_done(&view));
+        // The picture after three still frames is the three-sample render, bit for bit.
+        let camera = view.camera(1);
+        let expected =
+            render_samples(&camera, &Lab::new(&scene, &accel, Stage::Ambient), 3, &|_| {})
+                .unwrap()
+                .to_rgb8_clamped()
+                .unwrap();
+        let mut words = vec![0; 24 * 16];
+        renderer.write_0rgb(&mut words, 24, 16);
+        assert!(rgb8_from_0rgb(&words, 24, 16) == expected);
+
+        // The light moves: a new picture, showing the moved light.
+        let mut moved = view;
+        moved.pose.light.x += 0.3;
+        let info = renderer.frame(&scene, &accel, &moved).unwrap();
+        assert_eq!((info.moving, info.samples), (true, 1));
+        let mut scene_moved = scene.clone();
+        scene_moved.light.position = moved.pose.light;
+        let expected =
+            crate::render(&camera, &Lab::new(&scene_moved, &accel, Stage::Ambient), &|_| {})
+                .unwrap()
+                .to_rgb8_clamped()
+                .unwrap();
+        renderer.write_0rgb(&mut words, 24, 16);
+        assert!(rgb8_from_0rgb(&words, 24, 16) == expected);
+        // Standing still again refines the moved picture.
+        assert_eq!(renderer.frame(&scene, &accel, &moved).unwrap().samples, 2);
+    }
+
+    #[test]
+    fn moving_frames_drop_resolution_when_over_budget_and_recover_when_still() {
+        let scene = Scene::built_in("cornell").unwrap();
+        let accel = BruteForce::new(&scene.triangles);
+        let mut view = lab_view(64, 64);
+        // A zero budget: every moving frame is over it.
+        let mut renderer = FrameRenderer::new(Some(Duration::ZERO), 16);
+        renderer.frame(&scene, &accel, &view).unwrap();
+        let mut scales = Vec::new();
+        for _ in 0..4 {
+            view.pose.yaw += 0.01;
+            scales.push(renderer.frame(&scene, &accel, &view).unwrap().scale);
+        }
+        assert_eq!(scales, [1, 2, 3, 4]);
+        let mut words = vec![0; 64 * 64];
+        renderer.write_0rgb(&mut words, 64, 64);
+        // Blocks of 4×4 window pixels show one rendered pixel.
+        assert_eq!(words[0], words[3 * 64 + 3]);
+        // Still: full resolution again, from the first sample.
+        let info = renderer.frame(&scene, &accel, &view).unwrap();
+        assert_eq!((info.moving, info.samples, info.scale), (false, 1, 1));
+        // A resize is a change of view.
+        view.width = 50;
+        let info = renderer.frame(&scene, &accel, &view).unwrap();
+        assert!(info.moving && info.samples == 1);
+    }
+
+    #[test]
+    fn window_words_round_trip_to_rgb() {
+        let image = rgb8_from_0rgb(&[0x00ff_8001, 0x0000_00ff], 2, 1);
+        assert_eq!(image.get_pixel(0, 0).0, [255, 128, 1]);
+        assert_eq!(image.get_pixel(1, 0).0, [0, 0, 255]);
+    }
+}
