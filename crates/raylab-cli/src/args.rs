@@ -30,6 +30,16 @@ pub fn fov_deg(text: &str) -> Result<f32, String> {
     }
 }
 
+/// Parses a pitch in degrees, from -89 to 89 (beyond, the view would flip over the vertical).
+pub fn pitch_deg(text: &str) -> Result<f32, String> {
+    let value = finite_f32(text)?;
+    if (-89.0..=89.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("a pitch must be between -89° and 89°, not {text}"))
+    }
+}
+
 /// Parses `X,Y,Z` into a vector of finite numbers.
 pub fn vec3(text: &str) -> Result<Vec3, String> {
     let parts: Vec<&str> = text.split(',').collect();
@@ -79,6 +89,7 @@ mod tests {
         assert!(positive_f32("0").is_err());
         assert!(non_negative_f32("-1").is_err() && non_negative_f32("0") == Ok(0.0));
         assert!(fov_deg("180").is_err() && fov_deg("0").is_err() && fov_deg("90").is_ok());
+        assert!(pitch_deg("90").is_err() && pitch_deg("-89") == Ok(-89.0));
     }
 
     #[test]

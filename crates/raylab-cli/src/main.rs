@@ -4,7 +4,10 @@
 mod args;
 mod bench_cmd;
 mod render_cmd;
+mod scene_args;
 mod system;
+mod view_cmd;
+mod view_window;
 
 use std::process::ExitCode;
 
@@ -22,6 +25,9 @@ struct Cli {
 enum Command {
     /// Render a scene to an image file (the lab's Cornell box by default).
     Render(render_cmd::RenderArgs),
+    /// Open the lab's interactive window: move the camera with the arrow keys and the light with
+    /// W/S/A/D/Q/E while the picture follows in real time; still, it refines.
+    View(view_cmd::ViewArgs),
     /// Measure ray-query speed on the standard ray sets (primary, shadow, diffuse), as Embree is
     /// measured (shared/bench/BENCHMARK.md).
     Bench(bench_cmd::BenchArgs),
@@ -47,6 +53,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
+        Command::View(args) => view_cmd::run(&args),
         Command::Bench(args) => bench_cmd::run(&args),
     };
     match result {

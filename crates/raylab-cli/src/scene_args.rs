@@ -1,0 +1,168 @@
+//! What `raylab render` and `raylab view` share: the scene, the camera, the light, the stage and
+//! the threads, parsed and checked the same way.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use glam::Vec3;
+use raylab::{Camera, Scene, Stage};
+
+use crate::args::{self, Size};
+use crate::system;
+
+/// The most threads `--threads` accepts.
+const MAX_THREADS: usize = 1024;
+
+#[derive(Args, Debug)]
+pub struct SceneArgs {
+    /// The scene: `cornell`, the lab's Cornell box (30 triangles, y down), or a model file
+    /// (.obj with its .mtl, .ply, either optionally .gz; y up, framed by the camera unless
+    /// --camera is given).
+    #[arg(default_value = "cornell", value_name = "SCENE|MODEL")]
+    pub scene: String,
+
+    /// Image size in pixels.
+    #[arg(long, value_name = "WxH", default_value = "500x500", value_parser = args::size, allow_hyphen_values = true)]
+    pub size: Size,
+
+    /// Camera position (lab axes: x right, y down, z forward) [default: the lab's (0, 0, -3) for
+    /// `cornell`; for a model, in front of it, framing its bounding box].
+    #[arg(long, value_name = "X,Y,Z", value_parser = args::vec3, allow_hyphen_values = true)]
+    pub camera: Option<Vec3>,
+
+    /// Camera yaw in degrees: rotation about the vertical axis, positive toward +x (the lab's R(y)).
+    #[arg(long, value_name = "DEG", default_value = "0", value_parser = args::finite_f32, allow_hyphen_values = true)]
+    pub yaw: f32,
+
+    /// Camera pitch in degrees, positive looking up, between -89 and 89 (the lab has none).
+    #[arg(long, value_name = "DEG", default_value = "0", value_parser = args::pitch_deg, allow_hyphen_values = true)]
+    pub pitch: f32,
+
+    /// Focal length in pixels [default: the image width, as the lab's f = 500 for 500×500, which
+    /// is a 53.13° horizontal field of view: fov = 2·atan(W / 2f), not 90°].
+    #[arg(long, value_name = "PX", value_parser = args::positive_f32, conflicts_with = "fov")]
+    pub focal: Option<f32>,
+
+    /// Horizontal field of view in degrees, instead of --focal (sets f = W / (2·tan(fov/2))).
+    #[arg(long, value_name = "DEG", value_parser = args::fov_deg)]
+    pub fov: Option<f32>,
+
+    /// Point-light position [default: the lab's (0, -0.5, -0.7); for a model, above it, to the
+    /// right and in front].
+    #[arg(long, value_name = "X,Y,Z", value_parser = args::vec3, allow_hyphen_values = true)]
+    pub light: Option<Vec3>,
+
+    /// Point-light power P per channel [default: the lab's 14; for a model, enough for an
+    /// irradiance of 1 at its centre].
+    #[arg(long, value_name = "WATTS", value_parser = args::non_negative_f32)]
+    pub light_power: Option<f32>,
+
+    /// How much of the lab's light model to show (see below).
+    #[arg(long, value_name = "STAGE", default_value = "ambient")]
+    pub stage: Stage,
+
+    /// Threads to render with [default: one per core].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+pub const STAGES_HELP: &str = "\
+Stages, the lab's steps in order (--stage NAME or 1-5):
+  flat       flat triangle colour ρ, black where nothing is hit
+  direct     the light's power per area D = P·max(r̂·n̂,0)/(4πr²) alone (lab eq. 27)
+  reflected  ρ∗D, no shadows
+  shadows    ρ∗D with shadow rays
+  ambient    ρ∗(D+N) with shadows and constant ambient N = 0.5 (lab eq. 30; the default)
+
+Every channel is clamped to [0,1] and shown without gamma, as in the lab.";
+
+/// A checked scene, its camera and the thread count.
+pub struct Setup {
+    pub scene: Scene,
+    pub camera: Camera,
+    pub threads: usize,
+}
+
+impl SceneArgs {
+    /// Loads and checks everything before any rendering, so that no work is lost to a bad value.
+    pub fn setup(&self) -> Result<Setup> {
+        let (mut scene, is_model) = load_scene(&self.scene)?;
+        if let Some(position) = self.light {
+            scene.light.position = position;
+        }
+        if let Some(power) = self.light_power {
+            scene.light.power = Vec3::splat(power);
+        }
+        scene.validate()?;
+
+        let Size { width, height } = self.size;
+        let focal_length_px = match (self.focal, self.fov) {
+            (Some(focal), _) => focal,
+            (None, Some(fov)) => Camera::focal_length_for_fov(width, fov),
+            (None, None) => Camera::lab(width, height).focal_length_px,
+        };
+        if !focal_length_px.is_finite() {
+            bail!(
+                "--fov {} is too small: the focal length would be infinite",
+                self.fov.unwrap_or(0.0)
+            );
+        }
+        let default_position = match scene.bounds() {
+            Some((lo, hi)) if is_model => Camera::framing(lo, hi, width, height).position,
+            _ => Camera::lab(width, height).position,
+        };
+        let camera = Camera {
+            position: self.camera.unwrap_or(default_position),
+            yaw: self.yaw.to_radians(),
+            pitch: self.pitch.to_radians(),
+            focal_length_px,
+            width,
+            height,
+        };
+        let threads = match self.threads {
+            None | Some(0) => system::cores(),
+            Some(n) if n > MAX_THREADS => bail!("--threads {n} is more than {MAX_THREADS}"),
+            Some(n) => n,
+        };
+        Ok(Setup { scene, camera, threads })
+    }
+}
+
+impl Setup {
+    /// The render threads.
+    pub fn thread_pool(&self) -> Result<rayon::ThreadPool> {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(self.threads)
+            .build()
+            .context("cannot start the render threads")
+    }
+}
+
+/// A built-in scene by name, or a model file (anything that looks like a path). The flag says
+/// whether it is a model.
+fn load_scene(name: &str) -> Result<(Scene, bool)> {
+    let path = std::path::Path::new(name);
+    let looks_like_a_file = path.exists() || name.contains('/') || name.contains('.');
+    match Scene::built_in(name) {
+        Ok(scene) => return Ok((scene, false)),
+        // Neither a built-in name nor a file: say what the built-in scenes are.
+        Err(unknown) if !looks_like_a_file => return Err(unknown.into()),
+        Err(_) => {}
+    }
+    let loaded = raylab::scene::load_mesh(path)?;
+    for warning in &loaded.warnings {
+        eprintln!("raylab: warning: {warning}");
+    }
+    Ok((Scene::from_mesh(&loaded.mesh), true))
+}
+
+/// A number with at most 4 significant decimals and no trailing zeros.
+pub fn tidy(v: f32) -> String {
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+/// A vector as `(x, y, z)` with [`tidy`] numbers.
+pub fn tidy_vec3(v: Vec3) -> String {
+    format!("({}, {}, {})", tidy(v.x), tidy(v.y), tidy(v.z))
+}

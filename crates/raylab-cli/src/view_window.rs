@@ -1,0 +1,537 @@
+//! The window of `raylab view`: winit for events, softbuffer for pixels, no GPU.
+//!
+//! Two threads. The event loop (this thread) turns input into the controller's pose and shows
+//! finished frames; a render thread renders the latest view with the library's frame function
+//! and hands each frame over. Input never waits for a frame: the event loop only copies pixels.
+
+use std::collections::VecDeque;
+use std::num::NonZeroU32;
+use std::rc::Rc;
+use std::sync::{Condvar, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, anyhow, bail};
+use raylab::Stage;
+use raylab::interactive::{Controller, FrameInfo, FrameRenderer, Motion, View};
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+use crate::view_cmd::{KEYS_HELP, Session, next_screenshot_path, save_screenshot};
+
+/// A moving frame should take at most this long: 30 frames per second with room to spare.
+const MOVING_BUDGET: Duration = Duration::from_millis(25);
+
+/// While keys are held, the pose is brought up to date at least this often.
+const TICK: Duration = Duration::from_millis(4);
+
+/// Fails with advice when there is no display to open a window on.
+pub fn check_display() -> Result<()> {
+    let set = |name: &str| std::env::var_os(name).is_some_and(|value| !value.is_empty());
+    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") && !set("WAYLAND_SOCKET") {
+        bail!(
+            "cannot open a window: there is no display (neither DISPLAY nor WAYLAND_DISPLAY is \
+             set); use `raylab view --headless` to render without a window"
+        );
+    }
+    Ok(())
+}
+
+/// A finished frame, in window words `0x00RRGGBB`.
+struct Frame {
+    words: Vec<u32>,
+    width: u32,
+    height: u32,
+    info: FrameInfo,
+}
+
+/// What the two threads share.
+struct Shared {
+    state: Mutex<State>,
+    /// Wakes the render thread: a new view, a free frame slot, or quitting.
+    changed: Condvar,
+}
+
+struct State {
+    view: View,
+    /// The finished frame the event loop has not taken yet.
+    ready: Option<Frame>,
+    /// A buffer to reuse for the next frame.
+    spare: Vec<u32>,
+    quit: bool,
+    error: Option<String>,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, State> {
+        // A panic on the other thread must not turn into a second one here.
+        self.state.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn wait<'a>(&self, guard: MutexGuard<'a, State>) -> MutexGuard<'a, State> {
+        self.changed.wait(guard).unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
+
+/// The event the render thread sends: a frame is ready (or the renderer failed).
+#[derive(Debug)]
+struct FrameReady;
+
+/// Opens the window and runs until it is closed.
+pub fn run(session: Session) -> Result<()> {
+    check_display()?;
+    let event_loop = EventLoop::<FrameReady>::with_user_event().build().map_err(|error| {
+        let display = std::env::var("WAYLAND_DISPLAY")
+            .or_else(|_| std::env::var("DISPLAY"))
+            .unwrap_or_default();
+        // winit says "os error at FILE:LINE: MESSAGE"; users need the message.
+        let error = error.to_string();
+        let error = error
+            .strip_prefix("os error at ")
+            .and_then(|rest| rest.split_once(": "))
+            .map_or(error.as_str(), |(_, message)| message);
+        anyhow!(
+            "cannot open a window on display '{display}': {error}; use `raylab view --headless` \
+             to render without a window"
+        )
+    })?;
+    let shared = Shared {
+        state: Mutex::new(State {
+            view: session.view,
+            ready: None,
+            spare: Vec::new(),
+            quit: false,
+            error: None,
+        }),
+        changed: Condvar::new(),
+    };
+    let proxy = event_loop.create_proxy();
+    let mut app = App::new(&session, &shared);
+    let result = std::thread::scope(|scope| {
+        let renderer = scope.spawn(|| render_loop(&session, &shared, proxy));
+        let result = event_loop.run_app(&mut app);
+        shared.lock().quit = true;
+        shared.changed.notify_all();
+        if renderer.join().is_err() {
+            shared.lock().error.get_or_insert_with(|| "the render thread failed".into());
+        }
+        result
+    });
+    if let Some(error) = app.error.take() {
+        return Err(error);
+    }
+    if let Some(error) = shared.lock().error.take() {
+        bail!("{error}");
+    }
+    result.map_err(|error| anyhow!("the window's event loop failed: {error}"))
+}
+
+/// The render thread: renders the latest view whenever it is not done, and hands over frames
+/// one at a time.
+fn render_loop(session: &Session, shared: &Shared, proxy: EventLoopProxy<FrameReady>) {
+    let mut renderer = FrameRenderer::new(Some(MOVING_BUDGET), session.max_spp);
+    loop {
+        let (view, mut words) = {
+            let mut state = shared.lock();
+            while !state.quit && renderer.is_done(&state.view) {
+                state = shared.wait(state);
+            }
+            if state.quit {
+                return;
+            }
+            (state.view, std::mem::take(&mut state.spare))
+        };
+        let info =
+            match session.pool.install(|| renderer.frame(session.scene, session.accel, &view)) {
+                Ok(info) => info,
+                Err(error) => {
+                    shared.lock().error = Some(format!("cannot render a frame: {error}"));
+                    let _ = proxy.send_event(FrameReady);
+                    return;
+                }
+            };
+        words.resize(view.width as usize * view.height as usize, 0);
+        renderer.write_0rgb(&mut words, view.width, view.height);
+        let frame = Frame { words, width: view.width, height: view.height, info };
+        {
+            let mut state = shared.lock();
+            while !state.quit && state.ready.is_some() {
+                state = shared.wait(state);
+            }
+            if state.quit {
+                return;
+            }
+            state.ready = Some(frame);
+        }
+        if proxy.send_event(FrameReady).is_err() {
+            return; // The event loop is gone.
+        }
+    }
+}
+
+/// The window and what is shown in it.
+struct Screen {
+    window: Rc<Window>,
+    surface: softbuffer::Surface<Rc<Window>, Rc<Window>>,
+}
+
+struct App<'a> {
+    session: &'a Session<'a>,
+    shared: &'a Shared,
+    controller: Controller,
+    screen: Option<Screen>,
+    start: Instant,
+    /// The view as the event loop last sent it.
+    view: View,
+    /// The frame on screen.
+    shown: Option<Frame>,
+    frames_shown: u32,
+    /// When recent frames were shown, for frames per second.
+    recent: VecDeque<Instant>,
+    cursor: Option<PhysicalPosition<f64>>,
+    dragging: bool,
+    error: Option<anyhow::Error>,
+}
+
+impl<'a> App<'a> {
+    fn new(session: &'a Session<'a>, shared: &'a Shared) -> Self {
+        App {
+            session,
+            shared,
+            controller: session.controller.clone(),
+            screen: None,
+            start: Instant::now(),
+            view: session.view,
+            shown: None,
+            frames_shown: 0,
+            recent: VecDeque::new(),
+            cursor: None,
+            dragging: false,
+            error: None,
+        }
+    }
+
+    /// Time since the window opened: the controller's clock.
+    fn now(&self) -> Duration {
+        self.start.elapsed()
+    }
+
+    /// Sends the view to the render thread.
+    fn publish_view(&self) {
+        self.shared.lock().view = self.view;
+        self.shared.changed.notify_all();
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: anyhow::Error) {
+        self.error.get_or_insert(error);
+        event_loop.exit();
+    }
+
+    fn create_screen(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let attributes = Window::default_attributes()
+            .with_title("raylab")
+            .with_inner_size(PhysicalSize::new(self.view.width, self.view.height));
+        let window = Rc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|error| anyhow!("cannot open a window: {error}"))?,
+        );
+        let context = softbuffer::Context::new(window.clone())
+            .map_err(|error| anyhow!("cannot draw in the window: {error}"))?;
+        let surface = softbuffer::Surface::new(&context, window.clone())
+            .map_err(|error| anyhow!("cannot draw in the window: {error}"))?;
+        self.screen = Some(Screen { window, surface });
+        Ok(())
+    }
+
+    /// Copies the frame on screen into the window.
+    fn present(&mut self) -> Result<()> {
+        let (Some(screen), Some(frame)) = (&mut self.screen, &self.shown) else {
+            return Ok(());
+        };
+        let (Some(width), Some(height)) =
+            (NonZeroU32::new(frame.width), NonZeroU32::new(frame.height))
+        else {
+            return Ok(());
+        };
+        let draw_error =
+            |error: softbuffer::SoftBufferError| anyhow!("cannot draw in the window: {error}");
+        screen.surface.resize(width, height).map_err(draw_error)?;
+        let mut buffer = screen.surface.buffer_mut().map_err(draw_error)?;
+        buffer.copy_from_slice(&frame.words);
+        buffer.present().map_err(draw_error)
+    }
+
+    /// Takes the render thread's finished frame, shows it, and handles --exit-after-frames.
+    fn show_ready_frame(&mut self, event_loop: &ActiveEventLoop) {
+        let frame = {
+            let mut state = self.shared.lock();
+            if let Some(error) = state.error.take() {
+                drop(state);
+                self.fail(event_loop, anyhow!(error));
+                return;
+            }
+            let Some(frame) = state.ready.take() else {
+                return;
+            };
+            // The previous frame's memory goes back for reuse.
+            if let Some(old) = self.shown.take() {
+                state.spare = old.words;
+            }
+            frame
+        };
+        self.shared.changed.notify_all();
+        self.shown = Some(frame);
+        if let Err(error) = self.present() {
+            self.fail(event_loop, error);
+            return;
+        }
+        self.frames_shown += 1;
+        let now = Instant::now();
+        self.recent.push_back(now);
+        while self.recent.front().is_some_and(|&t| now - t > Duration::from_secs(1)) {
+            self.recent.pop_front();
+        }
+        self.update_title();
+        if self.session.exit_after_frames.is_some_and(|n| self.frames_shown >= n) {
+            if let Some(path) = self.session.screenshot {
+                match self.screenshot_to(path) {
+                    Ok(()) => {}
+                    Err(error) => return self.fail(event_loop, error),
+                }
+            }
+            event_loop.exit();
+        }
+    }
+
+    fn update_title(&self) {
+        let (Some(screen), Some(frame)) = (&self.screen, &self.shown) else {
+            return;
+        };
+        let info = &frame.info;
+        let fps = self.recent.len().saturating_sub(1) as f64
+            / self
+                .recent
+                .back()
+                .zip(self.recent.front())
+                .map_or(0.0, |(last, first)| (*last - *first).as_secs_f64())
+                .max(1e-9);
+        let resolution =
+            if info.scale > 1 { format!(" at 1/{}", info.scale) } else { String::new() };
+        let state = if info.samples >= self.session.max_spp { " (done)" } else { "" };
+        screen.window.set_title(&format!(
+            "raylab — {} — {:.0} fps, {:.1} ms, {} spp{resolution}{state} — stage {} — arrows move, \
+             WASDQE light, drag look, 1-5 stage, P screenshot, R reset, H keys, Esc quit",
+            self.session.scene.name,
+            if self.recent.len() > 1 { fps } else { 0.0 },
+            info.render_time.as_secs_f64() * 1e3,
+            info.samples,
+            self.view.stage,
+        ));
+    }
+
+    /// Writes the frame on screen to `path`.
+    fn screenshot_to(&self, path: &std::path::Path) -> Result<()> {
+        let Some(frame) = &self.shown else {
+            bail!("no frame has been shown yet");
+        };
+        save_screenshot(path, &frame.words, frame.width, frame.height)?;
+        println!(
+            "screenshot: {} ({}×{}, {} samples per pixel)",
+            path.display(),
+            frame.width,
+            frame.height,
+            frame.info.samples
+        );
+        Ok(())
+    }
+
+    fn key(&mut self, event_loop: &ActiveEventLoop, code: KeyCode, pressed: bool, repeat: bool) {
+        let now = self.now();
+        if let Some(motion) = motion_for(code) {
+            if pressed {
+                self.controller.press(motion, now);
+            } else {
+                self.controller.release(motion, now);
+            }
+            return;
+        }
+        if !pressed
+            || repeat
+                && !matches!(
+                    code,
+                    KeyCode::Equal | KeyCode::Minus | KeyCode::NumpadAdd | KeyCode::NumpadSubtract
+                )
+        {
+            return;
+        }
+        match code {
+            KeyCode::Escape => event_loop.exit(),
+            KeyCode::KeyR => self.controller.reset(now),
+            KeyCode::Equal | KeyCode::NumpadAdd => self.controller.faster(now),
+            KeyCode::Minus | KeyCode::NumpadSubtract => self.controller.slower(now),
+            KeyCode::KeyH | KeyCode::F1 => println!("{KEYS_HELP}"),
+            KeyCode::KeyP | KeyCode::F12 => {
+                let result = next_screenshot_path().and_then(|path| self.screenshot_to(&path));
+                if let Err(error) = result {
+                    // Not worth closing the window for: say so and go on.
+                    eprintln!("raylab: error: {error:#}");
+                }
+            }
+            _ => {
+                if let Some(stage) = stage_for(code) {
+                    self.view.stage = stage;
+                    self.publish_view();
+                }
+            }
+        }
+    }
+}
+
+/// The held motion a key drives, as in the lab: arrows for the camera, W/S/A/D/Q/E for the light.
+fn motion_for(code: KeyCode) -> Option<Motion> {
+    Some(match code {
+        KeyCode::ArrowUp => Motion::Forward,
+        KeyCode::ArrowDown => Motion::Back,
+        KeyCode::ArrowLeft => Motion::TurnLeft,
+        KeyCode::ArrowRight => Motion::TurnRight,
+        KeyCode::PageUp => Motion::Up,
+        KeyCode::PageDown => Motion::Down,
+        KeyCode::KeyW => Motion::LightForward,
+        KeyCode::KeyS => Motion::LightBack,
+        KeyCode::KeyA => Motion::LightLeft,
+        KeyCode::KeyD => Motion::LightRight,
+        KeyCode::KeyQ => Motion::LightUp,
+        KeyCode::KeyE => Motion::LightDown,
+        _ => return None,
+    })
+}
+
+/// The lab stage a number key shows.
+fn stage_for(code: KeyCode) -> Option<Stage> {
+    let index = match code {
+        KeyCode::Digit1 | KeyCode::Numpad1 => 0,
+        KeyCode::Digit2 | KeyCode::Numpad2 => 1,
+        KeyCode::Digit3 | KeyCode::Numpad3 => 2,
+        KeyCode::Digit4 | KeyCode::Numpad4 => 3,
+        KeyCode::Digit5 | KeyCode::Numpad5 => 4,
+        _ => return None,
+    };
+    Some(Stage::ALL[index])
+}
+
+impl ApplicationHandler<FrameReady> for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.screen.is_none()
+            && let Err(error) = self.create_screen(event_loop)
+        {
+            self.fail(event_loop, error);
+        }
+    }
+
+    fn user_event(&mut self, event_loop: &ActiveEventLoop, _: FrameReady) {
+        self.show_ready_frame(event_loop);
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::RedrawRequested => {
+                if let Err(error) = self.present() {
+                    self.fail(event_loop, error);
+                }
+            }
+            WindowEvent::Resized(size) if size.width > 0 && size.height > 0 => {
+                self.view.width = size.width;
+                self.view.height = size.height;
+                self.publish_view();
+            }
+            WindowEvent::Focused(false) => self.controller.release_all(self.now()),
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    self.key(event_loop, code, event.state == ElementState::Pressed, event.repeat);
+                }
+            }
+            WindowEvent::MouseInput { button: MouseButton::Left, state, .. } => {
+                self.dragging = state == ElementState::Pressed;
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                if self.dragging
+                    && let Some(last) = self.cursor
+                {
+                    let focal = self.view.focal_per_width * self.view.width as f32;
+                    self.controller.drag(
+                        (position.x - last.x) as f32,
+                        (position.y - last.y) as f32,
+                        focal,
+                    );
+                }
+                self.cursor = Some(position);
+            }
+            WindowEvent::CursorLeft { .. } => self.cursor = None,
+            WindowEvent::MouseWheel { delta, .. } => {
+                let up = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y > 0.0,
+                    MouseScrollDelta::PixelDelta(position) => position.y > 0.0,
+                };
+                let now = self.now();
+                if up { self.controller.faster(now) } else { self.controller.slower(now) }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let now = self.now();
+        self.controller.advance(now);
+        let pose = self.controller.pose();
+        if pose != self.view.pose {
+            self.view.pose = pose;
+            self.publish_view();
+        }
+        // While something moves, wake up to move it on even without events.
+        event_loop.set_control_flow(if self.controller.is_moving() {
+            ControlFlow::WaitUntil(Instant::now() + TICK)
+        } else {
+            ControlFlow::Wait
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_follow_the_lab() {
+        assert_eq!(motion_for(KeyCode::ArrowUp), Some(Motion::Forward));
+        assert_eq!(motion_for(KeyCode::ArrowLeft), Some(Motion::TurnLeft));
+        assert_eq!(motion_for(KeyCode::KeyW), Some(Motion::LightForward));
+        assert_eq!(motion_for(KeyCode::KeyQ), Some(Motion::LightUp));
+        assert_eq!(motion_for(KeyCode::KeyR), None);
+        assert_eq!(stage_for(KeyCode::Digit1), Some(Stage::Flat));
+        assert_eq!(stage_for(KeyCode::Numpad5), Some(Stage::Ambient));
+        // Every motion has a key.
+        for motion in Motion::ALL {
+            assert!(ALL_KEYS.iter().any(|&code| motion_for(code) == Some(motion)), "{motion:?}");
+        }
+    }
+
+    const ALL_KEYS: [KeyCode; 12] = [
+        KeyCode::ArrowUp,
+        KeyCode::ArrowDown,
+        KeyCode::ArrowLeft,
+        KeyCode::ArrowRight,
+        KeyCode::PageUp,
+        KeyCode::PageDown,
+        KeyCode::KeyW,
+        KeyCode::KeyS,
+        KeyCode::KeyA,
+        KeyCode::KeyD,
+        KeyCode::KeyQ,
+        KeyCode::KeyE,
+    ];
+}
