@@ -267,6 +267,10 @@ impl<'a> App<'a> {
 
     /// Takes the render thread's finished frame, shows it, and handles --exit-after-frames.
     fn show_ready_frame(&mut self, event_loop: &ActiveEventLoop) {
+        if event_loop.exiting() {
+            // Frames can still arrive after `exit`: the last one shown must stay the last.
+            return;
+        }
         let frame = {
             let mut state = self.shared.lock();
             if let Some(error) = state.error.take() {
