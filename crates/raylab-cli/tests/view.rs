@@ -1,10 +1,11 @@
 //! `raylab view` end to end: headless frames, the refined picture against `raylab render` of as
-//! many samples, a real window under Xvfb (a virtual X server) checked the same way, and the
-//! errors: no display, a display that is not there, an unwritable screenshot.
+//! many samples, a real window under Xvfb (a virtual X server) checked the same way, keys typed
+//! into it (xdotool), and the errors: no display, a display that is not there, an unwritable
+//! screenshot.
 //!
-//! The window test needs Debian's `xvfb` package (`.ci/run` installs it). Without it the test
-//! says it is skipped on standard error, unless `RAYLAB_REQUIRE_XVFB=1` is set (as `.ci/run`
-//! sets it), in which case it fails: in CI it can never pass by not running.
+//! The window tests need Debian's `xvfb` and `xdotool` packages (`.ci/run` installs them).
+//! Without them a test says on standard error that it is skipped, unless `RAYLAB_REQUIRE_XVFB=1`
+//! is set (as `.ci/run` sets it), in which case it fails: in CI it can never pass by not running.
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
@@ -275,4 +276,88 @@ fn the_window_shows_what_render_renders() {
     // Five frames of a still camera are five samples per pixel: `raylab render --spp 5`.
     let shown = load(&dir.path().join("window.png"));
     assert_same_picture("window", &shown, &reference_render(dir.path(), 5));
+}
+
+/// Runs `xdotool` on the virtual display; `None` (with a message) when it is not installed and
+/// not required.
+fn xdotool(xvfb: &Xvfb, args: &[&str]) -> Option<String> {
+    let out = match Command::new("xdotool").args(args).env("DISPLAY", &xvfb.display).output() {
+        Ok(out) => out,
+        Err(error) => {
+            let required = std::env::var_os("RAYLAB_REQUIRE_XVFB").is_some_and(|v| v == "1");
+            assert!(!required, "RAYLAB_REQUIRE_XVFB=1 but xdotool cannot run: {error}");
+            eprintln!("SKIPPED: the input test needs xdotool (Debian: apt-get install xdotool)");
+            return None;
+        }
+    };
+    assert!(out.status.success(), "xdotool {args:?}: {}", text(&out.stderr));
+    Some(text(&out.stdout).trim().to_string())
+}
+
+/// A user at the keyboard: resize the window, hold RIGHT for half a second (60°/s: a yaw of
+/// about 30°), press P for a screenshot and Esc to quit. The screenshot has the new size and
+/// shows the camera turned by about 30°; the title shows the frame rate and the samples.
+#[test]
+fn keys_turn_the_camera_and_the_window_resizes() {
+    let Some(xvfb) = Xvfb::start() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = raylab(dir.path())
+        .args(["view", "--size", "96x72"])
+        .env("DISPLAY", &xvfb.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pause = |ms| std::thread::sleep(Duration::from_millis(ms));
+    let Some(window) = xdotool(&xvfb, &["search", "--sync", "--name", "^raylab"]) else {
+        let _ = child.kill();
+        return;
+    };
+    let window = window.lines().next().unwrap().to_string();
+    xdotool(&xvfb, &["windowfocus", "--sync", &window]);
+    xdotool(&xvfb, &["windowsize", "--sync", &window, "120", "90"]);
+    pause(300);
+    xdotool(&xvfb, &["keydown", "Right"]);
+    pause(500);
+    xdotool(&xvfb, &["keyup", "Right"]);
+    pause(700);
+    let title = xdotool(&xvfb, &["getwindowname", &window]).unwrap();
+    xdotool(&xvfb, &["key", "p"]);
+    pause(300);
+    xdotool(&xvfb, &["key", "Escape"]);
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("Esc did not close the window");
+        }
+        pause(20);
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "exit {:?}: {}", out.status, text(&out.stderr));
+    assert!(title.contains("fps") && title.contains(" ms") && title.contains("spp"), "{title}");
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("screenshot: raylab-view-1.png (120×90, "), "{stdout}");
+    let shown = load(&dir.path().join("raylab-view-1.png"));
+
+    // Which yaw is it? The render it is closest to, among yaws 5° apart.
+    let (mut best_yaw, mut best_error) = (0, f64::INFINITY);
+    for yaw in (0..=60).step_by(5) {
+        let yaw_arg = yaw.to_string();
+        let args = ["render", "--size", "120x90", "--spp", "16", "--yaw", &yaw_arg, "-o", "y.png"];
+        let out = run(dir.path(), &args);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let error =
+            compare_rgb8(&shown, &load(&dir.path().join("y.png")), 0).unwrap().mean_abs_diff;
+        if error < best_error {
+            (best_yaw, best_error) = (yaw, error);
+        }
+    }
+    eprintln!("turned by about {best_yaw}° (mean difference {best_error:.2} levels)");
+    // Half a second at 60°/s, give or take the delivery of the key events.
+    assert!((15..=45).contains(&best_yaw), "the camera turned by about {best_yaw}°");
 }
