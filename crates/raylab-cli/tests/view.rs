@@ -315,6 +315,7 @@ fn keys_turn_the_camera_and_the_window_resizes() {
     let pause = |ms| std::thread::sleep(Duration::from_millis(ms));
     let Some(window) = xdotool(&xvfb, &["search", "--sync", "--name", "^raylab"]) else {
         let _ = child.kill();
+        let _ = child.wait();
         return;
     };
     let window = window.lines().next().unwrap().to_string();
@@ -333,6 +334,7 @@ fn keys_turn_the_camera_and_the_window_resizes() {
     while child.try_wait().unwrap().is_none() {
         if start.elapsed() > Duration::from_secs(60) {
             let _ = child.kill();
+            let _ = child.wait();
             panic!("Esc did not close the window");
         }
         pause(20);
