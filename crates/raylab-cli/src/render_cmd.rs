@@ -5,10 +5,9 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use raylab::film::format_bytes;
 use raylab::{Bvh, Film, Lab, image_io, render_samples};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup, tidy, tidy_vec3};
@@ -42,16 +41,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let Setup { scene, camera, threads } = &setup;
     let (width, height) = (camera.width, camera.height);
     image_io::check_writable(&args.output)?;
-    let needed = Film::bytes_needed(width, height);
-    if let Some(available) = system::available_memory_bytes()
-        && needed > available
-    {
-        bail!(
-            "image size {width}×{height} needs {} of memory, but only {} is available",
-            format_bytes(needed),
-            format_bytes(available)
-        );
-    }
+    // With more than one sample, the sums and their mean: two films.
+    let films = if args.spp > 1 { 2 } else { 1 };
+    system::check_memory(films * Film::bytes_needed(width, height), width, height)?;
     let pool = setup.thread_pool()?;
 
     let start = Instant::now();

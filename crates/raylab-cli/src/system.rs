@@ -13,6 +13,21 @@ fn parse_meminfo(meminfo: &str, key: &str) -> Option<u64> {
     kib.checked_mul(1024)
 }
 
+/// Fails with a one-line error when a `width×height` picture needs more memory (`bytes`) than
+/// the machine has available.
+pub fn check_memory(bytes: u64, width: u32, height: u32) -> anyhow::Result<()> {
+    if let Some(available) = available_memory_bytes()
+        && bytes > available
+    {
+        anyhow::bail!(
+            "image size {width}×{height} needs {} of memory, but only {} is available",
+            raylab::film::format_bytes(bytes),
+            raylab::film::format_bytes(available)
+        );
+    }
+    Ok(())
+}
+
 /// The number of threads the machine runs at once.
 pub fn cores() -> usize {
     std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)

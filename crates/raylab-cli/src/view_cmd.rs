@@ -10,10 +10,10 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use raylab::interactive::{Controller, FrameRenderer, Motion, Pose, View, rgb8_from_0rgb};
-use raylab::{Bvh, Scene, image_io};
+use raylab::{Bvh, Film, Scene, image_io};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup};
-use crate::view_window;
+use crate::{system, view_window};
 
 /// The key map, printed by `raylab view --help` and the H key.
 pub const KEYS_HELP: &str = "\
@@ -54,11 +54,13 @@ pub struct ViewArgs {
     #[arg(long, requires = "headless")]
     still: bool,
 
-    /// Write the picture shown after the last frame to this PNG (or PPM) file.
+    /// Write the picture shown last to this PNG (or PPM) file: after the last frame, or when the
+    /// window closes.
     #[arg(long, value_name = "FILE")]
     screenshot: Option<PathBuf>,
 
-    /// Close the window after this many frames (with --screenshot: after writing it).
+    /// Close the window after this many frames, or once the picture has --max-spp samples (with
+    /// --screenshot: after writing it).
     #[arg(long, value_name = "N", conflicts_with = "headless", value_parser = clap::value_parser!(u32).range(1..))]
     exit_after_frames: Option<u32>,
 
@@ -79,8 +81,19 @@ pub struct Session<'a> {
     pub exit_after_frames: Option<u32>,
 }
 
+/// The largest window side `raylab view` opens (X11 windows cannot be wider than 32,767).
+const MAX_WINDOW_SIDE: u32 = 16_384;
+
 pub fn run(args: &ViewArgs) -> Result<()> {
     let setup = args.scene.setup()?;
+    let (width, height) = (setup.camera.width, setup.camera.height);
+    if width.max(height) > MAX_WINDOW_SIDE {
+        bail!(
+            "--size {width}x{height} is too large for a window: at most {MAX_WINDOW_SIDE} pixels a side"
+        );
+    }
+    // The picture's sums, the window's words and their spare: about twice a film.
+    system::check_memory(2 * Film::bytes_needed(width, height), width, height)?;
     if let Some(path) = &args.screenshot {
         image_io::check_writable(path)?;
     }
@@ -157,6 +170,7 @@ fn headless(mut session: Session, frames: u32, still: bool) -> Result<()> {
     // Benchmarks measure full-resolution frames: no budget.
     let mut renderer = FrameRenderer::new(None, session.max_spp);
     let mut times = Vec::with_capacity(frames as usize);
+    let mut words = Vec::new();
     let run_start = Instant::now();
     for frame in 0..frames {
         // Simulated time: the path is the same on every machine.
@@ -176,7 +190,7 @@ fn headless(mut session: Session, frames: u32, still: bool) -> Result<()> {
             println!("the picture has all its {} samples per pixel: stopping", session.max_spp);
             break;
         }
-        let info = pool.install(|| renderer.frame(scene, accel, &view))?;
+        let info = pool.install(|| renderer.frame(scene, accel, &view, &mut words))?;
         let ms = info.render_time.as_secs_f64() * 1e3;
         times.push(ms);
         println!(
@@ -208,8 +222,6 @@ fn headless(mut session: Session, frames: u32, still: bool) -> Result<()> {
         total.as_secs_f64(),
     );
     if let Some(path) = session.screenshot {
-        let mut words = vec![0; view.width as usize * view.height as usize];
-        renderer.write_0rgb(&mut words, view.width, view.height);
         save_screenshot(path, &words, view.width, view.height)?;
         println!("screenshot: {}", path.display());
     }

@@ -25,6 +25,9 @@ use crate::view_cmd::{KEYS_HELP, Session, next_screenshot_path, save_screenshot}
 /// A moving frame should take at most this long: 30 frames per second with room to spare.
 const MOVING_BUDGET: Duration = Duration::from_millis(25);
 
+/// Touchpad scrolling changes the speed by a step per this many pixels.
+const WHEEL_STEP_PIXELS: f64 = 60.0;
+
 /// While keys are held, the pose is brought up to date at least this often.
 const TICK: Duration = Duration::from_millis(4);
 
@@ -74,6 +77,12 @@ impl Shared {
     fn wait<'a>(&self, guard: MutexGuard<'a, State>) -> MutexGuard<'a, State> {
         self.changed.wait(guard).unwrap_or_else(|poisoned| poisoned.into_inner())
     }
+
+    /// Tells the render thread to stop.
+    fn quit(&self) {
+        self.lock().quit = true;
+        self.changed.notify_all();
+    }
 }
 
 /// The event the render thread sends: a frame is ready (or the renderer failed).
@@ -111,10 +120,14 @@ pub fn run(session: Session) -> Result<()> {
     let proxy = event_loop.create_proxy();
     let mut app = App::new(&session, &shared);
     let result = std::thread::scope(|scope| {
-        let renderer = scope.spawn(|| render_loop(&session, &shared, proxy));
+        let renderer = scope.spawn(|| render_thread(&session, &shared, proxy));
+        // However the event loop ends, even by a panic, the render thread is told to stop
+        // before the scope waits for it.
+        let _quit = QuitOnDrop(&shared);
         let result = event_loop.run_app(&mut app);
-        shared.lock().quit = true;
-        shared.changed.notify_all();
+        // Close the window now rather than after the frame in flight.
+        app.screen = None;
+        shared.quit();
         if renderer.join().is_err() {
             shared.lock().error.get_or_insert_with(|| "the render thread failed".into());
         }
@@ -126,12 +139,44 @@ pub fn run(session: Session) -> Result<()> {
     if let Some(error) = shared.lock().error.take() {
         bail!("{error}");
     }
-    result.map_err(|error| anyhow!("the window's event loop failed: {error}"))
+    result.map_err(|error| anyhow!("the window's event loop failed: {error}"))?;
+    // --screenshot without --exit-after-frames: the picture shown when the window closed.
+    if let Some(path) = session.screenshot
+        && !app.screenshot_written
+    {
+        app.screenshot_to(path)?;
+    }
+    Ok(())
 }
 
-/// The render thread: renders the latest view whenever it is not done, and hands over frames
-/// one at a time.
-fn render_loop(session: &Session, shared: &Shared, proxy: EventLoopProxy<FrameReady>) {
+/// Tells the render thread to stop when dropped.
+struct QuitOnDrop<'a>(&'a Shared);
+
+impl Drop for QuitOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.quit();
+    }
+}
+
+/// The render thread: [`render_loop`], with a panic reported to the window as an error rather
+/// than leaving it waiting for frames.
+fn render_thread(session: &Session, shared: &Shared, proxy: EventLoopProxy<FrameReady>) {
+    let rendered = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        render_loop(session, shared, &proxy)
+    }));
+    if let Err(panic) = rendered {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        shared.lock().error = Some(format!("the render thread failed: {message}"));
+        let _ = proxy.send_event(FrameReady);
+    }
+}
+
+/// Renders the latest view whenever it is not done, and hands over frames one at a time.
+fn render_loop(session: &Session, shared: &Shared, proxy: &EventLoopProxy<FrameReady>) {
     let mut renderer = FrameRenderer::new(Some(MOVING_BUDGET), session.max_spp);
     loop {
         let (view, mut words) = {
@@ -144,17 +189,17 @@ fn render_loop(session: &Session, shared: &Shared, proxy: EventLoopProxy<FrameRe
             }
             (state.view, std::mem::take(&mut state.spare))
         };
-        let info =
-            match session.pool.install(|| renderer.frame(session.scene, session.accel, &view)) {
-                Ok(info) => info,
-                Err(error) => {
-                    shared.lock().error = Some(format!("cannot render a frame: {error}"));
-                    let _ = proxy.send_event(FrameReady);
-                    return;
-                }
-            };
-        words.resize(view.width as usize * view.height as usize, 0);
-        renderer.write_0rgb(&mut words, view.width, view.height);
+        let rendered = session
+            .pool
+            .install(|| renderer.frame(session.scene, session.accel, &view, &mut words));
+        let info = match rendered {
+            Ok(info) => info,
+            Err(error) => {
+                shared.lock().error = Some(format!("cannot render a frame: {error}"));
+                let _ = proxy.send_event(FrameReady);
+                return;
+            }
+        };
         let frame = Frame { words, width: view.width, height: view.height, info };
         {
             let mut state = shared.lock();
@@ -186,9 +231,15 @@ struct App<'a> {
     start: Instant,
     /// The view as the event loop last sent it.
     view: View,
-    /// The frame on screen.
+    /// The frame on screen, or about to be: see `unpresented`.
     shown: Option<Frame>,
+    /// `shown` is waiting for the window to be redrawn (winit's `RedrawRequested`, which paces
+    /// frames to the compositor on Wayland).
+    unpresented: bool,
     frames_shown: u32,
+    screenshot_written: bool,
+    /// Wheel motion in pixels (touchpads) not yet turned into speed steps.
+    wheel_pixels: f64,
     /// When recent frames were shown, for frames per second.
     recent: VecDeque<Instant>,
     cursor: Option<PhysicalPosition<f64>>,
@@ -206,7 +257,10 @@ impl<'a> App<'a> {
             start: Instant::now(),
             view: session.view,
             shown: None,
+            unpresented: false,
             frames_shown: 0,
+            screenshot_written: false,
+            wheel_pixels: 0.0,
             recent: VecDeque::new(),
             cursor: None,
             dragging: false,
@@ -262,12 +316,14 @@ impl<'a> App<'a> {
         screen.surface.resize(width, height).map_err(draw_error)?;
         let mut buffer = screen.surface.buffer_mut().map_err(draw_error)?;
         buffer.copy_from_slice(&frame.words);
+        screen.window.pre_present_notify();
         buffer.present().map_err(draw_error)
     }
 
-    /// Takes the render thread's finished frame, shows it, and handles --exit-after-frames.
-    fn show_ready_frame(&mut self, event_loop: &ActiveEventLoop) {
-        if event_loop.exiting() {
+    /// Takes the render thread's finished frame, if the one before it has been presented, and
+    /// asks for a redraw to present it. A frame of a size the window no longer has is dropped.
+    fn take_ready_frame(&mut self, event_loop: &ActiveEventLoop) {
+        if event_loop.exiting() || self.unpresented {
             // Frames can still arrive after `exit`: the last one shown must stay the last.
             return;
         }
@@ -281,6 +337,12 @@ impl<'a> App<'a> {
             let Some(frame) = state.ready.take() else {
                 return;
             };
+            if (frame.width, frame.height) != (self.view.width, self.view.height) {
+                state.spare = frame.words;
+                drop(state);
+                self.shared.changed.notify_all();
+                return;
+            }
             // The previous frame's memory goes back for reuse.
             if let Some(old) = self.shown.take() {
                 state.spare = old.words;
@@ -289,9 +351,20 @@ impl<'a> App<'a> {
         };
         self.shared.changed.notify_all();
         self.shown = Some(frame);
+        self.unpresented = true;
+        if let Some(screen) = &self.screen {
+            screen.window.request_redraw();
+        }
+    }
+
+    /// Presents the frame taken last, then handles --exit-after-frames (or a finished picture
+    /// that will get no more frames) and takes the next frame if one is ready.
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) {
         if let Err(error) = self.present() {
-            self.fail(event_loop, error);
-            return;
+            return self.fail(event_loop, error);
+        }
+        if !std::mem::take(&mut self.unpresented) {
+            return; // Shown again after being uncovered: not a new frame.
         }
         self.frames_shown += 1;
         let now = Instant::now();
@@ -300,15 +373,20 @@ impl<'a> App<'a> {
             self.recent.pop_front();
         }
         self.update_title();
-        if self.session.exit_after_frames.is_some_and(|n| self.frames_shown >= n) {
-            if let Some(path) = self.session.screenshot {
-                match self.screenshot_to(path) {
-                    Ok(()) => {}
-                    Err(error) => return self.fail(event_loop, error),
+        if let Some(limit) = self.session.exit_after_frames {
+            let info = &self.shown.as_ref().expect("a frame was presented").info;
+            // A finished picture gets no more frames: it is the last one.
+            let finished = !info.moving && info.samples >= self.session.max_spp;
+            if self.frames_shown >= limit || finished {
+                if let Some(path) = self.session.screenshot
+                    && let Err(error) = self.screenshot_to(path)
+                {
+                    return self.fail(event_loop, error);
                 }
+                return event_loop.exit();
             }
-            event_loop.exit();
         }
+        self.take_ready_frame(event_loop);
     }
 
     fn update_title(&self) {
@@ -327,8 +405,9 @@ impl<'a> App<'a> {
             if info.scale > 1 { format!(" at 1/{}", info.scale) } else { String::new() };
         let state = if info.samples >= self.session.max_spp { " (done)" } else { "" };
         screen.window.set_title(&format!(
-            "raylab — {} — {:.0} fps, {:.1} ms, {} spp{resolution}{state} — stage {} — arrows move, \
-             WASDQE light, drag look, 1-5 stage, P screenshot, R reset, H keys, Esc quit",
+            "raylab — {} — {:.0} fps, {:.1} ms/frame, {} spp{resolution}{state} — stage {} — \
+             arrows move/turn, PgUp/PgDn up/down, WASDQE light, drag look, +/- speed, 1-5 stage, \
+             P screenshot, R reset, H keys, Esc quit",
             self.session.scene.name,
             if self.recent.len() > 1 { fps } else { 0.0 },
             info.render_time.as_secs_f64() * 1e3,
@@ -338,11 +417,14 @@ impl<'a> App<'a> {
     }
 
     /// Writes the frame on screen to `path`.
-    fn screenshot_to(&self, path: &std::path::Path) -> Result<()> {
+    fn screenshot_to(&mut self, path: &std::path::Path) -> Result<()> {
         let Some(frame) = &self.shown else {
-            bail!("no frame has been shown yet");
+            bail!("cannot write the screenshot {}: no frame was shown", path.display());
         };
         save_screenshot(path, &frame.words, frame.width, frame.height)?;
+        if Some(path) == self.session.screenshot {
+            self.screenshot_written = true;
+        }
         println!(
             "screenshot: {} ({}×{}, {} samples per pixel)",
             path.display(),
@@ -437,23 +519,22 @@ impl ApplicationHandler<FrameReady> for App<'_> {
     }
 
     fn user_event(&mut self, event_loop: &ActiveEventLoop, _: FrameReady) {
-        self.show_ready_frame(event_loop);
+        self.take_ready_frame(event_loop);
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
-            WindowEvent::RedrawRequested => {
-                if let Err(error) = self.present() {
-                    self.fail(event_loop, error);
-                }
-            }
+            WindowEvent::RedrawRequested => self.redraw(event_loop),
             WindowEvent::Resized(size) if size.width > 0 && size.height > 0 => {
                 self.view.width = size.width;
                 self.view.height = size.height;
                 self.publish_view();
             }
-            WindowEvent::Focused(false) => self.controller.release_all(self.now()),
+            WindowEvent::Focused(false) => {
+                self.controller.release_all(self.now());
+                self.dragging = false;
+            }
             WindowEvent::KeyboardInput { event, .. } => {
                 if let PhysicalKey::Code(code) = event.physical_key {
                     self.key(event_loop, code, event.state == ElementState::Pressed, event.repeat);
@@ -467,22 +548,36 @@ impl ApplicationHandler<FrameReady> for App<'_> {
                     && let Some(last) = self.cursor
                 {
                     let focal = self.view.focal_per_width * self.view.width as f32;
+                    let now = self.now();
                     self.controller.drag(
                         (position.x - last.x) as f32,
                         (position.y - last.y) as f32,
                         focal,
+                        now,
                     );
                 }
                 self.cursor = Some(position);
             }
             WindowEvent::CursorLeft { .. } => self.cursor = None,
             WindowEvent::MouseWheel { delta, .. } => {
-                let up = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y > 0.0,
-                    MouseScrollDelta::PixelDelta(position) => position.y > 0.0,
+                // A notch of a wheel is a step; a touchpad's pixels count by WHEEL_STEP_PIXELS.
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y.signum() as i32 * (y != 0.0) as i32,
+                    MouseScrollDelta::PixelDelta(position) => {
+                        self.wheel_pixels += position.y;
+                        let steps = (self.wheel_pixels / WHEEL_STEP_PIXELS).trunc();
+                        self.wheel_pixels -= steps * WHEEL_STEP_PIXELS;
+                        steps as i32
+                    }
                 };
                 let now = self.now();
-                if up { self.controller.faster(now) } else { self.controller.slower(now) }
+                for _ in 0..steps.unsigned_abs() {
+                    if steps > 0 {
+                        self.controller.faster(now)
+                    } else {
+                        self.controller.slower(now)
+                    }
+                }
             }
             _ => {}
         }
@@ -511,31 +606,35 @@ mod tests {
 
     #[test]
     fn keys_follow_the_lab() {
-        assert_eq!(motion_for(KeyCode::ArrowUp), Some(Motion::Forward));
-        assert_eq!(motion_for(KeyCode::ArrowLeft), Some(Motion::TurnLeft));
-        assert_eq!(motion_for(KeyCode::KeyW), Some(Motion::LightForward));
-        assert_eq!(motion_for(KeyCode::KeyQ), Some(Motion::LightUp));
-        assert_eq!(motion_for(KeyCode::KeyR), None);
-        assert_eq!(stage_for(KeyCode::Digit1), Some(Stage::Flat));
-        assert_eq!(stage_for(KeyCode::Numpad5), Some(Stage::Ambient));
-        // Every motion has a key.
-        for motion in Motion::ALL {
-            assert!(ALL_KEYS.iter().any(|&code| motion_for(code) == Some(motion)), "{motion:?}");
+        let table = [
+            (KeyCode::ArrowUp, Motion::Forward),
+            (KeyCode::ArrowDown, Motion::Back),
+            (KeyCode::ArrowLeft, Motion::TurnLeft),
+            (KeyCode::ArrowRight, Motion::TurnRight),
+            (KeyCode::PageUp, Motion::Up),
+            (KeyCode::PageDown, Motion::Down),
+            (KeyCode::KeyW, Motion::LightForward),
+            (KeyCode::KeyS, Motion::LightBack),
+            (KeyCode::KeyA, Motion::LightLeft),
+            (KeyCode::KeyD, Motion::LightRight),
+            (KeyCode::KeyQ, Motion::LightUp),
+            (KeyCode::KeyE, Motion::LightDown),
+        ];
+        for (code, motion) in table {
+            assert_eq!(motion_for(code), Some(motion), "{code:?}");
         }
+        // Every motion has its key, and no other key moves anything.
+        assert!(Motion::ALL.iter().all(|m| table.iter().any(|(_, t)| t == m)));
+        for code in [KeyCode::KeyR, KeyCode::KeyP, KeyCode::Escape, KeyCode::Digit1, KeyCode::Space]
+        {
+            assert_eq!(motion_for(code), None, "{code:?}");
+        }
+        let stages =
+            [KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5];
+        for (code, stage) in stages.into_iter().zip(Stage::ALL) {
+            assert_eq!(stage_for(code), Some(stage));
+        }
+        assert_eq!(stage_for(KeyCode::Numpad5), Some(Stage::Ambient));
+        assert_eq!(stage_for(KeyCode::Digit6), None);
     }
-
-    const ALL_KEYS: [KeyCode; 12] = [
-        KeyCode::ArrowUp,
-        KeyCode::ArrowDown,
-        KeyCode::ArrowLeft,
-        KeyCode::ArrowRight,
-        KeyCode::PageUp,
-        KeyCode::PageDown,
-        KeyCode::KeyW,
-        KeyCode::KeyS,
-        KeyCode::KeyA,
-        KeyCode::KeyD,
-        KeyCode::KeyQ,
-        KeyCode::KeyE,
-    ];
 }

@@ -173,6 +173,11 @@ fn an_unwritable_screenshot_fails_before_rendering() {
     assert!(!text(&out.stdout).contains("frame 1"), "{}", text(&out.stdout));
     let out = run(dir.path(), &["view", "--frames", "3"]);
     assert_eq!(out.status.code(), Some(2), "--frames needs --headless");
+    // X11 windows cannot be that wide: an error, not a panic in the window system.
+    let out = run(dir.path(), &["view", "--size", "70000x10"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("too large for a window") && stderr.lines().count() == 1, "{stderr}");
 }
 
 #[test]
@@ -276,6 +281,18 @@ fn the_window_shows_what_render_renders() {
     // Five frames of a still camera are five samples per pixel: `raylab render --spp 5`.
     let shown = load(&dir.path().join("window.png"));
     assert_same_picture("window", &shown, &reference_render(dir.path(), 5));
+
+    // Asked for more frames than the picture will get, the window closes when it is finished.
+    let mut command = raylab(dir.path());
+    command
+        .args(["view", "--screenshot", "done.png", "--exit-after-frames", "50", "--max-spp", "3"])
+        .args(SCENE_ARGS)
+        .env("DISPLAY", &xvfb.display);
+    let out = output_within(command, Duration::from_secs(120));
+    assert!(out.status.success(), "exit {:?}: {}", out.status, text(&out.stderr));
+    assert!(text(&out.stdout).contains("(96×72, 3 samples per pixel)"), "{}", text(&out.stdout));
+    let shown = load(&dir.path().join("done.png"));
+    assert_same_picture("window-done", &shown, &reference_render(dir.path(), 3));
 }
 
 /// Runs `xdotool` on the virtual display; `None` (with a message) when it is not installed and
@@ -304,7 +321,7 @@ fn keys_turn_the_camera_and_the_window_resizes() {
     };
     let dir = tempfile::tempdir().unwrap();
     let mut child = raylab(dir.path())
-        .args(["view", "--size", "96x72"])
+        .args(["view", "--size", "96x72", "--screenshot", "closed.png"])
         .env("DISPLAY", &xvfb.display)
         .env_remove("WAYLAND_DISPLAY")
         .env_remove("WAYLAND_SOCKET")
@@ -341,9 +358,21 @@ fn keys_turn_the_camera_and_the_window_resizes() {
     }
     let out = child.wait_with_output().unwrap();
     assert!(out.status.success(), "exit {:?}: {}", out.status, text(&out.stderr));
-    assert!(title.contains("fps") && title.contains(" ms") && title.contains("spp"), "{title}");
+    // "raylab — cornell — 93 fps, 10.6 ms/frame, 372 spp — stage ambient — arrows …"
+    let number_before = |unit: &str| -> f64 {
+        let before = title.split(unit).next().unwrap_or_else(|| panic!("no {unit} in {title}"));
+        let number = before.rsplit(' ').next().unwrap_or_else(|| panic!("{title}"));
+        number.parse().unwrap_or_else(|_| panic!("{number:?} in {title}"))
+    };
+    assert!(number_before(" fps") > 0.0, "{title}");
+    assert!(number_before(" ms/frame") > 0.0, "{title}");
+    assert!(number_before(" spp") >= 1.0, "{title}");
+    assert!(title.contains("stage ambient") && title.contains("Esc quit"), "{title}");
     let stdout = text(&out.stdout);
     assert!(stdout.contains("screenshot: raylab-view-1.png (120×90, "), "{stdout}");
+    // --screenshot without --exit-after-frames: written when the window closed.
+    assert!(stdout.contains("screenshot: closed.png (120×90, "), "{stdout}");
+    assert_eq!(load(&dir.path().join("closed.png")).dimensions(), (120, 90));
     let shown = load(&dir.path().join("raylab-view-1.png"));
 
     // Which yaw is it? The render it is closest to, among yaws 5° apart.

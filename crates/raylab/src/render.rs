@@ -213,7 +213,7 @@ impl Accumulator {
 
     /// Writes the mean into a `width×height` window buffer of `0x00RRGGBB` words, scaled to fill
     /// it by nearest neighbour (a picture rendered at a fraction of the window's resolution fills
-    /// the window). Channels as in [`Film::to_rgb8_clamped`].
+    /// the window). Channels as in [`Film::to_rgb8_clamped`]. Runs on the current rayon pool.
     ///
     /// # Panics
     /// If `out` does not hold `width×height` words.
@@ -223,14 +223,14 @@ impl Accumulator {
         let columns: Vec<usize> = (0..width as usize)
             .map(|x| (x * source_width / width as usize).min(source_width - 1))
             .collect();
-        for (y, row) in out.chunks_exact_mut(width as usize).enumerate() {
+        out.par_chunks_exact_mut(width as usize).enumerate().for_each(|(y, row)| {
             let source_row = (y * source_height / height as usize).min(source_height - 1);
             for (word, &x) in row.iter_mut().zip(&columns) {
-                let [r, g, b] =
-                    self.mean_at(source_row * source_width + x).to_array().map(to_8bit_clamped);
+                let mean = self.mean_at(source_row * source_width + x);
+                let [r, g, b] = mean.to_array().map(to_8bit_clamped);
                 *word = (r as u32) << 16 | (g as u32) << 8 | b as u32;
             }
-        }
+        });
     }
 }
 

@@ -82,11 +82,32 @@ pub const SPEED_STEP: f32 = std::f32::consts::SQRT_2;
 /// a factor of 2¹⁰ either way.
 const MAX_SPEED_STEPS: i32 = 20;
 
+/// A [`Pose`] in double precision: integrated over many intervals, it stays independent of
+/// how the time was cut into them to well below `f32` rounding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PoseF64 {
+    position: DVec3,
+    yaw: f64,
+    pitch: f64,
+    light: DVec3,
+}
+
+impl From<Pose> for PoseF64 {
+    fn from(pose: Pose) -> Self {
+        PoseF64 {
+            position: pose.position.as_dvec3(),
+            yaw: pose.yaw as f64,
+            pitch: pose.pitch as f64,
+            light: pose.light.as_dvec3(),
+        }
+    }
+}
+
 /// Turns held keys, their durations and mouse drags into a [`Pose`].
 #[derive(Clone, Debug)]
 pub struct Controller {
     home: Pose,
-    pose: Pose,
+    pose: PoseF64,
     held: [bool; Motion::ALL.len()],
     /// The time up to which the pose is integrated.
     now: Duration,
@@ -101,7 +122,7 @@ impl Controller {
         let home = Pose { pitch: home.pitch.clamp(-MAX_PITCH, MAX_PITCH), ..home };
         Controller {
             home,
-            pose: home,
+            pose: home.into(),
             held: [false; Motion::ALL.len()],
             now: Duration::ZERO,
             base_speed: speed,
@@ -111,7 +132,12 @@ impl Controller {
 
     /// The pose, integrated up to the last [`advance`](Self::advance) or event.
     pub fn pose(&self) -> Pose {
-        self.pose
+        Pose {
+            position: self.pose.position.as_vec3(),
+            yaw: self.pose.yaw as f32,
+            pitch: self.pose.pitch as f32,
+            light: self.pose.light.as_vec3(),
+        }
     }
 
     /// Speed of motion, in scene units per second.
@@ -161,21 +187,24 @@ impl Controller {
         self.held = [false; Motion::ALL.len()];
     }
 
-    /// Turns the camera by a mouse drag of `(dx, dy)` pixels with a focal length of `focal_px`
-    /// pixels, grabbing the picture: what was under the cursor at the centre of the image stays
-    /// under it. Dragging right turns left; dragging down looks up.
-    pub fn drag(&mut self, dx: f32, dy: f32, focal_px: f32) {
+    /// Turns the camera by a mouse drag of `(dx, dy)` pixels at time `at` with a focal length
+    /// of `focal_px` pixels, grabbing the picture: what was under the cursor at the centre of
+    /// the image stays under it. Dragging right turns left; dragging down looks up.
+    pub fn drag(&mut self, dx: f32, dy: f32, focal_px: f32, at: Duration) {
+        self.advance(at);
         if !(dx.is_finite() && dy.is_finite() && focal_px.is_finite() && focal_px > 0.0) {
             return;
         }
-        self.pose.yaw = wrap_angle(self.pose.yaw - (dx / focal_px).atan());
-        self.pose.pitch = (self.pose.pitch + (dy / focal_px).atan()).clamp(-MAX_PITCH, MAX_PITCH);
+        let max_pitch = MAX_PITCH as f64;
+        self.pose.yaw = wrap_angle(self.pose.yaw - (dx as f64 / focal_px as f64).atan());
+        self.pose.pitch =
+            (self.pose.pitch + (dy as f64 / focal_px as f64).atan()).clamp(-max_pitch, max_pitch);
     }
 
     /// Back to the starting pose (keys stay as they are, and so does the speed).
     pub fn reset(&mut self, at: Duration) {
         self.advance(at);
-        self.pose = self.home;
+        self.pose = self.home.into();
     }
 
     /// Integrates the motion of the held keys up to time `to`.
@@ -196,12 +225,12 @@ impl Controller {
         }
         // ∫₀ᵗ sin(θ₀ + ωs) ds = t·sin(θm)·sinc(ωt/2) with θm the middle yaw, and the same with
         // cos: stable for any ω, including 0.
-        let yaw0 = self.pose.yaw as f64;
+        let yaw0 = self.pose.yaw;
         let half = turn * t / 2.0;
         let sinc = if half.abs() < 1e-4 { 1.0 - half * half / 6.0 } else { half.sin() / half };
         let (sin_mid, cos_mid) = (yaw0 + half).sin_cos();
         let (int_sin, int_cos) = (t * sin_mid * sinc, t * cos_mid * sinc);
-        let (sin_pitch, cos_pitch) = (self.pose.pitch as f64).sin_cos();
+        let (sin_pitch, cos_pitch) = self.pose.pitch.sin_cos();
         // The camera: forward f = (sin θ cos p, −sin p, cos θ cos p), right r = (cos θ, 0, −sin θ)
         // and up (0, −1, 0); velocity is (forward, right, up) speeds.
         let camera = DVec3::new(
@@ -216,9 +245,9 @@ impl Controller {
             -light.z * t,
             light.x * int_cos - light.y * int_sin,
         );
-        self.pose.position = (self.pose.position.as_dvec3() + camera).as_vec3();
-        self.pose.light = (self.pose.light.as_dvec3() + light).as_vec3();
-        self.pose.yaw = wrap_angle((yaw0 + turn * t) as f32);
+        self.pose.position += camera;
+        self.pose.light += light;
+        self.pose.yaw = wrap_angle(yaw0 + turn * t);
     }
 
     /// The camera's (forward, right, up) speeds, its turn rate in radians per second, and the
@@ -242,8 +271,8 @@ impl Controller {
 }
 
 /// An angle in radians brought into `(−π, π]`, so that hours of turning keep full precision.
-fn wrap_angle(angle: f32) -> f32 {
-    use std::f32::consts::{PI, TAU};
+fn wrap_angle(angle: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
     if (-PI..=PI).contains(&angle) {
         return angle;
     }
@@ -349,7 +378,7 @@ mod tests {
         hold(&mut c, &[Motion::Down], 1.0, 2.0, 2);
         assert!(close(c.pose().position, Vec3::new(0.0, 0.5, -3.0)));
         // Looking up 90° (clamped to 89°) and moving forward rises almost straight up.
-        c.drag(0.0, 1e9, 500.0);
+        c.drag(0.0, 1e9, 500.0, secs(2.0));
         assert_eq!(c.pose().pitch, MAX_PITCH);
         hold(&mut c, &[Motion::Forward], 3.0, 4.0, 1);
         let moved = c.pose().position - Vec3::new(0.0, 0.5, -3.0);
@@ -410,7 +439,7 @@ mod tests {
         c.slower(secs(0.0));
         hold(&mut c, &[Motion::Forward, Motion::LightUp], 0.0, 1.0, 1);
         assert!(close(c.pose().position, Vec3::new(0.0, 0.0, -2.5)));
-        c.drag(100.0, 0.0, 500.0);
+        c.drag(100.0, 0.0, 500.0, secs(1.0));
         c.reset(secs(1.0));
         assert_eq!(c.pose(), home());
         c.press(Motion::TurnLeft, secs(1.0));
@@ -425,14 +454,35 @@ mod tests {
         let mut c = Controller::new(home(), 1.0);
         // A point 100 px right of the centre at f = 500 is atan(0.2) to the right; dragging it
         // to the centre turns the camera right by that angle.
-        c.drag(-100.0, 0.0, 500.0);
+        c.drag(-100.0, 0.0, 500.0, secs(0.0));
         assert!((c.pose().yaw - 0.2f32.atan()).abs() < 1e-7);
-        c.drag(0.0, 50.0, 500.0);
+        c.drag(0.0, 50.0, 500.0, secs(0.0));
         assert!((c.pose().pitch - 0.1f32.atan()).abs() < 1e-7);
         let before = c.pose();
-        c.drag(f32::NAN, 1.0, 500.0);
-        c.drag(1.0, 1.0, 0.0);
+        c.drag(f32::NAN, 1.0, 500.0, secs(0.0));
+        c.drag(1.0, 1.0, 0.0, secs(0.0));
         assert_eq!(c.pose(), before);
+    }
+
+    #[test]
+    fn a_drag_while_moving_turns_at_its_time() {
+        // Forward for a second, with a drag to the right by 90° half-way: half a unit along z,
+        // then half a unit along x, however often the pose was asked for before the drag.
+        let focal = 500.0;
+        // atan(1e7) is 90° to within 1e-7.
+        let dx = -focal * 1e7;
+        for steps in [1, 10] {
+            let mut c = Controller::new(home(), 1.0);
+            c.press(Motion::Forward, secs(0.0));
+            for i in 1..steps {
+                c.advance(secs(0.5 * i as f64 / steps as f64));
+            }
+            c.drag(dx, 0.0, focal, secs(0.5));
+            c.release(Motion::Forward, secs(1.0));
+            assert!((c.pose().yaw - FRAC_PI_2).abs() < 1e-4, "{}", c.pose().yaw);
+            let expected = home().position + Vec3::new(0.5, 0.0, 0.5);
+            assert!((c.pose().position - expected).length() < 1e-4, "{:?}", c.pose());
+        }
     }
 
     #[test]
@@ -441,8 +491,11 @@ mod tests {
         hold(&mut c, &[Motion::TurnRight], 0.0, 3600.0 * 5.0 + 0.75, 1000);
         // 60°/s for 5 h and 0.75 s: a whole number of turns plus 45°.
         assert!((c.pose().yaw - PI / 4.0).abs() < 1e-3, "{}", c.pose().yaw);
-        assert!((wrap_angle(3.0 * PI / 2.0) + FRAC_PI_2).abs() < 1e-6);
-        assert_eq!(wrap_angle(PI), PI);
-        assert!(wrap_angle(-PI - 1e-3) > 0.0);
+        {
+            use std::f64::consts::{FRAC_PI_2, PI};
+            assert!((wrap_angle(3.0 * PI / 2.0) + FRAC_PI_2).abs() < 1e-12);
+            assert_eq!(wrap_angle(PI), PI);
+            assert!(wrap_angle(-PI - 1e-3) > 0.0);
+        }
     }
 }

@@ -60,7 +60,7 @@ pub struct FrameInfo {
     pub samples: u32,
     /// The picture's resolution is `1/scale` of the window's.
     pub scale: u32,
-    /// Time spent rendering the frame.
+    /// Time spent on the frame: rendering it and writing the window's pixels.
     pub render_time: Duration,
 }
 
@@ -68,11 +68,15 @@ pub struct FrameInfo {
 pub const MAX_SCALE: u32 = 8;
 
 /// The resolution scale for the next moving frame, given that this one, at `scale`, took
-/// `elapsed` against a `budget`: coarser when over budget, finer when the finer resolution's
-/// estimated time (which grows with the pixel count) fits in ¾ of the budget.
+/// `elapsed` against a `budget`: coarser when over budget, at once by as much as the time says
+/// (it grows with the pixel count, the square of the scale's inverse); finer by one step when
+/// the finer resolution's estimated time fits in ¾ of the budget.
 pub fn next_scale(scale: u32, elapsed: Duration, budget: Duration) -> u32 {
     if elapsed > budget {
-        return (scale + 1).min(MAX_SCALE);
+        let ratio = elapsed.as_secs_f64() / budget.as_secs_f64().max(1e-9);
+        // (Less a hair, so that exactly 3× the pixel time asks for 3, not 4.)
+        let needed = (scale as f64 * ratio.sqrt() - 1e-9).ceil().min(MAX_SCALE as f64) as u32;
+        return needed.max(scale + 1).min(MAX_SCALE);
     }
     if scale > 1 {
         let growth = (scale as f64 / (scale - 1) as f64).powi(2);
@@ -109,12 +113,15 @@ impl FrameRenderer {
     }
 
     /// Renders one frame of `view` of `scene`, whose triangles `accel` holds, on the current
-    /// rayon pool: a new picture if the view changed, else one more sample of the same one.
+    /// rayon pool: a new picture if the view changed, else one more sample of the same one. The
+    /// picture is then written into `window`, resized to the view's `width×height` words of
+    /// `0x00RRGGBB` (see [`write_0rgb`](Self::write_0rgb)).
     pub fn frame<A: Accelerator + ?Sized>(
         &mut self,
         scene: &Scene,
         accel: &A,
         view: &View,
+        window: &mut Vec<u32>,
     ) -> Result<FrameInfo, FilmError> {
         let start = Instant::now();
         let refining = matches!(&self.picture, Some((shown, 1, _)) if shown == view);
@@ -141,6 +148,15 @@ impl FrameRenderer {
         let mut lab = Lab::new(scene, accel, view.stage);
         lab.light.position = view.pose.light;
         picture.add_sample(&camera, &lab);
+        let words = view.width as usize * view.height as usize;
+        window.clear();
+        window.try_reserve_exact(words).map_err(|_| FilmError::OutOfMemory {
+            width: view.width,
+            height: view.height,
+            bytes: words as u64 * 4,
+        })?;
+        window.resize(words, 0);
+        picture.write_0rgb(window, view.width, view.height);
         let render_time = start.elapsed();
         if moving && let Some(budget) = self.budget {
             self.scale = next_scale(scale, render_time, budget);
@@ -199,10 +215,14 @@ mod tests {
         assert_eq!(next_scale(1, ms(40), ms(33)), 2);
         assert_eq!(next_scale(1, ms(20), ms(33)), 1);
         assert_eq!(next_scale(MAX_SCALE, ms(400), ms(33)), MAX_SCALE);
+        // Nine times over budget: a third of the resolution at once.
+        assert_eq!(next_scale(1, ms(270), ms(30)), 3);
+        assert_eq!(next_scale(2, ms(1000), ms(10)), MAX_SCALE);
         // At scale 2 a frame of 5 ms would take about 20 ms at full resolution: fits.
         assert_eq!(next_scale(2, ms(5), ms(33)), 1);
         // 8 ms would be about 32 ms: too close to the budget, stay.
         assert_eq!(next_scale(2, ms(8), ms(33)), 2);
+        assert_eq!(next_scale(1, ms(1), Duration::ZERO), MAX_SCALE);
     }
 
     #[test]
@@ -215,72 +235,77 @@ mod tests {
         assert_eq!(lab_view(1, 1).camera(8).width, 1);
     }
 
+    fn rgb(words: &[u32], view: &View) -> RgbImage {
+        rgb8_from_0rgb(words, view.width, view.height)
+    }
+
     #[test]
     fn still_frames_refine_moving_frames_restart() {
         let scene = Scene::built_in("cornell").unwrap();
         let accel = BruteForce::new(&scene.triangles);
         let view = lab_view(24, 16);
         let mut renderer = FrameRenderer::new(None, 3);
+        let mut words = Vec::new();
         for n in 1..=3 {
             assert!(!renderer.is_done(&view));
-            let info = renderer.frame(&scene, &accel, &view).unwrap();
+            let info = renderer.frame(&scene, &accel, &view, &mut words).unwrap();
             assert_eq!((info.moving, info.samples, info.scale), (false, n, 1));
         }
         assert!(renderer.is_done(&view));
         // The picture after three still frames is the three-sample render, bit for bit.
         let camera = view.camera(1);
-        let expected =
-            render_samples(&camera, &Lab::new(&scene, &accel, Stage::Ambient), 3, &|_| {})
-                .unwrap()
-                .to_rgb8_clamped()
-                .unwrap();
-        let mut words = vec![0; 24 * 16];
-        renderer.write_0rgb(&mut words, 24, 16);
-        assert!(rgb8_from_0rgb(&words, 24, 16) == expected);
+        let lab = Lab::new(&scene, &accel, Stage::Ambient);
+        let expected = render_samples(&camera, &lab, 3, &|_| {}).unwrap();
+        assert!(rgb(&words, &view) == expected.to_rgb8_clamped().unwrap());
 
         // The light moves: a new picture, showing the moved light.
         let mut moved = view;
         moved.pose.light.x += 0.3;
-        let info = renderer.frame(&scene, &accel, &moved).unwrap();
+        let info = renderer.frame(&scene, &accel, &moved, &mut words).unwrap();
         assert_eq!((info.moving, info.samples), (true, 1));
         let mut scene_moved = scene.clone();
         scene_moved.light.position = moved.pose.light;
-        let expected =
-            crate::render(&camera, &Lab::new(&scene_moved, &accel, Stage::Ambient), &|_| {})
-                .unwrap()
-                .to_rgb8_clamped()
-                .unwrap();
-        renderer.write_0rgb(&mut words, 24, 16);
-        assert!(rgb8_from_0rgb(&words, 24, 16) == expected);
+        let lab_moved = Lab::new(&scene_moved, &accel, Stage::Ambient);
+        let expected = crate::render(&camera, &lab_moved, &|_| {}).unwrap();
+        assert!(rgb(&words, &view) == expected.to_rgb8_clamped().unwrap());
         // Standing still again refines the moved picture.
-        assert_eq!(renderer.frame(&scene, &accel, &moved).unwrap().samples, 2);
+        assert_eq!(renderer.frame(&scene, &accel, &moved, &mut words).unwrap().samples, 2);
     }
 
     #[test]
     fn moving_frames_drop_resolution_when_over_budget_and_recover_when_still() {
         let scene = Scene::built_in("cornell").unwrap();
         let accel = BruteForce::new(&scene.triangles);
-        let mut view = lab_view(64, 64);
+        let mut view = lab_view(64, 48);
         // A zero budget: every moving frame is over it.
         let mut renderer = FrameRenderer::new(Some(Duration::ZERO), 16);
-        renderer.frame(&scene, &accel, &view).unwrap();
+        let mut words = Vec::new();
+        renderer.frame(&scene, &accel, &view, &mut words).unwrap();
         let mut scales = Vec::new();
         for _ in 0..4 {
             view.pose.yaw += 0.01;
-            scales.push(renderer.frame(&scene, &accel, &view).unwrap().scale);
+            scales.push(renderer.frame(&scene, &accel, &view, &mut words).unwrap().scale);
         }
-        assert_eq!(scales, [1, 2, 3, 4]);
-        let mut words = vec![0; 64 * 64];
-        renderer.write_0rgb(&mut words, 64, 64);
-        // Blocks of 4×4 window pixels show one rendered pixel.
-        assert_eq!(words[0], words[3 * 64 + 3]);
+        // The first moving frame is at full resolution; the next at the coarsest, at once.
+        assert_eq!(scales, [1, MAX_SCALE, MAX_SCALE, MAX_SCALE]);
+        // The window shows the coarse render scaled up: each of its pixels fills a block.
+        let scale = scales[3];
+        let coarse = view.camera(scale);
+        let lab = Lab::new(&scene, &accel, Stage::Ambient);
+        let coarse = crate::render(&coarse, &lab, &|_| {}).unwrap().to_rgb8_clamped().unwrap();
+        let shown = rgb(&words, &view);
+        for (x, y, pixel) in shown.enumerate_pixels() {
+            let source = coarse
+                .get_pixel(x * coarse.width() / view.width, y * coarse.height() / view.height);
+            assert_eq!(pixel, source, "window pixel ({x}, {y}) at scale {scale}");
+        }
         // Still: full resolution again, from the first sample.
-        let info = renderer.frame(&scene, &accel, &view).unwrap();
+        let info = renderer.frame(&scene, &accel, &view, &mut words).unwrap();
         assert_eq!((info.moving, info.samples, info.scale), (false, 1, 1));
         // A resize is a change of view.
         view.width = 50;
-        let info = renderer.frame(&scene, &accel, &view).unwrap();
-        assert!(info.moving && info.samples == 1);
+        let info = renderer.frame(&scene, &accel, &view, &mut words).unwrap();
+        assert!(info.moving && info.samples == 1 && words.len() == 50 * 48);
     }
 
     #[test]
