@@ -111,8 +111,12 @@ impl Film {
 /// One channel as the lab shows it: clamp to `[0, 1]`, ×255, round. NaN shows as 0.
 #[inline]
 pub fn to_8bit_clamped(value: f32) -> u8 {
-    // `as` saturates and maps NaN to 0.
-    (value.clamp(0.0, 1.0) * 255.0).round() as u8
+    // NaN stays NaN here and `as` maps it to 0 (and NaN ≥ 0.5 is false).
+    let scaled = value.clamp(0.0, 1.0) * 255.0;
+    // Rounding half away from zero, as `f32::round`, without its library call (no SSE4.1 in the
+    // baseline x86-64): the fraction `scaled − trunc(scaled)` is exact below 2²³.
+    let whole = scaled as u8;
+    whole + (scaled - whole as f32 >= 0.5) as u8
 }
 
 #[cfg(test)]
@@ -139,6 +143,27 @@ mod tests {
         let rgb = film.to_rgb8_clamped().unwrap();
         assert_eq!(rgb.get_pixel(1, 0).0, [255, 191, 0]);
         assert_eq!(rgb.get_pixel(0, 0).0, [0, 0, 0]);
+    }
+
+    #[test]
+    fn conversion_rounds_exactly_as_f32_round() {
+        // Every value whose ×255 is near a half, and a sweep of the whole range.
+        let mut values: Vec<f32> = (0..=255 * 4).map(|i| (i as f32 + 0.5) / 4.0 / 255.0).collect();
+        for level in 0..=255u32 {
+            let half = (level as f32 + 0.5) / 255.0;
+            let mut v = half;
+            for _ in 0..4 {
+                values.extend([v, f32::from_bits(v.to_bits() + 1)]);
+                v = f32::from_bits(v.to_bits() - 1);
+            }
+        }
+        values.extend((0..100_000).map(|i| i as f32 / 99_999.0));
+        for v in values {
+            let expected = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+            assert_eq!(to_8bit_clamped(v), expected, "{v:e}");
+        }
+        assert_eq!(to_8bit_clamped(f32::INFINITY), 255);
+        assert_eq!(to_8bit_clamped(f32::NEG_INFINITY), 0);
     }
 
     #[test]

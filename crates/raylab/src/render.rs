@@ -26,6 +26,8 @@ use crate::ray::Ray;
 const BAND_ROWS: usize = 8;
 /// Tile width.
 const TILE: usize = 8;
+/// Rows per parallel task when writing a window's pixels.
+const ROWS_PER_TASK: usize = 16;
 
 /// Renders the camera's whole image with one ray through each pixel's centre.
 ///
@@ -191,17 +193,18 @@ impl Accumulator {
         self.samples += 1;
     }
 
-    /// The mean of the samples of pixel `index` (row by row); black before the first sample.
+    /// The factor that turns sums into means: `1/samples` (black before the first sample).
     #[inline]
-    fn mean_at(&self, index: usize) -> Vec3 {
-        self.sum.pixels()[index] * (1.0 / self.samples.max(1) as f32)
+    fn mean_factor(&self) -> f32 {
+        1.0 / self.samples.max(1) as f32
     }
 
     /// The mean of the samples so far, as a film.
     pub fn mean(&self) -> Result<Film, FilmError> {
         let mut film = Film::new(self.width(), self.height())?;
-        for (i, pixel) in film.pixels_mut().iter_mut().enumerate() {
-            *pixel = self.mean_at(i);
+        let factor = self.mean_factor();
+        for (pixel, sum) in film.pixels_mut().iter_mut().zip(self.sum.pixels()) {
+            *pixel = *sum * factor;
         }
         Ok(film)
     }
@@ -220,15 +223,26 @@ impl Accumulator {
     pub fn write_0rgb(&self, out: &mut [u32], width: u32, height: u32) {
         assert_eq!(out.len(), width as usize * height as usize, "a word per window pixel");
         let (source_width, source_height) = (self.width() as usize, self.height() as usize);
+        let factor = self.mean_factor();
+        let word = |sum: &Vec3| {
+            let [r, g, b] = (*sum * factor).to_array().map(to_8bit_clamped);
+            (r as u32) << 16 | (g as u32) << 8 | b as u32
+        };
+        if (source_width, source_height) == (width as usize, height as usize) {
+            // Same size: pixel for pixel.
+            out.par_chunks_mut(ROWS_PER_TASK * source_width)
+                .zip(self.sum.pixels().par_chunks(ROWS_PER_TASK * source_width))
+                .for_each(|(out, sums)| out.iter_mut().zip(sums).for_each(|(w, s)| *w = word(s)));
+            return;
+        }
         let columns: Vec<usize> = (0..width as usize)
             .map(|x| (x * source_width / width as usize).min(source_width - 1))
             .collect();
         out.par_chunks_exact_mut(width as usize).enumerate().for_each(|(y, row)| {
             let source_row = (y * source_height / height as usize).min(source_height - 1);
-            for (word, &x) in row.iter_mut().zip(&columns) {
-                let mean = self.mean_at(source_row * source_width + x);
-                let [r, g, b] = mean.to_array().map(to_8bit_clamped);
-                *word = (r as u32) << 16 | (g as u32) << 8 | b as u32;
+            let sums = &self.sum.pixels()[source_row * source_width..][..source_width];
+            for (w, &x) in row.iter_mut().zip(&columns) {
+                *w = word(&sums[x]);
             }
         });
     }
