@@ -18,6 +18,7 @@ use raylab::bvh::{BuildSettings, Bvh, Isa};
 use raylab::ray_sets::{self, Agreement, Frame, HitRecord};
 use raylab::{Accelerator, Ray};
 
+use crate::stats::median;
 use crate::system;
 
 /// The most threads `--threads` accepts.
@@ -419,12 +420,6 @@ fn time_median<T>(reps: usize, mut f: impl FnMut() -> T) -> f64 {
         })
         .collect();
     median(&mut times)
-}
-
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) }
 }
 
 fn to_json(

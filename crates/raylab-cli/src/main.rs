@@ -5,6 +5,7 @@ mod args;
 mod bench_cmd;
 mod render_cmd;
 mod scene_args;
+mod stats;
 mod system;
 mod view_cmd;
 mod view_window;

@@ -10,7 +10,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::{Bvh, Film, Lab, image_io, render_samples};
 
-use crate::scene_args::{STAGES_HELP, SceneArgs, Setup, tidy, tidy_vec3};
+use raylab::camera::tidy;
+
+use crate::scene_args::{STAGES_HELP, SceneArgs, Setup, tidy_vec3};
 use crate::system;
 
 /// Renders longer than this get a progress bar (on a terminal).

@@ -4,6 +4,7 @@
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use glam::Vec3;
+use raylab::camera::tidy;
 use raylab::{Camera, Scene, Stage};
 
 use crate::args::{self, Size};
@@ -153,13 +154,6 @@ fn load_scene(name: &str) -> Result<(Scene, bool)> {
         eprintln!("raylab: warning: {warning}");
     }
     Ok((Scene::from_mesh(&loaded.mesh), true))
-}
-
-/// A number with at most 4 significant decimals and no trailing zeros.
-pub fn tidy(v: f32) -> String {
-    let s = format!("{v:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.into() }
 }
 
 /// A vector as `(x, y, z)` with [`tidy`] numbers.

@@ -13,7 +13,7 @@ use raylab::interactive::{Controller, FrameRenderer, Motion, Pose, View, rgb8_fr
 use raylab::{Bvh, Film, Scene, image_io};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup};
-use crate::{system, view_window};
+use crate::{stats, system, view_window};
 
 /// The key map, printed by `raylab view --help` and the H key.
 pub const KEYS_HELP: &str = "\
@@ -237,14 +237,14 @@ struct Summary {
 
 /// Median, mean and 10th and 90th percentiles (nearest rank) of frame times.
 fn summarize(times: &mut [f64]) -> Summary {
-    if times.is_empty() {
-        return Summary { median: f64::NAN, mean: f64::NAN, p10: f64::NAN, p90: f64::NAN };
+    let median = stats::median(times);
+    let mean = times.iter().sum::<f64>() / times.len() as f64;
+    Summary {
+        median,
+        mean,
+        p10: stats::nearest_rank(times, 0.1),
+        p90: stats::nearest_rank(times, 0.9),
     }
-    times.sort_by(f64::total_cmp);
-    let n = times.len();
-    let rank = |q: f64| times[((q * n as f64).ceil() as usize).clamp(1, n) - 1];
-    let median = if n % 2 == 1 { times[n / 2] } else { (times[n / 2 - 1] + times[n / 2]) / 2.0 };
-    Summary { median, mean: times.iter().sum::<f64>() / n as f64, p10: rank(0.1), p90: rank(0.9) }
 }
 
 /// Writes a window buffer of `0x00RRGGBB` words to an image file (whole, or not at all).
@@ -296,7 +296,7 @@ mod tests {
     #[test]
     fn summaries_use_the_median() {
         let s = summarize(&mut [5.0, 1.0, 3.0, 100.0]);
-        assert_eq!((s.median, s.p10, s.p90), (4.0, 1.0, 100.0));
+        assert_eq!((s.median, s.mean, s.p10, s.p90), (4.0, 27.25, 1.0, 100.0));
         assert_eq!(summarize(&mut [2.0, 9.0, 4.0]).median, 4.0);
     }
 }

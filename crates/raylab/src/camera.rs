@@ -191,8 +191,9 @@ impl RayGenerator {
     }
 }
 
-/// A number for people: at most four decimals, no trailing zeros (`30.000002` → `30`).
-fn tidy(value: f32) -> String {
+/// A number for people, as the camera and the command line's reports print them: at most four
+/// decimals, no trailing zeros (`30.000002` → `30`), and no `-0`.
+pub fn tidy(value: f32) -> String {
     let text = format!("{value:.4}");
     let text = text.trim_end_matches('0').trim_end_matches('.');
     if text == "-0" { "0".to_string() } else { text.to_string() }

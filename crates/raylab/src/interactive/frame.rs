@@ -149,13 +149,16 @@ impl FrameRenderer {
         lab.light.position = view.pose.light;
         picture.add_sample(&camera, &lab);
         let words = view.width as usize * view.height as usize;
-        window.clear();
-        window.try_reserve_exact(words).map_err(|_| FilmError::OutOfMemory {
-            width: view.width,
-            height: view.height,
-            bytes: words as u64 * 4,
-        })?;
-        window.resize(words, 0);
+        if window.len() != words {
+            // Only when the size changes: every word is written below.
+            window.clear();
+            window.try_reserve_exact(words).map_err(|_| FilmError::OutOfMemory {
+                width: view.width,
+                height: view.height,
+                bytes: words as u64 * 4,
+            })?;
+            window.resize(words, 0);
+        }
         picture.write_0rgb(window, view.width, view.height);
         let render_time = start.elapsed();
         if moving && let Some(budget) = self.budget {
