@@ -38,6 +38,7 @@ pub mod mesh;
 pub mod ray;
 pub mod ray_sets;
 pub mod render;
+pub mod sampling;
 pub mod scene;
 pub mod triangle;
 
@@ -49,7 +50,8 @@ pub use integrator::{Integrator, Lab, Stage};
 pub use light::PointLight;
 pub use mesh::{Material, Mesh};
 pub use ray::{Ray, SurfacePoint};
-pub use render::{Accumulator, render, render_samples, sample_offset};
+pub use render::{Accumulator, render, render_samples};
+pub use sampling::{Sampler, SamplerKind, sample_offset};
 pub use scene::{LoadError, LoadedMesh, load_mesh};
 pub use scene::{Scene, SceneError};
 pub use triangle::Triangle;

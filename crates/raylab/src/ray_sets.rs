@@ -27,6 +27,8 @@ use glam::{DVec3, Vec3};
 use crate::accel::Hit;
 use crate::mesh::Mesh;
 use crate::ray::Ray;
+use crate::sampling;
+pub use crate::sampling::Pcg32;
 
 /// Why a ray-set file could not be read or written. The message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -41,41 +43,6 @@ pub struct RaySetError {
 impl RaySetError {
     fn new(path: &Path, message: impl Into<String>) -> Self {
         RaySetError { path: path.to_path_buf(), message: message.into() }
-    }
-}
-
-/// O'Neill's PCG32 (XSH-RR 64/32), as `pcg32_srandom_r` / `pcg32_random_r`; the same sequence as
-/// `rand_pcg::Pcg32::new(initstate, initseq)`.
-#[derive(Clone, Debug)]
-pub struct Pcg32 {
-    state: u64,
-    increment: u64,
-}
-
-impl Pcg32 {
-    const MULTIPLIER: u64 = 6364136223846793005;
-
-    /// Seeds the generator with a start state and a stream selector.
-    pub fn new(initstate: u64, initseq: u64) -> Self {
-        let mut rng = Pcg32 { state: 0, increment: (initseq << 1) | 1 };
-        rng.next_u32();
-        rng.state = rng.state.wrapping_add(initstate);
-        rng.next_u32();
-        rng
-    }
-
-    /// The next 32 random bits.
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old.wrapping_mul(Self::MULTIPLIER).wrapping_add(self.increment);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rotation = (old >> 59) as u32;
-        xorshifted.rotate_right(rotation)
-    }
-
-    /// A uniform number in `[0, 1)` with 24 random bits: `(next >> 8) · 2⁻²⁴`, exact in `f32`.
-    pub fn next_unit(&mut self) -> f64 {
-        (self.next_u32() >> 8) as f64 * (1.0 / (1u64 << 24) as f64)
     }
 }
 
@@ -305,15 +272,8 @@ pub fn diffuse_rays(frame: &Frame, mesh: &Mesh, primary: &[Ray], hits: &[HitReco
             let mut rng = Pcg32::new(pixel as u64, DIFFUSE_STREAM);
             let u1 = rng.next_unit();
             let u2 = rng.next_unit();
-            let radius = u1.sqrt();
-            let phi = 2.0 * std::f64::consts::PI * u2;
-            let local =
-                DVec3::new(radius * phi.cos(), radius * phi.sin(), (1.0 - u1).max(0.0).sqrt());
-            let s = 1f64.copysign(n.z);
-            let a = -1.0 / (s + n.z);
-            let b = n.x * n.y * a;
-            let tangent = DVec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
-            let bitangent = DVec3::new(b, s + n.y * n.y * a, -n.y);
+            let local = sampling::square_to_cosine_hemisphere_polar_f64(u1, u2);
+            let (tangent, bitangent) = sampling::orthonormal_basis_f64(n);
             let d = local.x * tangent + local.y * bitangent + local.z * n;
             // The origin is the f64 hit point rounded once, as in the reference program.
             ray_f32(p, eps, d / d.length(), f64::INFINITY)

@@ -6,12 +6,12 @@
 //! tiling.
 //!
 //! Sample 0 of a pixel goes through its centre, which is the lab's one ray per pixel; samples
-//! 1, 2, … are spread over the pixel (anti-aliasing) by [`sample_offset`]. An [`Accumulator`]
+//! 1, 2, … are spread over the pixel (anti-aliasing) by [`sample_offset`](crate::sampling::sample_offset). An [`Accumulator`]
 //! adds samples one pass at a time, which is how `raylab view` refines a still picture; a render
 //! of `N` samples at once ([`render_samples`]) is the same passes in the same order, so it gives
 //! the same pixels bit for bit.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use image::RgbImage;
 use rayon::prelude::*;
 
@@ -60,42 +60,6 @@ pub fn render_samples(
     accumulator.mean()
 }
 
-/// Where sample `index` of pixel `(x, y)` goes through the pixel, in `[0, 1)²` from its top-left
-/// corner.
-///
-/// Sample 0 is the centre `(½, ½)`. Later samples follow the R₂ low-discrepancy sequence
-/// (Roberts 2018: `{s + k·(1/φ₂, 1/φ₂²)}` with φ₂ the plastic number), shifted per pixel by a
-/// hash of its coordinates so that neighbouring pixels do not share one pattern. Any prefix of
-/// the sequence covers the pixel evenly, so a picture refined one sample at a time improves at
-/// every step.
-pub fn sample_offset(x: u32, y: u32, index: u32) -> Vec2 {
-    if index == 0 {
-        return Vec2::splat(0.5);
-    }
-    // 1/φ₂ and 1/φ₂², where φ₂ ≈ 1.3247 solves x³ = x + 1.
-    const ALPHA: [f64; 2] = [0.754_877_666_246_692_7, 0.569_840_290_998_053_3];
-    let hash = pixel_hash(x, y);
-    let shift = [
-        (hash >> 40) as f64 / (1u64 << 24) as f64,
-        (hash & 0xff_ffff) as f64 / (1u64 << 24) as f64,
-    ];
-    let k = index as f64;
-    let coordinate = |i: usize| {
-        let value = (shift[i] + k * ALPHA[i]).fract() as f32;
-        // Rounding to f32 can give exactly 1.0; keep the sample inside its pixel.
-        value.min(1.0 - f32::EPSILON / 2.0)
-    };
-    Vec2::new(coordinate(0), coordinate(1))
-}
-
-/// A well-mixed 64-bit hash of a pixel's coordinates (SplitMix64's finalizer).
-fn pixel_hash(x: u32, y: u32) -> u64 {
-    let mut z = ((x as u64) << 32 | y as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
 /// Adds sample `sample` of every pixel to `pixels` (the camera's image, row by row).
 fn add_pass(
     camera: &Camera,
@@ -119,7 +83,7 @@ fn add_pass(
             let mut ray = tile_rays.iter_mut();
             for y in first_row..first_row + rows {
                 for x in columns.clone() {
-                    let offset = sample_offset(x as u32, y as u32, sample);
+                    let offset = crate::sampling::sample_offset(x as u32, y as u32, sample);
                     *ray.next().expect("a tile's rays fit") =
                         rays.ray(x as f32 + offset.x, y as f32 + offset.y);
                 }
@@ -251,39 +215,6 @@ impl Accumulator {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sample_zero_is_the_pixel_centre_and_the_rest_stay_inside_the_pixel() {
-        assert_eq!(sample_offset(3, 4, 0), Vec2::splat(0.5));
-        for (x, y) in [(0, 0), (1, 0), (499, 499), (u32::MAX, 7)] {
-            for k in [1, 2, 3, 100, 65_535, u32::MAX] {
-                let o = sample_offset(x, y, k);
-                assert!(o.cmpge(Vec2::ZERO).all() && o.cmplt(Vec2::ONE).all(), "{o}");
-            }
-        }
-        // Neighbouring pixels do not share a pattern.
-        assert_ne!(sample_offset(0, 0, 1), sample_offset(1, 0, 1));
-        assert_ne!(sample_offset(0, 0, 1), sample_offset(0, 1, 1));
-    }
-
-    #[test]
-    fn samples_cover_the_pixel_evenly() {
-        // n² consecutive samples leave at most a fifth of the pixel's n×n cells empty and put at
-        // most 3 in any; n² uniform random points would leave about n²/e (37 %) of them empty.
-        for (x, y) in [(0, 0), (17, 230), (499, 3)] {
-            for n in [4usize, 8] {
-                let mut cells = vec![0u32; n * n];
-                for k in 1..=(n * n) as u32 {
-                    let o = sample_offset(x, y, k) * n as f32;
-                    cells[o.y as usize * n + o.x as usize] += 1;
-                }
-                let empty = cells.iter().filter(|&&c| c == 0).count();
-                assert!(empty <= n * n / 5 && cells.iter().all(|&c| c <= 3), "{n}: {cells:?}");
-            }
-            let mean = (1..=1024).map(|k| sample_offset(x, y, k)).sum::<Vec2>() / 1024.0;
-            assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.01, "{mean}");
-        }
-    }
 
     #[test]
     fn window_words_are_nearest_neighbour_and_clamped() {

@@ -1,0 +1,306 @@
+//! Sampling: warps from the unit square to the shapes a renderer samples, each beside its
+//! density, and the [`Sampler`] that feeds them.
+//!
+//! The shape follows pbrt-v4's `util/sampling.h`: every warp is a small pure function
+//! `square_to_*(u) -> point` with its `*_pdf(point)` right below it, so that the pair can be read
+//! and tested together (the chi-square tests in this module's tests check every warp against its
+//! density). Densities are per unit solid angle for directions and per unit area for points.
+//!
+//! - [`sample_offset`]: where sample `k` of a pixel goes through it (the lab's centre, then R₂).
+//! - [`Sampler`]: the numbers behind every random decision of a path, derived from
+//!   (seed, pixel, sample index) alone, so pictures do not depend on threads or tiling.
+
+mod sampler;
+
+#[cfg(test)]
+pub(crate) mod chi2;
+
+use std::f32::consts::{FRAC_1_PI, PI};
+
+use glam::{DVec3, Vec2, Vec3};
+
+pub use sampler::{Pcg32, Sampler, SamplerKind, mix64};
+
+/// Where sample `index` of pixel `(x, y)` goes through the pixel, in `[0, 1)²` from its top-left
+/// corner: the lab's pixel sampling.
+///
+/// Sample 0 is the centre `(½, ½)`. Later samples follow the R₂ low-discrepancy sequence
+/// (Roberts 2018: `{s + k·(1/φ₂, 1/φ₂²)}` with φ₂ the plastic number), shifted per pixel by a
+/// hash of its coordinates so that neighbouring pixels do not share one pattern. Any prefix of
+/// the sequence covers the pixel evenly, so a picture refined one sample at a time improves at
+/// every step.
+pub fn sample_offset(x: u32, y: u32, index: u32) -> Vec2 {
+    if index == 0 {
+        return Vec2::splat(0.5);
+    }
+    // 1/φ₂ and 1/φ₂², where φ₂ ≈ 1.3247 solves x³ = x + 1.
+    const ALPHA: [f64; 2] = [0.754_877_666_246_692_7, 0.569_840_290_998_053_3];
+    let hash = pixel_hash(x, y);
+    let shift = [
+        (hash >> 40) as f64 / (1u64 << 24) as f64,
+        (hash & 0xff_ffff) as f64 / (1u64 << 24) as f64,
+    ];
+    let k = index as f64;
+    let coordinate = |i: usize| {
+        let value = (shift[i] + k * ALPHA[i]).fract() as f32;
+        // Rounding to f32 can give exactly 1.0; keep the sample inside its pixel.
+        value.min(ONE_MINUS_EPSILON)
+    };
+    Vec2::new(coordinate(0), coordinate(1))
+}
+
+/// The largest `f32` below 1: samples live in `[0, 1)`.
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// A well-mixed 64-bit hash of a pixel's coordinates (SplitMix64's finalizer).
+pub fn pixel_hash(x: u32, y: u32) -> u64 {
+    mix64(((x as u64) << 32 | y as u64).wrapping_add(0x9e37_79b9_7f4a_7c15))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Disks and hemispheres.
+
+/// A point on the unit disk, uniform by area: Shirley & Chiu's concentric map, which keeps
+/// strata compact (a stratified square gives a stratified disk).
+#[inline]
+pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
+    let offset = 2.0 * u - Vec2::ONE;
+    if offset == Vec2::ZERO {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if offset.x.abs() > offset.y.abs() {
+        (offset.x, std::f32::consts::FRAC_PI_4 * (offset.y / offset.x))
+    } else {
+        (
+            offset.y,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (offset.x / offset.y),
+        )
+    };
+    let (sin, cos) = theta.sin_cos();
+    r * Vec2::new(cos, sin)
+}
+
+/// Density of [`square_to_uniform_disk_concentric`] per unit area: `1/π` inside the disk.
+#[inline]
+pub fn uniform_disk_pdf(p: Vec2) -> f32 {
+    if p.length_squared() <= 1.0 { FRAC_1_PI } else { 0.0 }
+}
+
+/// A direction in the hemisphere `z > 0` with density `cos θ / π` (Malley's method: a
+/// concentric disk point lifted to the hemisphere).
+#[inline]
+pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = square_to_uniform_disk_concentric(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+/// Density of [`square_to_cosine_hemisphere`] per unit solid angle: `cos θ / π` for `z > 0`.
+#[inline]
+pub fn cosine_hemisphere_pdf(w: Vec3) -> f32 {
+    if w.z > 0.0 { w.z * FRAC_1_PI } else { 0.0 }
+}
+
+/// A direction in the hemisphere `z ≥ 0`, uniform by solid angle.
+#[inline]
+pub fn square_to_uniform_hemisphere(u: Vec2) -> Vec3 {
+    let z = u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    Vec3::new(r * cos, r * sin, z)
+}
+
+/// Density of [`square_to_uniform_hemisphere`]: `1/2π` for `z ≥ 0`.
+#[inline]
+pub fn uniform_hemisphere_pdf(w: Vec3) -> f32 {
+    if w.z >= 0.0 { 0.5 * FRAC_1_PI } else { 0.0 }
+}
+
+/// A direction on the unit sphere, uniform by solid angle.
+#[inline]
+pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    Vec3::new(r * cos, r * sin, z)
+}
+
+/// Density of [`square_to_uniform_sphere`]: `1/4π` everywhere.
+#[inline]
+pub fn uniform_sphere_pdf(_w: Vec3) -> f32 {
+    0.25 * FRAC_1_PI
+}
+
+// ---------------------------------------------------------------------------------------------
+// Triangles.
+
+/// Barycentric coordinates `(b0, b1, b2)` of a point uniform by area on a triangle (Heitz 2019,
+/// "A Low-Distortion Map Between Triangle and Square": no square root, and it keeps strata).
+#[inline]
+pub fn square_to_uniform_triangle(u: Vec2) -> [f32; 3] {
+    let (b0, b1) = if u.x < u.y {
+        let b0 = u.x / 2.0;
+        (b0, u.y - b0)
+    } else {
+        let b1 = u.y / 2.0;
+        (u.x - b1, b1)
+    };
+    [b0, b1, 1.0 - b0 - b1]
+}
+
+/// Density of a point uniform on a triangle of `area`, per unit area: `1/area`.
+#[inline]
+pub fn uniform_triangle_pdf(area: f32) -> f32 {
+    if area > 0.0 { 1.0 / area } else { 0.0 }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Filters.
+
+/// An offset from a pixel's centre distributed as a Gaussian of standard deviation `sigma`,
+/// truncated at `radius` on each axis (by inverting the truncated normal's distribution per axis).
+pub fn square_to_truncated_gaussian(u: Vec2, sigma: f32, radius: f32) -> Vec2 {
+    let axis = |u: f32| {
+        let edge = erf(radius / (sigma * std::f32::consts::SQRT_2));
+        sigma * std::f32::consts::SQRT_2 * erf_inv((2.0 * u - 1.0) * edge)
+    };
+    Vec2::new(axis(u.x), axis(u.y))
+}
+
+/// The error function, to about 1e-7 (Abramowitz & Stegun 7.1.26 is too coarse; this is the
+/// rational approximation of W. J. Cody as used by many numeric libraries, evaluated in `f64`).
+pub fn erf(x: f32) -> f32 {
+    libm_erf(x as f64) as f32
+}
+
+/// `erf` in double precision by its Taylor series near 0 and a continued fraction for the
+/// complement further out: accurate to ~1e-12 over the line.
+fn libm_erf(x: f64) -> f64 {
+    let a = x.abs();
+    let value = if a < 2.5 {
+        // erf(x) = 2/√π Σ (−1)ⁿ x^(2n+1) / (n! (2n+1))
+        let mut term = a;
+        let mut sum = a;
+        let x2 = a * a;
+        let mut n = 0.0;
+        while term.abs() > 1e-17 * sum.abs() {
+            n += 1.0;
+            term *= -x2 / n;
+            sum += term / (2.0 * n + 1.0);
+        }
+        sum * std::f64::consts::FRAC_2_SQRT_PI
+    } else {
+        // erfc(x) = exp(−x²)/√π · 1/(x + 1/2/(x + 1/(x + 3/2/(x + …)))) (Lentz's method).
+        let tiny = 1e-300;
+        let mut f = a;
+        let mut c = a;
+        let mut d = 0.0;
+        for k in 1..200 {
+            let coefficient = k as f64 / 2.0;
+            d = a + coefficient * d;
+            d = if d == 0.0 { tiny } else { d };
+            c = a + coefficient / c;
+            c = if c == 0.0 { tiny } else { c };
+            d = 1.0 / d;
+            let delta = c * d;
+            f *= delta;
+            if (delta - 1.0).abs() < 1e-16 {
+                break;
+            }
+        }
+        1.0 - (-a * a).exp() / (f * std::f64::consts::PI.sqrt())
+    };
+    value.copysign(x)
+}
+
+/// The inverse error function on `(−1, 1)`: Giles' single-precision approximation ("Approximating
+/// the erfinv function", GPU Computing Gems, 2011), then two Newton steps in `f64`.
+pub fn erf_inv(y: f32) -> f32 {
+    let y = y.clamp(-ONE_MINUS_EPSILON, ONE_MINUS_EPSILON) as f64;
+    let mut w = -((1.0 - y) * (1.0 + y)).ln();
+    let mut x = if w < 5.0 {
+        w -= 2.5;
+        let mut p = 2.810_226_36e-08;
+        for c in [
+            3.432_739_39e-07,
+            -3.523_387_7e-06,
+            -4.391_506_54e-06,
+            0.000_218_580_87,
+            -0.001_253_725_03,
+            -0.004_177_681_64,
+            0.246_640_727,
+            1.501_409_41,
+        ] {
+            p = c + p * w;
+        }
+        p * y
+    } else {
+        w = w.sqrt() - 3.0;
+        let mut p = -0.000_200_214_257;
+        for c in [
+            0.000_100_950_558,
+            0.001_349_343_22,
+            -0.003_673_428_44,
+            0.005_739_507_73,
+            -0.007_622_461_3,
+            0.009_438_870_47,
+            1.001_674_06,
+            2.832_976_82,
+        ] {
+            p = c + p * w;
+        }
+        p * y
+    };
+    for _ in 0..2 {
+        let error = libm_erf(x) - y;
+        x -= error / (std::f64::consts::FRAC_2_SQRT_PI * (-x * x).exp());
+    }
+    x as f32
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frames and heuristics.
+
+/// An orthonormal basis `(tangent, bitangent)` completing the unit vector `n` to a right-handed
+/// frame, without a branch on a near-zero axis (Duff et al., "Building an Orthonormal Basis,
+/// Revisited", JCGT 2017).
+#[inline]
+pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+    let s = 1f32.copysign(n.z);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x), Vec3::new(b, s + n.y * n.y * a, -n.y))
+}
+
+/// [`orthonormal_basis`] in double precision: the ray-set protocol's diffuse rays.
+#[inline]
+pub fn orthonormal_basis_f64(n: DVec3) -> (DVec3, DVec3) {
+    let s = 1f64.copysign(n.z);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (DVec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x), DVec3::new(b, s + n.y * n.y * a, -n.y))
+}
+
+/// A cosine-weighted direction about +z by polar coordinates, `r = √u₁`, `φ = 2πu₂`, in double
+/// precision: the ray-set protocol's diffuse rays (§5), which must match the reference program
+/// bit for bit. Renders use [`square_to_cosine_hemisphere`].
+#[inline]
+pub fn square_to_cosine_hemisphere_polar_f64(u1: f64, u2: f64) -> DVec3 {
+    let radius = u1.sqrt();
+    let phi = 2.0 * std::f64::consts::PI * u2;
+    DVec3::new(radius * phi.cos(), radius * phi.sin(), (1.0 - u1).max(0.0).sqrt())
+}
+
+/// The power heuristic with β = 2 (Veach 1997): the weight of a sample drawn with density `f`
+/// when another strategy would have drawn it with density `g`.
+#[inline]
+pub fn power_heuristic(f: f32, g: f32) -> f32 {
+    let (f2, g2) = (f * f, g * g);
+    if f2.is_infinite() {
+        return 1.0;
+    }
+    if f2 + g2 == 0.0 { 0.0 } else { f2 / (f2 + g2) }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,203 @@
+//! Every warp against its density (chi-square), and the helpers' known values.
+
+use glam::{Vec2, Vec3};
+
+use super::chi2::{self, Rectangle, Sphere};
+use super::*;
+
+const ATTEMPTS: usize = 400_000;
+/// Warp tests in this file (for the Šidák correction).
+const TESTS: usize = 6;
+
+fn uniform(rng: &mut Pcg32) -> Vec2 {
+    Vec2::new(rng.next_f32(), rng.next_f32())
+}
+
+#[test]
+fn cosine_hemisphere_fits_its_density() {
+    chi2::run(
+        &Sphere,
+        (16, 32),
+        ATTEMPTS,
+        1,
+        |r| Some(square_to_cosine_hemisphere(uniform(r))),
+        cosine_hemisphere_pdf,
+    )
+    .assert_fits("cosine hemisphere", TESTS, 1e-3);
+}
+
+#[test]
+fn uniform_hemisphere_and_sphere_fit_their_densities() {
+    chi2::run(
+        &Sphere,
+        (16, 32),
+        ATTEMPTS,
+        2,
+        |r| Some(square_to_uniform_hemisphere(uniform(r))),
+        uniform_hemisphere_pdf,
+    )
+    .assert_fits("uniform hemisphere", TESTS, 1e-3);
+    chi2::run(
+        &Sphere,
+        (16, 32),
+        ATTEMPTS,
+        3,
+        |r| Some(square_to_uniform_sphere(uniform(r))),
+        uniform_sphere_pdf,
+    )
+    .assert_fits("uniform sphere", TESTS, 1e-3);
+}
+
+#[test]
+fn concentric_disk_fits_its_density() {
+    let domain = Rectangle(Vec2::splat(-1.0), Vec2::splat(1.0));
+    chi2::run(
+        &domain,
+        (24, 24),
+        ATTEMPTS,
+        4,
+        |r| {
+            let p = square_to_uniform_disk_concentric(uniform(r));
+            Some(Vec3::new(p.x, p.y, 0.0))
+        },
+        |p| uniform_disk_pdf(Vec2::new(p.x, p.y)),
+    )
+    // The disk's edge crosses cells: the midpoint rule's error there.
+    .assert_fits("concentric disk", TESTS, 2e-3);
+}
+
+#[test]
+fn triangle_points_fit_the_uniform_area_density() {
+    // The triangle (0,0), (2,0), (0.5,1.5): area 1.5.
+    let [a, b, c] = [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.5, 1.5, 0.0)];
+    let inside = |p: Vec3| {
+        let edge = |p0: Vec3, p1: Vec3| (p1 - p0).cross(p - p0).z >= 0.0;
+        edge(a, b) && edge(b, c) && edge(c, a)
+    };
+    chi2::run(
+        &Rectangle(Vec2::ZERO, Vec2::new(2.0, 1.5)),
+        (24, 24),
+        ATTEMPTS,
+        5,
+        |r| {
+            let [b0, b1, b2] = square_to_uniform_triangle(uniform(r));
+            Some(b0 * a + b1 * b + b2 * c)
+        },
+        |p| if inside(p) { uniform_triangle_pdf(1.5) } else { 0.0 },
+    )
+    .assert_fits("uniform triangle", TESTS, 5e-3);
+}
+
+#[test]
+fn truncated_gaussian_fits_its_density() {
+    let (sigma, radius) = (0.5f32, 2.0f32);
+    let edge = erf(radius / (sigma * std::f32::consts::SQRT_2));
+    let density_1d =
+        |x: f32| (-x * x / (2.0 * sigma * sigma)).exp() / (sigma * (2.0 * PI).sqrt()) / edge;
+    chi2::run(
+        &Rectangle(Vec2::splat(-radius), Vec2::splat(radius)),
+        (20, 20),
+        ATTEMPTS,
+        6,
+        |r| {
+            let p = square_to_truncated_gaussian(uniform(r), sigma, radius);
+            Some(Vec3::new(p.x, p.y, 0.0))
+        },
+        |p| density_1d(p.x) * density_1d(p.y),
+    )
+    .assert_fits("truncated gaussian", TESTS, 1e-3);
+}
+
+#[test]
+fn erf_and_its_inverse_match_known_values() {
+    for (x, expected) in [
+        (0.0f32, 0.0f32),
+        (0.5, 0.520_499_9),
+        (1.0, 0.842_700_8),
+        (2.0, 0.995_322_3),
+        (3.0, 0.999_977_9),
+    ] {
+        assert!((erf(x) - expected).abs() < 1e-6, "erf({x}) = {}", erf(x));
+        assert!((erf(-x) + expected).abs() < 1e-6);
+    }
+    for y in [-0.999f32, -0.5, 0.0, 0.1, 0.9, 0.999_9] {
+        assert!((erf(erf_inv(y)) - y).abs() < 1e-6, "{y}");
+    }
+}
+
+#[test]
+fn warps_stay_in_their_domains_at_the_square_s_corners() {
+    let corners = [
+        Vec2::ZERO,
+        Vec2::new(ONE_MINUS_EPSILON, 0.0),
+        Vec2::splat(ONE_MINUS_EPSILON),
+        Vec2::new(0.0, ONE_MINUS_EPSILON),
+        Vec2::splat(0.5),
+    ];
+    for u in corners {
+        let w = square_to_cosine_hemisphere(u);
+        assert!(w.z >= 0.0 && (w.length() - 1.0).abs() < 1e-6, "{u}: {w}");
+        let [b0, b1, b2] = square_to_uniform_triangle(u);
+        assert!(b0 >= 0.0 && b1 >= 0.0 && b2 >= 0.0 && ((b0 + b1 + b2) - 1.0).abs() < 1e-6, "{u}");
+        assert!(square_to_uniform_disk_concentric(u).length() <= 1.0 + 1e-6);
+        assert!((square_to_uniform_sphere(u).length() - 1.0).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn orthonormal_bases_are_orthonormal_and_right_handed() {
+    for n in [
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::X,
+        Vec3::new(0.3, -0.4, 0.866).normalize(),
+        Vec3::new(0.0, 0.0, -1e-9).normalize_or(Vec3::Z),
+    ] {
+        let (t, b) = orthonormal_basis(n);
+        assert!((t.length() - 1.0).abs() < 1e-6 && (b.length() - 1.0).abs() < 1e-6);
+        assert!(t.dot(n).abs() < 1e-6 && b.dot(n).abs() < 1e-6 && t.dot(b).abs() < 1e-6);
+        assert!((t.cross(b) - n).length() < 1e-5, "{n}");
+    }
+}
+
+#[test]
+fn the_power_heuristic_weights_sum_to_one() {
+    for (f, g) in [(1.0f32, 1.0f32), (0.2, 3.0), (5.0, 0.0), (0.0, 0.0)] {
+        let sum = power_heuristic(f, g) + power_heuristic(g, f);
+        assert!(sum == 0.0 && f == 0.0 && g == 0.0 || (sum - 1.0).abs() < 1e-6, "{f} {g}");
+    }
+    assert_eq!(power_heuristic(f32::INFINITY, 1.0), 1.0);
+}
+
+#[test]
+fn sample_zero_is_the_pixel_centre_and_the_rest_stay_inside_the_pixel() {
+    assert_eq!(sample_offset(3, 4, 0), Vec2::splat(0.5));
+    for (x, y) in [(0, 0), (1, 0), (499, 499), (u32::MAX, 7)] {
+        for k in [1, 2, 3, 100, 65_535, u32::MAX] {
+            let o = sample_offset(x, y, k);
+            assert!(o.cmpge(Vec2::ZERO).all() && o.cmplt(Vec2::ONE).all(), "{o}");
+        }
+    }
+    // Neighbouring pixels do not share a pattern.
+    assert_ne!(sample_offset(0, 0, 1), sample_offset(1, 0, 1));
+    assert_ne!(sample_offset(0, 0, 1), sample_offset(0, 1, 1));
+}
+
+#[test]
+fn samples_cover_the_pixel_evenly() {
+    // n² consecutive samples leave at most a fifth of the pixel's n×n cells empty and put at
+    // most 3 in any; n² uniform random points would leave about n²/e (37 %) of them empty.
+    for (x, y) in [(0, 0), (17, 230), (499, 3)] {
+        for n in [4usize, 8] {
+            let mut cells = vec![0u32; n * n];
+            for k in 1..=(n * n) as u32 {
+                let o = sample_offset(x, y, k) * n as f32;
+                cells[o.y as usize * n + o.x as usize] += 1;
+            }
+            let empty = cells.iter().filter(|&&c| c == 0).count();
+            assert!(empty <= n * n / 5 && cells.iter().all(|&c| c <= 3), "{n}: {cells:?}");
+        }
+        let mean = (1..=1024).map(|k| sample_offset(x, y, k)).sum::<Vec2>() / 1024.0;
+        assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.01, "{mean}");
+    }
+}

@@ -1,0 +1,176 @@
+#!/usr/bin/env python3
+"""Reference renders of Mitsuba 3's built-in Cornell box (mi.cornell_box()).
+
+Renders the scene that shared/scenes/mitsuba-cbox/ exports (see its README.md
+and cbox.json) with Mitsuba itself, so that raylab's path tracer can be
+compared against it.
+
+Scene: mi.cornell_box() unchanged except for
+  * film:       hdrfilm, rfilter box, SIZE x SIZE, pixel_format rgb, float32
+  * sampler:    independent, sample_count SPP (seed passed to mi.render)
+  * integrator: path, max_depth 8, rr_depth 5 (Mitsuba's default, made explicit)
+
+Output: linear float32 RGB, no tonemapping, row 0 = top of the image.
+  OUT            OpenEXR (via mi.Bitmap)
+  --npy          OUT with .npy suffix: float32 array (H, W, 3)
+  --pfm          OUT with .pfm suffix: little-endian PFM, 'PF\\nW H\\n-1.0\\n',
+                 rows bottom-to-top (standard PFM)
+
+--passes N renders N independent passes of SPP samples each (seeds SEED,
+SEED+1, ..., SEED+N-1) and averages them: with a box filter every pixel gets
+exactly SPP samples per pass, so the average equals one render with N*SPP spp.
+
+Timing: prints the wall time of the rendering proper (mi.render + evaluation
++ sync, summed over passes), the scene load time, and the time since the
+interpreter started (whole process, minus interpreter start-up; measure the
+whole process from outside with /usr/bin/time -v for the exact figure).
+
+Requirements: pip install mitsuba; for the llvm_* variants a libLLVM
+(Debian: apt-get install libllvm19) and
+DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so.
+
+Example:
+  DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
+  python3 tools/mitsuba/cbox_reference.py --variant llvm_ad_rgb \\
+      --size 512 --spp 64 --seed 0 --out /work/refs/cbox_512_64spp.exr --npy
+"""
+
+import time
+
+T_PROCESS0 = time.perf_counter()
+
+import argparse
+import os
+import sys
+
+import numpy as np
+
+
+def write_pfm(path, img):
+    """Standard little-endian colour PFM; img is (H, W, 3), row 0 = top."""
+    img = np.ascontiguousarray(img, dtype=np.float32)
+    h, w, c = img.shape
+    assert c == 3
+    with open(path, "wb") as f:
+        f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+        f.write(np.flipud(img).astype("<f4").tobytes())
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        tag = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        c = 3 if tag == b"PF" else 1
+        dt = "<f4" if scale < 0 else ">f4"
+        data = np.frombuffer(f.read(w * h * c * 4), dtype=dt)
+    return np.flipud(data.reshape(h, w, c)).astype(np.float32)
+
+
+def build_scene_dict(mi, size, spp, max_depth, rr_depth):
+    d = mi.cornell_box()
+    d["sensor"]["film"] = {
+        "type": "hdrfilm",
+        "width": size,
+        "height": size,
+        "rfilter": {"type": "box"},
+        "pixel_format": "rgb",
+        "component_format": "float32",
+    }
+    d["sensor"]["sampler"] = {"type": "independent", "sample_count": spp}
+    d["integrator"] = {"type": "path", "max_depth": max_depth, "rr_depth": rr_depth}
+    return d
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--size", type=int, default=512, help="film width = height")
+    ap.add_argument("--spp", type=int, default=64, help="samples per pixel per pass")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--passes", type=int, default=1,
+                    help="independent passes (seeds seed..seed+passes-1), averaged")
+    ap.add_argument("--max-depth", type=int, default=8)
+    ap.add_argument("--rr-depth", type=int, default=5)
+    ap.add_argument("--threads", type=int, default=0,
+                    help="Dr.Jit worker threads (0 = Dr.Jit default = all cores)")
+    ap.add_argument("--out", required=True, help="output .exr path")
+    ap.add_argument("--npy", action="store_true", help="also write OUT.npy")
+    ap.add_argument("--pfm", action="store_true", help="also write OUT.pfm")
+    args = ap.parse_args()
+
+    if args.variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
+        cand = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+        if os.path.exists(cand):
+            os.environ["DRJIT_LIBLLVM_PATH"] = cand
+
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    if args.threads > 0:
+        dr.set_thread_count(args.threads)
+
+    t0 = time.perf_counter()
+    scene = mi.load_dict(build_scene_dict(mi, args.size, args.spp,
+                                          args.max_depth, args.rr_depth))
+    t_load = time.perf_counter() - t0
+
+    acc = None
+    acc2 = None
+    t_render = 0.0
+    pass_times = []
+    for i in range(args.passes):
+        t0 = time.perf_counter()
+        img = mi.render(scene, spp=args.spp, seed=args.seed + i)
+        dr.eval(img)
+        dr.sync_thread()
+        dt = time.perf_counter() - t0
+        t_render += dt
+        pass_times.append(dt)
+        a = np.array(img, dtype=np.float64)
+        acc = a if acc is None else acc + a
+        acc2 = a * a if acc2 is None else acc2 + a * a
+        if args.passes > 1:
+            print(f"pass {i + 1}/{args.passes} seed {args.seed + i}: {dt:.3f} s",
+                  flush=True)
+    img = (acc / args.passes).astype(np.float32)
+    assert img.shape == (args.size, args.size, 3), img.shape
+
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)) or ".", exist_ok=True)
+    mi.Bitmap(img, pixel_format=mi.Bitmap.PixelFormat.RGB).write(args.out)
+    stem = os.path.splitext(args.out)[0]
+    if args.npy:
+        np.save(stem + ".npy", img)
+    if args.pfm:
+        write_pfm(stem + ".pfm", img)
+
+    total_spp = args.spp * args.passes
+    n = args.size * args.size * total_spp
+    m = img.reshape(-1, 3).mean(axis=0)
+    print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant}")
+    print(f"size {args.size}x{args.size} spp {total_spp} ({args.passes} pass(es) x "
+          f"{args.spp}) seed {args.seed} max_depth {args.max_depth} "
+          f"rr_depth {args.rr_depth}")
+    print(f"scene load: {t_load:.3f} s")
+    print(f"render wall time (mi.render + eval + sync): {t_render:.3f} s "
+          f"({n / t_render / 1e6:.2f} M samples/s)")
+    print(f"process time since interpreter start: "
+          f"{time.perf_counter() - T_PROCESS0:.3f} s")
+    print(f"mean R G B: {m[0]:.6f} {m[1]:.6f} {m[2]:.6f}  overall {img.mean():.6f}")
+    if args.passes > 1:
+        # standard error of the averaged image, from the pass-to-pass spread
+        mean = acc / args.passes
+        var = np.maximum(acc2 / args.passes - mean * mean, 0.0) * (
+            args.passes / (args.passes - 1))
+        se = np.sqrt(np.mean(var / args.passes))
+        print(f"estimated RMS standard error of the result (from {args.passes} "
+              f"passes): {se:.6f}")
+    print(f"nonfinite: {int((~np.isfinite(img)).sum())}  min {img.min():.6g} "
+          f"max {img.max():.6g}")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
