@@ -148,7 +148,7 @@ def main():
 
     total_spp = args.spp * args.passes
     n = args.size * args.size * total_spp
-    m = img.reshape(-1, 3).mean(axis=0)
+    m = img.reshape(-1, 3).astype(np.float64).mean(axis=0)
     print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant}")
     print(f"size {args.size}x{args.size} spp {total_spp} ({args.passes} pass(es) x "
           f"{args.spp}) seed {args.seed} max_depth {args.max_depth} "
@@ -158,7 +158,7 @@ def main():
           f"({n / t_render / 1e6:.2f} M samples/s)")
     print(f"process time since interpreter start: "
           f"{time.perf_counter() - T_PROCESS0:.3f} s")
-    print(f"mean R G B: {m[0]:.6f} {m[1]:.6f} {m[2]:.6f}  overall {img.mean():.6f}")
+    print(f"mean R G B: {m[0]:.6f} {m[1]:.6f} {m[2]:.6f}  overall {img.astype(np.float64).mean():.6f}")
     if args.passes > 1:
         # standard error of the averaged image, from the pass-to-pass spread
         mean = acc / args.passes

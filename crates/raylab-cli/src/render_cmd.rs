@@ -49,7 +49,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let pool = setup.thread_pool()?;
 
     let start = Instant::now();
-    let accel = pool.install(|| Bvh::new(&scene.triangles));
+    let accel = pool.install(|| Bvh::new(&scene.vertices()));
     let build = start.elapsed();
     let stage = args.scene.stage;
     let integrator = Lab::new(scene, &accel, stage);
@@ -69,12 +69,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
          thread{} (+{:.1} ms BVH build)\n{camera}\nlight at {} power {}\n",
         args.output.display(),
         scene.name,
-        scene.triangles.len(),
+        scene.geometry.len(),
         elapsed.as_secs_f64() * 1e3,
         if *threads == 1 { "" } else { "s" },
         build.as_secs_f64() * 1e3,
-        tidy_vec3(scene.light.position),
-        tidy(scene.light.power.x),
+        tidy_vec3(scene.lab_light().position),
+        tidy(scene.lab_light().power.x),
     );
     // The image is written; a closed or full standard output is not worth a failure, but it
     // must not be a panic either (`println!` would panic).

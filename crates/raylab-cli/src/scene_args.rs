@@ -88,10 +88,10 @@ impl SceneArgs {
     pub fn setup(&self) -> Result<Setup> {
         let (mut scene, is_model) = load_scene(&self.scene)?;
         if let Some(position) = self.light {
-            scene.light.position = position;
+            scene.point_light_mut().position = position;
         }
         if let Some(power) = self.light_power {
-            scene.light.power = Vec3::splat(power);
+            scene.point_light_mut().power = Vec3::splat(power);
         }
         scene.validate()?;
 
@@ -118,6 +118,8 @@ impl SceneArgs {
             focal_length_px,
             width,
             height,
+            aperture_radius: 0.0,
+            focus_distance: 1.0,
         };
         let threads = match self.threads {
             None | Some(0) => system::cores(),

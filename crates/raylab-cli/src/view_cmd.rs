@@ -103,12 +103,12 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     }
     let Setup { scene, camera, .. } = &setup;
     let pool = setup.thread_pool()?;
-    let accel = pool.install(|| Bvh::new(&scene.triangles));
+    let accel = pool.install(|| Bvh::new(&scene.vertices()));
     let home = Pose {
         position: camera.position,
         yaw: camera.yaw,
         pitch: camera.pitch,
-        light: scene.light.position,
+        light: scene.lab_light().position,
     };
     let view = View {
         pose: home,
@@ -209,7 +209,7 @@ fn headless(mut session: Session, frames: u32, still: bool) -> Result<()> {
          per second), mean {:.2} ms, 10th–90th percentile {:.2}–{:.2} ms; {:.2} s in all",
         times.len(),
         scene.name,
-        scene.triangles.len(),
+        scene.geometry.len(),
         view.width,
         view.height,
         pool.current_num_threads(),

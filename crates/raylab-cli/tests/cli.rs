@@ -73,8 +73,8 @@ fn options_give_the_same_pixels_as_the_library() {
     let from_cli = image::open(dir.path().join("x.png")).unwrap().to_rgb8();
 
     let mut scene = Scene::built_in("cornell").unwrap();
-    scene.light.position = Vec3::new(0.2, -0.4, -0.5);
-    scene.light.power = Vec3::splat(9.0);
+    scene.point_light_mut().position = Vec3::new(0.2, -0.4, -0.5);
+    scene.point_light_mut().power = Vec3::splat(9.0);
     let camera = Camera {
         position: Vec3::new(0.1, -0.2, -2.5),
         yaw: (-10f32).to_radians(),
@@ -82,8 +82,9 @@ fn options_give_the_same_pixels_as_the_library() {
         focal_length_px: Camera::focal_length_for_fov(64, 60.0),
         width: 64,
         height: 48,
+        ..Camera::lab(64, 48)
     };
-    let accel = BruteForce::new(&scene.triangles);
+    let accel = BruteForce::new(&scene.vertices());
     let film = render(&camera, &Lab::new(&scene, &accel, Stage::Shadows), &|_| {}).unwrap();
     assert!(from_cli == film.to_rgb8_clamped().unwrap());
 }

@@ -8,8 +8,8 @@ use raylab::{Accelerator, BruteForce, Bvh, Camera, Lab, Scene, Stage, render};
 
 fn lab_frame(c: &mut Criterion) {
     let scene = Scene::built_in("cornell").expect("built in");
-    let brute_force = BruteForce::new(&scene.triangles);
-    let bvh = Bvh::new(&scene.triangles);
+    let brute_force = BruteForce::new(&scene.vertices());
+    let bvh = Bvh::new(&scene.vertices());
     let accelerators: [(&str, &dyn Accelerator); 2] =
         [("brute_force", &brute_force), ("bvh", &bvh)];
     let camera = Camera::lab(500, 500);

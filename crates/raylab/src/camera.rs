@@ -33,6 +33,10 @@ pub struct Camera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// Radius of the thin lens in scene units: 0 is a pinhole, everything sharp (the lab's).
+    pub aperture_radius: f32,
+    /// Distance along the view direction at which the thin lens focuses, in scene units.
+    pub focus_distance: f32,
 }
 
 impl Camera {
@@ -46,7 +50,15 @@ impl Camera {
             focal_length_px: width as f32,
             width,
             height,
+            aperture_radius: 0.0,
+            focus_distance: 1.0,
         }
+    }
+
+    /// Whether the camera has a lens of some size (depth of field), rather than a pinhole.
+    #[inline]
+    pub fn has_lens(&self) -> bool {
+        self.aperture_radius > 0.0
     }
 
     /// The focal length in pixels that gives a horizontal field of view of `fov_deg` for an image
@@ -122,6 +134,8 @@ impl Camera {
                     .max(self.height as f32 / 2.0)
                     .max(self.focal_length_px.abs())
                     .max(f32::MIN_POSITIVE),
+            aperture_radius: self.aperture_radius,
+            focus_distance: self.focus_distance,
         }
     }
 
@@ -173,6 +187,8 @@ pub struct RayGenerator {
     half_height: f32,
     focal_length_px: f32,
     scale: f32,
+    aperture_radius: f32,
+    focus_distance: f32,
 }
 
 impl RayGenerator {
@@ -188,6 +204,20 @@ impl RayGenerator {
     #[inline]
     pub fn pixel_ray(&self, x: u32, y: u32) -> Ray {
         self.ray(x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// The ray through the film position `film` (pixels) and the point of the thin lens that the
+    /// uniform numbers `u_lens` pick (concentric disk): it passes through the point that the
+    /// pinhole ray meets at the focus distance, so that plane stays sharp (PBR 4th ed. §5.2.3).
+    #[inline]
+    pub fn lens_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
+        let local =
+            Vec3::new(film.x - self.half_width, film.y - self.half_height, self.focal_length_px);
+        let focus = local * (self.focus_distance / self.focal_length_px);
+        let disk =
+            crate::sampling::square_to_uniform_disk_concentric(u_lens) * self.aperture_radius;
+        let lens = Vec3::new(disk.x, disk.y, 0.0);
+        Ray::new(self.position + self.rotation * lens, (self.rotation * (focus - lens)).normalize())
     }
 }
 
@@ -272,6 +302,30 @@ mod tests {
         assert!(turned.to_string().contains("yaw 57.2958°, pitch 30°"), "{turned}");
         let level = Camera { pitch: 0.0, ..turned };
         assert!(!level.to_string().contains("pitch"));
+    }
+
+    #[test]
+    fn lens_rays_meet_at_the_focus_distance() {
+        let camera =
+            Camera { aperture_radius: 0.1, focus_distance: 4.0, yaw: 0.4, ..Camera::lab(64, 48) };
+        let rays = camera.rays();
+        let film = Vec2::new(20.25, 31.5);
+        let pinhole = rays.ray(film.x, film.y);
+        // The pinhole ray reaches the focus plane (4 along the view axis) here:
+        let t = 4.0 / pinhole.direction.dot(camera.forward());
+        let focus = pinhole.at(t);
+        for u in [Vec2::ZERO, Vec2::new(0.9, 0.2), Vec2::splat(0.5), Vec2::new(0.3, 0.99)] {
+            let ray = rays.lens_ray(film, u);
+            assert!((ray.origin - camera.position).length() <= 0.1 + 1e-6);
+            let offset = ray.origin - camera.position;
+            assert!(offset.dot(camera.forward()).abs() < 1e-6, "the lens is in the film's plane");
+            let s = (focus - ray.origin).dot(ray.direction);
+            assert!((ray.at(s) - focus).length() < 1e-5, "{u}: misses the focus point");
+        }
+        // At the lens centre the ray is the pinhole's.
+        let centre = rays.lens_ray(film, Vec2::splat(0.5));
+        assert!((centre.direction - pinhole.direction).length() < 1e-6);
+        assert!(!Camera::lab(8, 8).has_lens() && camera.has_lens());
     }
 
     #[test]

@@ -1,8 +1,24 @@
-//! The lab's point light.
+//! Lights that are not surfaces: the lab's point light and a constant environment.
+//!
+//! Area lights are triangles whose material emits (see [`crate::material::Material::emission`]);
+//! the path integrator gathers every light into one set it samples by power
+//! (`integrator::lights`).
 
 use std::f32::consts::PI;
 
 use glam::Vec3;
+
+/// A light of the scene that is not a surface.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// The lab's point light.
+    Point(PointLight),
+    /// Radiance arriving equally from every direction that leaves the scene.
+    Environment {
+        /// The radiance, per channel.
+        radiance: Vec3,
+    },
+}
 
 /// An isotropic point light of power `P` (watts per channel).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -17,6 +33,12 @@ impl PointLight {
     /// The lab's light: at (0, −0.5, −0.7), power 14 in every channel.
     pub fn lab() -> Self {
         PointLight { position: Vec3::new(0.0, -0.5, -0.7), power: Vec3::splat(14.0) }
+    }
+
+    /// The radiant intensity `I = P/4π` (watts per steradian per channel).
+    #[inline]
+    pub fn intensity(&self) -> Vec3 {
+        self.power / (4.0 * PI)
     }
 
     /// Power per unit area arriving at `point` on a surface with unit normal `normal`, ignoring

@@ -22,7 +22,7 @@ pub struct CornerAttribute<T> {
 
 /// A surface description from an MTL file (or a default).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Material {
+pub struct MeshMaterial {
     /// The name the file gives it.
     pub name: String,
     /// Diffuse reflectance (`Kd`).
@@ -31,7 +31,7 @@ pub struct Material {
     pub emission: Vec3,
 }
 
-impl Material {
+impl MeshMaterial {
     /// The colour of surfaces that name no material: a neutral grey of reflectance 0.75.
     pub const DEFAULT_DIFFUSE: Vec3 = Vec3::splat(0.75);
 }
@@ -53,7 +53,7 @@ pub struct Mesh {
     /// Empty when the file has no materials at all.
     pub material_ids: Vec<Option<u32>>,
     /// The materials the file defines, in the order it defines them.
-    pub materials: Vec<Material>,
+    pub materials: Vec<MeshMaterial>,
 }
 
 impl Mesh {
@@ -75,7 +75,7 @@ impl Mesh {
     }
 
     /// The material of triangle `i`, if it has one.
-    pub fn material(&self, i: usize) -> Option<&Material> {
+    pub fn material(&self, i: usize) -> Option<&MeshMaterial> {
         let id = (*self.material_ids.get(i)?)?;
         self.materials.get(id as usize)
     }

@@ -1,17 +1,18 @@
 //! Rendering a frame: camera rays through every pixel, in parallel, one or more samples each.
 //!
 //! The image is cut into bands of rows that rayon's threads take in any order, and each band
-//! into 8×8 tiles whose camera rays are traced together. Every pixel depends only on its own
-//! coordinates and the sample's number, so the picture is the same for any thread count or
-//! tiling.
+//! into tiles whose camera rays are traced together. Every sample of a pixel draws its numbers
+//! from a [`Sampler`] made from (seed, pixel, sample index) alone, so the picture is the same for
+//! any thread count or tiling.
 //!
-//! Sample 0 of a pixel goes through its centre, which is the lab's one ray per pixel; samples
-//! 1, 2, … are spread over the pixel (anti-aliasing) by [`sample_offset`](crate::sampling::sample_offset). An [`Accumulator`]
-//! adds samples one pass at a time, which is how `raylab view` refines a still picture; a render
-//! of `N` samples at once ([`render_samples`]) is the same passes in the same order, so it gives
-//! the same pixels bit for bit.
+//! The first two numbers place the sample in the pixel (with the [`Filter`]), the next two on
+//! the lens when the camera has an aperture, and the integrator takes the rest. With the lab's
+//! sampler, sample 0 of a pixel goes through its centre, which is the lab's one ray per pixel.
+//! An [`Accumulator`] adds samples one pass at a time, which is how `raylab view` refines a still
+//! picture; a render of `N` samples at once ([`render_samples`]) is the same passes in the same
+//! order, so it gives the same pixels bit for bit.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use image::RgbImage;
 use rayon::prelude::*;
 
@@ -19,17 +20,73 @@ use crate::camera::Camera;
 use crate::film::{Film, FilmError, to_8bit_clamped};
 use crate::integrator::Integrator;
 use crate::ray::Ray;
+use crate::sampling::{Sampler, SamplerKind, square_to_truncated_gaussian};
 
-/// Rows per unit of parallel work: small enough to balance two cores; a band is traced in
-/// tiles of `TILE`×`BAND_ROWS` pixels, whose rays are coherent (the accelerator traces them as
-/// packets).
-const BAND_ROWS: usize = 8;
-/// Tile width.
-const TILE: usize = 8;
+/// Rows per unit of parallel work by default: small enough to balance two cores; a band is
+/// traced in tiles of `tile`×`band` pixels, whose rays are coherent (the accelerator traces them
+/// as packets).
+const BAND_ROWS: u32 = 8;
+/// Tile width by default.
+const TILE: u32 = 8;
+/// The most pixels in a tile: what the tile's arrays on the stack hold.
+const MAX_TILE_PIXELS: usize = 64;
 /// Rows per parallel task when writing a window's pixels.
 const ROWS_PER_TASK: usize = 16;
 
-/// Renders the camera's whole image with one ray through each pixel's centre.
+/// The pixel filter: how a sample's position in and around its pixel is drawn. Samples are
+/// distributed as the filter, so every sample has the same weight (importance-sampled filtering).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum Filter {
+    /// Uniform over the pixel: each pixel is the plain mean of the radiance over its area.
+    #[default]
+    Box,
+    /// A Gaussian about the pixel's centre, truncated at `radius` pixels on each axis.
+    Gaussian {
+        /// Standard deviation in pixels (Mitsuba's default is 0.5).
+        sigma: f32,
+        /// Truncation radius in pixels (Mitsuba's default is 4σ = 2).
+        radius: f32,
+    },
+}
+
+impl Filter {
+    /// Mitsuba's default Gaussian: σ = 0.5 px, radius 2 px.
+    pub const GAUSSIAN: Filter = Filter::Gaussian { sigma: 0.5, radius: 2.0 };
+
+    /// A sample's offset from the pixel's top-left corner for the uniform numbers `u`.
+    #[inline]
+    pub fn offset(&self, u: Vec2) -> Vec2 {
+        match *self {
+            Filter::Box => u,
+            Filter::Gaussian { sigma, radius } => {
+                Vec2::splat(0.5) + square_to_truncated_gaussian(u, sigma, radius)
+            }
+        }
+    }
+}
+
+/// How samples are drawn: the seed, the sampler (`None`: the integrator's choice), the filter and
+/// the tiling (which never changes the pixels, only the order of the work).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleSettings {
+    /// The seed every sampler derives from.
+    pub seed: u64,
+    /// The sampler, or `None` for [`Integrator::sampler_kind`].
+    pub sampler: Option<SamplerKind>,
+    /// The pixel filter.
+    pub filter: Filter,
+    /// Tile width and height in pixels (their product at most 64).
+    pub tile: (u32, u32),
+}
+
+impl Default for SampleSettings {
+    fn default() -> Self {
+        SampleSettings { seed: 0, sampler: None, filter: Filter::Box, tile: (TILE, BAND_ROWS) }
+    }
+}
+
+/// Renders the camera's whole image with one sample per pixel (with the lab's integrator, one
+/// ray through each pixel's centre).
 ///
 /// `progress` is called with the number of rows just finished, from the worker threads; use it
 /// for a progress bar or pass `&|_| {}`. Runs on the current rayon thread pool: use
@@ -39,14 +96,12 @@ pub fn render(
     integrator: &impl Integrator,
     progress: &(dyn Fn(u32) + Sync),
 ) -> Result<Film, FilmError> {
-    let mut film = Film::new(camera.width, camera.height)?;
-    add_pass(camera, integrator, 0, film.pixels_mut(), progress);
-    Ok(film)
+    render_samples(camera, integrator, 1, progress)
 }
 
-/// Renders `samples` samples per pixel (at least 1) and returns their mean: sample 0 through
-/// each pixel's centre, then spread over the pixel. `progress` gets rows finished, `height` per
-/// sample. Exactly the pixels of an [`Accumulator`] given the same samples.
+/// Renders `samples` samples per pixel (at least 1) with the default [`SampleSettings`] and
+/// returns their mean. `progress` gets rows finished, `height` per sample. Exactly the pixels of
+/// an [`Accumulator`] given the same samples.
 pub fn render_samples(
     camera: &Camera,
     integrator: &impl Integrator,
@@ -64,6 +119,7 @@ pub fn render_samples(
 fn add_pass(
     camera: &Camera,
     integrator: &impl Integrator,
+    settings: &SampleSettings,
     sample: u32,
     pixels: &mut [Vec3],
     progress: &(dyn Fn(u32) + Sync),
@@ -71,24 +127,34 @@ fn add_pass(
     let width = camera.width as usize;
     debug_assert_eq!(pixels.len(), width * camera.height as usize);
     let rays = camera.rays();
-    pixels.par_chunks_mut(width * BAND_ROWS).enumerate().for_each(|(band, pixels)| {
-        let first_row = band * BAND_ROWS;
+    let kind = settings.sampler.unwrap_or_else(|| integrator.sampler_kind());
+    let (tile_width, band_rows) = tile_shape(settings.tile);
+    pixels.par_chunks_mut(width * band_rows).enumerate().for_each(|(band, pixels)| {
+        let first_row = band * band_rows;
         let rows = pixels.len() / width;
-        // A tile's rays and colours, on the stack.
-        let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); TILE * BAND_ROWS];
-        let mut colours = [Vec3::ZERO; TILE * BAND_ROWS];
-        for tile_x in (0..width).step_by(TILE) {
-            let columns = tile_x..(tile_x + TILE).min(width);
+        // A tile's rays, samplers and colours, on the stack.
+        let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_TILE_PIXELS];
+        let mut samplers: [Sampler; MAX_TILE_PIXELS] =
+            std::array::from_fn(|_| Sampler::new(kind, 0, (0, 0), 0));
+        let mut colours = [Vec3::ZERO; MAX_TILE_PIXELS];
+        for tile_x in (0..width).step_by(tile_width) {
+            let columns = tile_x..(tile_x + tile_width).min(width);
             let n = columns.len() * rows;
-            let mut ray = tile_rays.iter_mut();
+            let mut slot = tile_rays.iter_mut().zip(samplers.iter_mut());
             for y in first_row..first_row + rows {
                 for x in columns.clone() {
-                    let offset = crate::sampling::sample_offset(x as u32, y as u32, sample);
-                    *ray.next().expect("a tile's rays fit") =
-                        rays.ray(x as f32 + offset.x, y as f32 + offset.y);
+                    let (ray, sampler) = slot.next().expect("a tile's rays fit");
+                    *sampler = Sampler::new(kind, settings.seed, (x as u32, y as u32), sample);
+                    let offset = settings.filter.offset(sampler.pixel_2d());
+                    let film = Vec2::new(x as f32 + offset.x, y as f32 + offset.y);
+                    *ray = if camera.has_lens() {
+                        rays.lens_ray(film, sampler.next_2d())
+                    } else {
+                        rays.ray(film.x, film.y)
+                    };
                 }
             }
-            integrator.radiance_each(&tile_rays[..n], &mut colours[..n]);
+            integrator.radiance_each(&tile_rays[..n], &mut samplers[..n], &mut colours[..n]);
             let mut colour = colours.iter();
             for y in 0..rows {
                 for x in columns.clone() {
@@ -100,17 +166,30 @@ fn add_pass(
     });
 }
 
+/// A tile shape that fits the tile arrays: both sides at least 1, at most 64 pixels.
+fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
+    let height = (height as usize).clamp(1, MAX_TILE_PIXELS);
+    let width = (width as usize).clamp(1, MAX_TILE_PIXELS / height);
+    (width, height)
+}
+
 /// Samples added up pass by pass: a picture that refines while the camera stands still.
 #[derive(Clone, Debug)]
 pub struct Accumulator {
     sum: Film,
     samples: u32,
+    /// How samples are drawn; change it only before the first sample.
+    pub settings: SampleSettings,
 }
 
 impl Accumulator {
     /// An empty accumulator for a `width×height` image.
     pub fn new(width: u32, height: u32) -> Result<Accumulator, FilmError> {
-        Ok(Accumulator { sum: Film::new(width, height)?, samples: 0 })
+        Ok(Accumulator {
+            sum: Film::new(width, height)?,
+            samples: 0,
+            settings: SampleSettings::default(),
+        })
     }
 
     /// Width in pixels.
@@ -142,7 +221,8 @@ impl Accumulator {
         self.add_sample_with_progress(camera, integrator, &|_| {});
     }
 
-    fn add_sample_with_progress(
+    /// [`add_sample`](Self::add_sample), calling `progress` with the rows finished.
+    pub fn add_sample_with_progress(
         &mut self,
         camera: &Camera,
         integrator: &impl Integrator,
@@ -153,7 +233,7 @@ impl Accumulator {
             (self.width(), self.height()),
             "the camera's image size must be the accumulator's"
         );
-        add_pass(camera, integrator, self.samples, self.sum.pixels_mut(), progress);
+        add_pass(camera, integrator, &self.settings, self.samples, self.sum.pixels_mut(), progress);
         self.samples += 1;
     }
 

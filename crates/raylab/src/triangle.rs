@@ -39,6 +39,12 @@ impl Triangle {
         Triangle { v0, v1, v2, normal, albedo }
     }
 
+    /// The three vertices.
+    #[inline]
+    pub fn corners(&self) -> [Vec3; 3] {
+        [self.v0, self.v1, self.v2]
+    }
+
     /// The point with barycentric coordinates `(b0, b1, b2)` and its rounding-error bound
     /// (PBR 4th ed. §6.8.5: interpolating the vertices errs by at most `γ₇ Σ|bᵢ·pᵢ|`).
     pub fn surface_point(&self, b0: f32, b1: f32, b2: f32) -> SurfacePoint {

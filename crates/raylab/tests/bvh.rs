@@ -5,7 +5,7 @@
 use glam::Vec3;
 use proptest::prelude::*;
 use raylab::bvh::{BuildSettings, Bvh, Isa};
-use raylab::{Accelerator, BruteForce, Ray, Triangle};
+use raylab::{Accelerator, BruteForce, Ray};
 
 /// Every BVH variant over `triangles`: each preset, and small-scene leaves (one block).
 fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
@@ -22,9 +22,7 @@ fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
 }
 
 fn brute_force(triangles: &[[Vec3; 3]]) -> BruteForce {
-    let t: Vec<Triangle> =
-        triangles.iter().map(|&[a, b, c]| Triangle::new(a, b, c, Vec3::ONE)).collect();
-    BruteForce::new(&t)
+    BruteForce::new(triangles)
 }
 
 /// Compares every BVH with brute force on `rays`, one at a time and as packets (the whole slice
@@ -344,10 +342,10 @@ fn every_bvh_variant_renders_the_same_pixels() {
         let integrator = Lab::new(&scene, accel, Stage::Ambient);
         render(&camera, &integrator, &|_| {}).unwrap().to_rgb8_clamped().unwrap()
     };
-    let reference = film_of(&BruteForce::new(&scene.triangles));
+    let reference = film_of(&BruteForce::new(&scene.vertices()));
     let covered = reference.pixels().filter(|p| p.0 != [0, 0, 0]).count();
     assert!(covered > 96 * 64 / 10, "the spider covers only {covered} pixels");
-    let vertices: Vec<[Vec3; 3]> = scene.triangles.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
+    let vertices: Vec<[Vec3; 3]> = scene.vertices();
     for (name, bvh) in bvhs(&vertices) {
         assert!(film_of(&bvh) == reference, "{name} changed pixels");
     }

@@ -11,7 +11,7 @@ use raylab::{Accelerator, BruteForce, Ray, Triangle};
 fn accelerators(triangles: &[Triangle]) -> Vec<(String, Box<dyn Accelerator>)> {
     let vertices: Vec<[Vec3; 3]> = triangles.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
     let mut all: Vec<(String, Box<dyn Accelerator>)> =
-        vec![("brute force".into(), Box::new(BruteForce::new(triangles)))];
+        vec![("brute force".into(), Box::new(BruteForce::new(&vertices)))];
     for (preset, settings) in BuildSettings::PRESETS {
         for isa in Isa::ALL {
             if let Some(bvh) = Bvh::build(&vertices, &settings).with_isa(isa) {
@@ -305,7 +305,7 @@ proptest! {
         // Skip nearly degenerate and nearly edge-on configurations, where "well inside" is moot.
         prop_assume!(area > 1.0 && to_target.length() > 1.0);
         prop_assume!(tri.normal.dot(to_target.normalize()).abs() > 0.05);
-        let hit = BruteForce::new(&[tri]).closest_hit(&Ray::new(origin, to_target));
+        let hit = BruteForce::new(&[tri.corners()]).closest_hit(&Ray::new(origin, to_target));
         prop_assert!(hit.is_some());
         let hit = hit.unwrap();
         prop_assert!((hit.t - 1.0).abs() < 1e-3, "t = {}", hit.t);
@@ -330,7 +330,7 @@ proptest! {
         let side = |p: Vec3| (b - a).cross(p - a).dot(-direction);
         prop_assume!(side(c) * side(d) < 0.0);
         prop_assume!((b - a).cross(c - a).length() > 1e-3 && (b - a).cross(d - a).length() > 1e-3);
-        prop_assert!(BruteForce::new(&pair).closest_hit(&ray).is_some());
+        prop_assert!(BruteForce::new(&pair.map(|t| t.corners())).closest_hit(&ray).is_some());
     }
 }
 
@@ -377,7 +377,7 @@ proptest! {
             prop_assert_eq!(accel.closest_hit(&ray), expected, "{}", name);
             prop_assert_eq!(accel.occluded(&ray), expected.is_some(), "{}", name);
         }
-        prop_assert_eq!(BruteForce::new(&triangles).triangles().count(), triangles.len());
+        prop_assert_eq!(BruteForce::new(&triangles.iter().map(Triangle::corners).collect::<Vec<_>>()).triangles().count(), triangles.len());
     }
 }
 

@@ -8,7 +8,8 @@ use glam::Vec3;
 use image::RgbImage;
 use raylab::image_compare::{compare_rgb8, save_failure_images};
 use raylab::{
-    BruteForce, Camera, Film, Integrator, Lab, Ray, Scene, Stage, image_io, render, render_samples,
+    BruteForce, Camera, Film, Integrator, Lab, Ray, Sampler, SamplerKind, Scene, Stage, image_io,
+    render, render_samples,
 };
 
 fn cornell() -> Scene {
@@ -17,15 +18,15 @@ fn cornell() -> Scene {
 
 /// The (unclamped) colour the lab camera sees at `point`, by a ray from the camera to it.
 fn radiance_at(scene: &Scene, stage: Stage, point: Vec3, camera_position: Vec3) -> Vec3 {
-    let accel = BruteForce::new(&scene.triangles);
+    let accel = BruteForce::new(&scene.vertices());
     let ray = Ray::new(camera_position, point - camera_position);
     let hit = raylab::Accelerator::closest_hit(&accel, &ray).expect("the point is visible");
     assert!((hit.t - 1.0).abs() < 1e-4, "the ray meets something before the point: t = {}", hit.t);
-    Lab::new(scene, &accel, stage).radiance(&ray)
+    Lab::new(scene, &accel, stage).radiance(&ray, &mut sampler())
 }
 
 fn render_scene(scene: &Scene, camera: &Camera, stage: Stage) -> Film {
-    let accel = BruteForce::new(&scene.triangles);
+    let accel = BruteForce::new(&scene.vertices());
     render(camera, &Lab::new(scene, &accel, stage), &|_| {}).unwrap()
 }
 
@@ -37,6 +38,11 @@ fn assert_images_close(name: &str, actual: &RgbImage, expected: &RgbImage, max_p
         let folder = save_failure_images(name, actual, expected).unwrap();
         panic!("{name}: {diff:?}; actual, expected and diff images are in {}", folder.display());
     }
+}
+
+/// A sampler for calls of `radiance` (the lab integrator draws no random numbers).
+fn sampler() -> Sampler {
+    Sampler::new(SamplerKind::Lab, 0, (0, 0), 0)
 }
 
 const CAMERA: Vec3 = Vec3::new(0.0, 0.0, -3.0);
@@ -99,7 +105,7 @@ fn a_wall_seen_from_behind_is_not_lit_through_itself() {
     assert!((ambient - Vec3::splat(0.75 * 0.5)).abs().max_element() < 1e-6, "{ambient}");
     // A light moved behind the wall lights that side, and the room's inside stays dark there.
     let mut outside_light = scene.clone();
-    outside_light.light.position = Vec3::new(0.0, 0.0, 2.0);
+    outside_light.point_light_mut().position = Vec3::new(0.0, 0.0, 2.0);
     assert!(radiance_at(&outside_light, Stage::Shadows, back_wall, behind).y > 0.1);
     assert_eq!(radiance_at(&outside_light, Stage::Shadows, back_wall, CAMERA), Vec3::ZERO);
 }
@@ -111,12 +117,12 @@ fn closest_hit_not_first_hit() {
     let scene = cornell();
     let ray = Ray::new(CAMERA, Vec3::Z);
     let hits: Vec<(usize, f32)> = scene
-        .triangles
+        .vertices()
         .iter()
         .enumerate()
-        .filter_map(|(i, t)| {
+        .filter_map(|(i, &[v0, v1, v2])| {
             raylab::triangle::WatertightRay::new(&ray)
-                .intersect(t.v0, t.v1, t.v2, f32::INFINITY)
+                .intersect(v0, v1, v2, f32::INFINITY)
                 .map(|h| (i, h.t))
         })
         .collect();
@@ -126,11 +132,12 @@ fn closest_hit_not_first_hit() {
         first.0 < 10 && nearest.0 >= 20,
         "the ray should meet the wall first in order: {hits:?}"
     );
-    let accel = BruteForce::new(&scene.triangles);
+    let accel = BruteForce::new(&scene.vertices());
     let hit = raylab::Accelerator::closest_hit(&accel, &ray).unwrap();
     assert_eq!(hit.triangle as usize, nearest.0);
     assert_eq!(hit.t, nearest.1);
-    assert_eq!(scene.triangles[hit.triangle as usize].albedo, Vec3::new(0.15, 0.15, 0.75));
+    let material = &scene.materials[scene.geometry.material_id(hit.triangle as usize) as usize];
+    assert_eq!(material.bsdf.albedo(), Vec3::new(0.15, 0.15, 0.75));
 }
 
 #[test]
@@ -138,7 +145,8 @@ fn flat_stage_shows_only_triangle_colours_or_black() {
     let image =
         render_scene(&cornell(), &Camera::lab(200, 200), Stage::Flat).to_rgb8_clamped().unwrap();
     let to8 = |c: Vec3| c.to_array().map(raylab::film::to_8bit_clamped);
-    let mut palette: Vec<[u8; 3]> = cornell().triangles.iter().map(|t| to8(t.albedo)).collect();
+    let mut palette: Vec<[u8; 3]> =
+        cornell().materials.iter().map(|m| to8(m.bsdf.albedo())).collect();
     palette.push([0, 0, 0]);
     palette.sort();
     palette.dedup();
@@ -197,7 +205,7 @@ fn the_picture_is_the_same_for_any_thread_count() {
 #[test]
 fn samples_per_pixel_anti_alias_deterministically() {
     let scene = cornell();
-    let accel = BruteForce::new(&scene.triangles);
+    let accel = BruteForce::new(&scene.vertices());
     let lab = Lab::new(&scene, &accel, Stage::Ambient);
     let camera = Camera { yaw: 0.1, ..Camera::lab(40, 30) };
     let films: Vec<Film> = [1, 2, 5]
@@ -254,7 +262,7 @@ fn samples_per_pixel_anti_alias_deterministically() {
 #[test]
 fn tiled_packets_give_each_pixel_its_own_rays_colour() {
     let scene = cornell();
-    let bvh = raylab::bvh::Bvh::new(&scene.triangles);
+    let bvh = raylab::bvh::Bvh::new(&scene.vertices());
     for camera in [Camera::lab(64, 64), Camera { yaw: 0.3, ..Camera::lab(53, 37) }] {
         for stage in Stage::ALL {
             let lab = Lab::new(&scene, &bvh, stage);
@@ -262,7 +270,7 @@ fn tiled_packets_give_each_pixel_its_own_rays_colour() {
             let rays = camera.rays();
             for y in 0..camera.height {
                 for x in 0..camera.width {
-                    let alone = lab.radiance(&rays.pixel_ray(x, y));
+                    let alone = lab.radiance(&rays.pixel_ray(x, y), &mut sampler());
                     assert_eq!(film.pixel(x, y), alone, "{stage} pixel ({x}, {y})");
                 }
             }

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::{Accelerator, Hit};
 use crate::ray::Ray;
-use crate::triangle::{LANES, Triangle, TriangleBlock, WatertightRay};
+use crate::triangle::{LANES, TriangleBlock, WatertightRay};
 
 /// Tests every triangle, in order. Exact and simple; linear in the triangle count.
 ///
@@ -16,9 +16,11 @@ pub struct BruteForce {
 }
 
 impl BruteForce {
-    /// Keeps a compact copy of the triangles' vertices.
-    pub fn new(triangles: &[Triangle]) -> Self {
-        BruteForce { blocks: TriangleBlock::pack(triangles.iter().map(|t| [t.v0, t.v1, t.v2])) }
+    /// Keeps a compact copy of the triangles' vertices (for a scene, [`Scene::vertices`]).
+    ///
+    /// [`Scene::vertices`]: crate::Scene::vertices
+    pub fn new(triangles: &[[Vec3; 3]]) -> Self {
+        BruteForce { blocks: TriangleBlock::pack(triangles.iter().copied()) }
     }
 
     /// The triangles' vertices, in order: for reference loops in tests.

@@ -22,7 +22,7 @@
 //! use glam::Vec3;
 //!
 //! let scene = Scene::built_in("cornell")?;
-//! let bvh = Bvh::new(&scene.triangles);
+//! let bvh = Bvh::new(&scene.vertices());
 //! let hit = bvh.closest_hit(&Ray::new(Vec3::new(0.0, 0.0, -3.0), Vec3::Z)).expect("a wall");
 //! assert!(hit.t > 3.0);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -41,7 +41,7 @@ pub use bounds::{Bounds, Frustum, RayBoxTest};
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;
-use crate::triangle::{Triangle, TriangleBlock};
+use crate::triangle::TriangleBlock;
 use wide::WideBvh;
 
 /// How a BVH is built: a trade of build time for tracing speed. Never changes the answers.
@@ -208,10 +208,10 @@ impl std::fmt::Debug for Bvh {
 }
 
 impl Bvh {
-    /// Builds with the default settings over a scene's triangles.
-    pub fn new(triangles: &[Triangle]) -> Bvh {
-        let vertices: Vec<[Vec3; 3]> = triangles.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
-        Bvh::build(&vertices, &BuildSettings::for_triangles(vertices.len()))
+    /// Builds with the default settings over triangles given by their corners (for a scene,
+    /// [`Scene::vertices`](crate::Scene::vertices)).
+    pub fn new(triangles: &[[Vec3; 3]]) -> Bvh {
+        Bvh::build(triangles, &BuildSettings::for_triangles(triangles.len()))
     }
 
     /// Builds over triangles given by their vertices; hits report indices into `triangles`.

@@ -19,6 +19,7 @@ use super::Integrator;
 use crate::accel::{Accelerator, Hit};
 use crate::light::PointLight;
 use crate::ray::Ray;
+use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 
 /// One step of the lab, each adding one idea to the previous.
@@ -90,7 +91,8 @@ impl FromStr for Stage {
     }
 }
 
-/// The lab's integrator over a scene and an accelerator built from its triangles.
+/// The lab's integrator over a scene and an accelerator built from its
+/// [`vertices`](Scene::vertices).
 #[derive(Clone, Copy, Debug)]
 pub struct Lab<'a, A: ?Sized> {
     scene: &'a Scene,
@@ -103,9 +105,10 @@ pub struct Lab<'a, A: ?Sized> {
 }
 
 impl<'a, A: Accelerator + ?Sized> Lab<'a, A> {
-    /// The lab's model at `stage`, with the scene's light and the lab's ambient light `N = 0.5`.
+    /// The lab's model at `stage`, with the scene's [`lab_light`](Scene::lab_light) and the lab's
+    /// ambient light `N = 0.5`.
     pub fn new(scene: &'a Scene, accel: &'a A, stage: Stage) -> Self {
-        Lab { scene, accel, stage, light: scene.light, ambient: Vec3::splat(0.5) }
+        Lab { scene, accel, stage, light: scene.lab_light(), ambient: Vec3::splat(0.5) }
     }
 }
 
@@ -129,16 +132,17 @@ impl<A: Accelerator + ?Sized> Lab<'_, A> {
         let Some(hit) = hit else {
             return Shading::NONE;
         };
-        let triangle = &self.scene.triangles[hit.triangle as usize];
-        let albedo = triangle.albedo;
+        let interaction = self.scene.interaction(ray, &hit);
+        let albedo = self.scene.material(&interaction).bsdf.albedo();
         if self.stage == Stage::Flat {
             return Shading { albedo, direct: Vec3::ZERO, shadow_ray: None };
         }
-        let mut point = triangle.surface_point(hit.b0(), hit.b1, hit.b2);
-        // Triangles are hit from both sides: light the side the ray sees. (With the lab's
-        // one-sided normal, a wall seen from behind would be lit through itself by a light on
-        // its front.) From the lab's camera every visible face is a front face.
-        if point.normal.dot(ray.direction) > 0.0 {
+        let mut point = interaction.point;
+        // Triangles are hit from both sides: light the side the ray sees. (With a one-sided
+        // normal, a wall seen from behind would be lit through itself by a light on its front.)
+        // A grazing ray (a zero product) gets the lab's own normal `(v2 − v0) × (v1 − v0)`, the
+        // opposite of the geometric one.
+        if point.normal.dot(ray.direction) >= 0.0 {
             point.normal = -point.normal;
         }
         let light = &self.light;
@@ -168,7 +172,7 @@ impl<A: Accelerator + ?Sized> Lab<'_, A> {
 }
 
 impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
-    fn radiance(&self, ray: &Ray) -> Vec3 {
+    fn radiance(&self, ray: &Ray, _sampler: &mut Sampler) -> Vec3 {
         let hit = self.accel.closest_hit(ray);
         let shading = self.shade(ray, hit);
         let occluded = shading.shadow_ray.is_some_and(|shadow| self.accel.occluded(&shadow));
@@ -177,8 +181,9 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
 
     /// Camera rays together, then their shadow rays together (toward one light, so they are
     /// coherent too).
-    fn radiance_each(&self, rays: &[Ray], out: &mut [Vec3]) {
+    fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
         assert_eq!(rays.len(), out.len(), "one colour per ray");
+        assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
         // A tile at a time, in arrays on the stack: no allocation per tile.
         const TILE: usize = 64;
         for (rays, out) in rays.chunks(TILE).zip(out.chunks_mut(TILE)) {
@@ -205,6 +210,11 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
                 *colour = self.finish(hit.is_some(), s, occluded);
             }
         }
+    }
+
+    /// The lab's pixel sampling: one sample is the ray through the pixel's centre.
+    fn sampler_kind(&self) -> SamplerKind {
+        SamplerKind::Lab
     }
 }
 

@@ -2,6 +2,10 @@
 //!
 //! One file per integrator. [`Lab`] is the lab's direct-light model with shadows and a constant
 //! ambient term, with a [`Stage`] for each step of the lab.
+//!
+//! An integrator draws every random number it needs from the [`Sampler`] it is given, which the
+//! renderer makes from (seed, pixel, sample index) alone: the same sample gives the same colour
+//! on any thread.
 
 mod lab;
 
@@ -10,22 +14,29 @@ use glam::Vec3;
 pub use lab::{Lab, Stage};
 
 use crate::ray::Ray;
+use crate::sampling::{Sampler, SamplerKind};
 
 /// Computes the colour seen along a camera ray.
 pub trait Integrator: Sync {
-    /// The colour (linear, unclamped) seen along `ray`.
-    fn radiance(&self, ray: &Ray) -> Vec3;
+    /// The colour (linear, unclamped) seen along `ray`, with random numbers from `sampler`.
+    fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3;
 
-    /// The colour seen along each ray, `out[i]` for `rays[i]`: exactly what
+    /// The colour seen along each ray, `out[i]` for `rays[i]` with `samplers[i]`: exactly what
     /// [`radiance`](Self::radiance) gives one ray at a time. Integrators override it to trace
     /// coherent rays (a tile of camera rays) together.
     ///
     /// # Panics
     /// If the slices differ in length.
-    fn radiance_each(&self, rays: &[Ray], out: &mut [Vec3]) {
+    fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
         assert_eq!(rays.len(), out.len(), "one colour per ray");
-        for (ray, colour) in rays.iter().zip(out) {
-            *colour = self.radiance(ray);
+        assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
+        for ((ray, sampler), colour) in rays.iter().zip(samplers).zip(out) {
+            *colour = self.radiance(ray, sampler);
         }
+    }
+
+    /// The sampler this integrator's pictures use unless told otherwise.
+    fn sampler_kind(&self) -> SamplerKind {
+        SamplerKind::Sobol
     }
 }

@@ -47,6 +47,8 @@ impl View {
             focal_length_px: self.focal_per_width * width as f32,
             width,
             height,
+            aperture_radius: 0.0,
+            focus_distance: 1.0,
         }
     }
 }
@@ -245,7 +247,7 @@ mod tests {
     #[test]
     fn still_frames_refine_moving_frames_restart() {
         let scene = Scene::built_in("cornell").unwrap();
-        let accel = BruteForce::new(&scene.triangles);
+        let accel = BruteForce::new(&scene.vertices());
         let view = lab_view(24, 16);
         let mut renderer = FrameRenderer::new(None, 3);
         let mut words = Vec::new();
@@ -267,7 +269,7 @@ mod tests {
         let info = renderer.frame(&scene, &accel, &moved, &mut words).unwrap();
         assert_eq!((info.moving, info.samples), (true, 1));
         let mut scene_moved = scene.clone();
-        scene_moved.light.position = moved.pose.light;
+        scene_moved.point_light_mut().position = moved.pose.light;
         let lab_moved = Lab::new(&scene_moved, &accel, Stage::Ambient);
         let expected = crate::render(&camera, &lab_moved, &|_| {}).unwrap();
         assert!(rgb(&words, &view) == expected.to_rgb8_clamped().unwrap());
@@ -278,7 +280,7 @@ mod tests {
     #[test]
     fn moving_frames_drop_resolution_when_over_budget_and_recover_when_still() {
         let scene = Scene::built_in("cornell").unwrap();
-        let accel = BruteForce::new(&scene.triangles);
+        let accel = BruteForce::new(&scene.vertices());
         let mut view = lab_view(64, 48);
         // A zero budget: every moving frame is over it.
         let mut renderer = FrameRenderer::new(Some(Duration::ZERO), 16);

@@ -8,8 +8,9 @@
 use glam::Vec3;
 
 use super::Scene;
+use crate::geometry::Geometry;
 use crate::light::PointLight;
-use crate::triangle::Triangle;
+use crate::material::Material;
 
 /// The room's side `L` in Cornell units.
 pub const CORNELL_BOX_SIZE: f32 = 555.0;
@@ -27,6 +28,15 @@ pub fn cornell_box() -> Scene {
     const L: f32 = CORNELL_BOX_SIZE;
     let v = Vec3::new;
     let mut faces: Vec<([Vec3; 3], Vec3)> = Vec::with_capacity(30);
+    let colours = [
+        ("red", RED),
+        ("yellow", YELLOW),
+        ("green", GREEN),
+        ("cyan", CYAN),
+        ("blue", BLUE),
+        ("purple", PURPLE),
+        ("white", WHITE),
+    ];
 
     // The room.
     let (a, b, c, d) = (v(L, 0.0, 0.0), v(0.0, 0.0, 0.0), v(L, 0.0, L), v(0.0, 0.0, L));
@@ -71,54 +81,75 @@ pub fn cornell_box() -> Scene {
     }
 
     let to_lab = |p: Vec3| v(1.0 - 2.0 * p.x / L, 1.0 - 2.0 * p.y / L, 2.0 * p.z / L - 1.0);
-    let triangles = faces
-        .into_iter()
-        .map(|([p0, p1, p2], colour)| Triangle::new(to_lab(p0), to_lab(p1), to_lab(p2), colour))
+    let material_of =
+        |colour: Vec3| colours.iter().position(|&(_, c)| c == colour).expect("a lab colour") as u32;
+    let mut geometry = Geometry::new();
+    geometry.add_triangles(
+        "cornell",
+        faces.into_iter().map(|(corners, colour)| (corners.map(to_lab), material_of(colour))),
+    );
+    // The lab lights both sides of every surface.
+    let materials = colours
+        .iter()
+        .map(|&(name, colour)| Material { two_sided: true, ..Material::diffuse(name, colour) })
         .collect();
-    Scene { name: "cornell".into(), triangles, light: PointLight::lab() }
+    Scene::new("cornell", geometry, materials, PointLight::lab())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn centroid(t: &Triangle) -> Vec3 {
-        (t.v0 + t.v1 + t.v2) / 3.0
+    fn centroid(t: &[Vec3; 3]) -> Vec3 {
+        (t[0] + t[1] + t[2]) / 3.0
+    }
+
+    /// The lab's normal, `(v2 − v0) × (v1 − v0)`: the opposite of the counter-clockwise one.
+    fn lab_normal(scene: &Scene, i: usize) -> Vec3 {
+        -scene.geometry.normal(i)
+    }
+
+    fn colour(scene: &Scene, i: usize) -> Vec3 {
+        scene.materials[scene.geometry.material_id(i) as usize].bsdf.albedo()
     }
 
     #[test]
     fn thirty_triangles_inside_the_unit_cube() {
         let scene = cornell_box();
-        assert_eq!(scene.triangles.len(), 30);
-        for t in &scene.triangles {
-            for p in [t.v0, t.v1, t.v2] {
+        assert_eq!(scene.geometry.len(), 30);
+        for i in 0..30 {
+            for p in scene.geometry.triangle(i) {
                 assert!(p.abs().max_element() <= 1.0, "{p}");
             }
-            assert!((t.normal.length() - 1.0).abs() < 1e-6);
+            assert!((scene.geometry.normal(i).length() - 1.0).abs() < 1e-6);
         }
     }
 
     #[test]
     fn y_points_down_floor_at_plus_one() {
         let scene = cornell_box();
-        let floor = &scene.triangles[0..2];
-        assert!(floor.iter().all(|t| [t.v0, t.v1, t.v2].iter().all(|p| p.y == 1.0)));
-        // The floor faces up, which is −y.
-        assert!(floor.iter().all(|t| (t.normal - Vec3::NEG_Y).length() < 1e-6));
-        assert!(floor.iter().all(|t| t.albedo == GREEN));
+        for i in 0..2 {
+            assert!(scene.geometry.triangle(i).iter().all(|p| p.y == 1.0));
+            // The floor faces up, which is −y.
+            assert!((lab_normal(&scene, i) - Vec3::NEG_Y).length() < 1e-6);
+            assert_eq!(colour(&scene, i), GREEN);
+        }
     }
 
     #[test]
     fn walls_face_into_the_room_and_blocks_face_out() {
         let scene = cornell_box();
-        for t in &scene.triangles[..10] {
+        for i in 0..10 {
             // Toward the room's centre, the origin.
-            assert!(t.normal.dot(-centroid(t)) > 0.0, "wall {t:?}");
+            let t = scene.geometry.triangle(i);
+            assert!(lab_normal(&scene, i).dot(-centroid(&t)) > 0.0, "wall {t:?}");
         }
-        for block in [&scene.triangles[10..20], &scene.triangles[20..30]] {
-            let centre = block.iter().map(centroid).sum::<Vec3>() / block.len() as f32;
-            for t in block {
-                assert!(t.normal.dot(centroid(t) - centre) > 0.0, "block {t:?}");
+        for block in [10..20, 20..30] {
+            let centre = block.clone().map(|i| centroid(&scene.geometry.triangle(i))).sum::<Vec3>()
+                / block.len() as f32;
+            for i in block {
+                let t = scene.geometry.triangle(i);
+                assert!(lab_normal(&scene, i).dot(centroid(&t) - centre) > 0.0, "block {t:?}");
             }
         }
     }
@@ -126,7 +157,7 @@ mod tests {
     #[test]
     fn the_lab_colours_are_where_the_lab_puts_them() {
         let scene = cornell_box();
-        let colours: Vec<Vec3> = scene.triangles.iter().map(|t| t.albedo).collect();
+        let colours: Vec<Vec3> = (0..30).map(|i| colour(&scene, i)).collect();
         let expected =
             [GREEN, PURPLE, YELLOW, CYAN, WHITE].iter().flat_map(|c| [*c, *c]).collect::<Vec<_>>();
         assert_eq!(colours[..10], expected[..]);

@@ -1,7 +1,13 @@
-//! Scenes: triangles with their colours, and a light.
+//! Scenes: geometry, materials, lights.
 //!
-//! A scene is plain data. Give its triangles to an [`Accelerator`](crate::Accelerator) to ask ray
-//! queries, and both to an integrator to make pictures.
+//! A scene is plain data: [`Geometry`] (triangle meshes, each triangle with a material), the
+//! [`Material`]s they name, and the lights that are not surfaces (point lights and a constant
+//! environment; emissive materials make area lights of their triangles). Build an accelerator
+//! over [`Scene::vertices`] to ask ray queries, and give both to an integrator to make pictures;
+//! [`Scene::interaction`] says what a ray sees at a hit.
+//!
+//! Scenes live in the lab's frame: x right, **y down**, z forward. Model and scene files are
+//! y-up; loaders turn them with [`model_to_lab`], a half turn about x that keeps handedness.
 
 mod cornell;
 mod file;
@@ -18,8 +24,11 @@ pub use file::{
 };
 pub use model::model_to_lab;
 
-use crate::light::PointLight;
-use crate::triangle::Triangle;
+use crate::accel::Hit;
+use crate::geometry::{Geometry, SurfaceInteraction};
+use crate::light::{Light, PointLight};
+use crate::material::Material;
+use crate::ray::Ray;
 
 /// Why a scene cannot be used.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -29,6 +38,16 @@ pub enum SceneError {
     UnknownScene {
         /// The name asked for.
         name: String,
+    },
+    /// A material, a light or a triangle's material id is out of its range.
+    #[error("scene '{scene}': {what}: {problem}")]
+    Invalid {
+        /// The scene's name.
+        scene: String,
+        /// Which part, e.g. "material 'gold'".
+        what: String,
+        /// What is wrong with it.
+        problem: String,
     },
     /// A vertex, colour or light value is NaN or infinite.
     #[error("scene '{scene}': {what} is not a finite number ({value:?})")]
@@ -45,18 +64,30 @@ pub enum SceneError {
 /// Names accepted by [`Scene::built_in`].
 pub const BUILT_IN_SCENES: &[&str] = &["cornell"];
 
-/// Triangles and a light.
+/// Geometry, materials and lights.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// A short name, used in messages.
     pub name: String,
-    /// Every triangle, with its normal and colour.
-    pub triangles: Vec<Triangle>,
-    /// The point light.
-    pub light: PointLight,
+    /// Every triangle, with its material.
+    pub geometry: Geometry,
+    /// The materials that [`Geometry::material_id`] indexes.
+    pub materials: Vec<Material>,
+    /// Lights that are not surfaces: point lights and the environment.
+    pub lights: Vec<Light>,
 }
 
 impl Scene {
+    /// A scene lit by one point light.
+    pub fn new(
+        name: &str,
+        geometry: Geometry,
+        materials: Vec<Material>,
+        light: PointLight,
+    ) -> Scene {
+        Scene { name: name.to_string(), geometry, materials, lights: vec![Light::Point(light)] }
+    }
+
     /// A built-in scene by name: `cornell`, the lab's Cornell box.
     pub fn built_in(name: &str) -> Result<Scene, SceneError> {
         match name {
@@ -65,47 +96,137 @@ impl Scene {
         }
     }
 
-    /// Checks that every number in the scene is finite.
+    /// Every triangle's corners, in order: build an accelerator over them.
+    pub fn vertices(&self) -> Vec<[Vec3; 3]> {
+        self.geometry.vertices()
+    }
+
+    /// What `ray` sees at `hit`, which an accelerator over [`vertices`](Self::vertices) found.
+    #[inline]
+    pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        self.geometry.interaction(ray, hit)
+    }
+
+    /// The material of an interaction.
+    #[inline]
+    pub fn material(&self, interaction: &SurfaceInteraction) -> &Material {
+        &self.materials[interaction.material as usize]
+    }
+
+    /// The bounding box `(min, max)` of every triangle, or `None` for an empty scene.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.geometry.bounds()
+    }
+
+    /// The lab's point light: the scene's first point light, or [`default_light`](Self::default_light)
+    /// for scenes lit only by surfaces.
+    pub fn lab_light(&self) -> PointLight {
+        self.lights
+            .iter()
+            .find_map(|light| match light {
+                Light::Point(point) => Some(*point),
+                _ => None,
+            })
+            .unwrap_or_else(|| self.default_light())
+    }
+
+    /// The first point light, added (as [`default_light`](Self::default_light)) if there is none:
+    /// for the command line's `--light` and `--light-power`.
+    pub fn point_light_mut(&mut self) -> &mut PointLight {
+        let index = match self.lights.iter().position(|l| matches!(l, Light::Point(_))) {
+            Some(index) => index,
+            None => {
+                self.lights.insert(0, Light::Point(self.default_light()));
+                0
+            }
+        };
+        match &mut self.lights[index] {
+            Light::Point(point) => point,
+            _ => unreachable!("found a point light above"),
+        }
+    }
+
+    /// Whether any material emits: the scene has area lights.
+    pub fn has_area_lights(&self) -> bool {
+        self.materials.iter().any(Material::is_emissive)
+    }
+
+    /// Checks that every number in the scene is finite and every material id and parameter
+    /// valid.
     pub fn validate(&self) -> Result<(), SceneError> {
         let not_finite = |what: String, value: Vec3| SceneError::NotFinite {
             scene: self.name.clone(),
             what,
             value,
         };
-        for (i, t) in self.triangles.iter().enumerate() {
-            for (name, v) in [("vertex 0", t.v0), ("vertex 1", t.v1), ("vertex 2", t.v2)] {
-                if !v.is_finite() {
-                    return Err(not_finite(format!("triangle {i}, {name}"), v));
+        for (i, p) in self.geometry.positions().iter().enumerate() {
+            if !p.is_finite() {
+                return Err(not_finite(format!("vertex {i}"), *p));
+            }
+        }
+        if let Some(i) =
+            self.geometry.material_ids().iter().position(|&m| m as usize >= self.materials.len())
+        {
+            return Err(SceneError::Invalid {
+                scene: self.name.clone(),
+                what: format!("triangle {i}"),
+                problem: format!(
+                    "names material {} of {}",
+                    self.geometry.material_id(i),
+                    self.materials.len()
+                ),
+            });
+        }
+        for material in &self.materials {
+            material.validate().map_err(|problem| SceneError::Invalid {
+                scene: self.name.clone(),
+                what: format!("material '{}'", material.name),
+                problem,
+            })?;
+        }
+        for light in &self.lights {
+            match light {
+                Light::Point(point) => {
+                    if !point.position.is_finite() {
+                        return Err(not_finite("the light's position".into(), point.position));
+                    }
+                    if !point.power.is_finite() {
+                        return Err(not_finite("the light's power".into(), point.power));
+                    }
+                }
+                Light::Environment { radiance } => {
+                    if !radiance.is_finite() || radiance.min_element() < 0.0 {
+                        return Err(SceneError::Invalid {
+                            scene: self.name.clone(),
+                            what: "the environment".into(),
+                            problem: format!("radiance {radiance} must be finite and not negative"),
+                        });
+                    }
                 }
             }
-            if !t.albedo.is_finite() {
-                return Err(not_finite(format!("triangle {i}, colour"), t.albedo));
-            }
-        }
-        if !self.light.position.is_finite() {
-            return Err(not_finite("the light's position".into(), self.light.position));
-        }
-        if !self.light.power.is_finite() {
-            return Err(not_finite("the light's power".into(), self.light.power));
         }
         Ok(())
     }
 
-    /// The same scene with every length multiplied by `factor`, and the light's power by
-    /// `factor²` so that the picture stays the same (lab eq. 27 falls off as 1/r²).
+    /// The same scene with every length multiplied by `factor`, and point lights' power by
+    /// `factor²` so that the lab's picture stays the same (lab eq. 27 falls off as 1/r²).
     pub fn scaled(&self, factor: f32) -> Scene {
-        let triangles = self
-            .triangles
+        let lights = self
+            .lights
             .iter()
-            .map(|t| Triangle::new(t.v0 * factor, t.v1 * factor, t.v2 * factor, t.albedo))
+            .map(|light| match light {
+                Light::Point(point) => Light::Point(PointLight {
+                    position: point.position * factor,
+                    power: point.power * factor * factor,
+                }),
+                other => other.clone(),
+            })
             .collect();
         Scene {
             name: format!("{} ×{factor}", self.name),
-            triangles,
-            light: PointLight {
-                position: self.light.position * factor,
-                power: self.light.power * factor * factor,
-            },
+            geometry: self.geometry.map_positions(|p| p * factor),
+            materials: self.materials.clone(),
+            lights,
         }
     }
 }
@@ -116,7 +237,7 @@ mod tests {
 
     #[test]
     fn built_in_names_resolve_and_unknown_names_are_listed() {
-        assert_eq!(Scene::built_in("cornell").unwrap().triangles.len(), 30);
+        assert_eq!(Scene::built_in("cornell").unwrap().geometry.len(), 30);
         let err = Scene::built_in("sponza").unwrap_err();
         assert_eq!(err.to_string(), "unknown scene 'sponza': the built-in scenes are cornell");
     }
@@ -125,11 +246,23 @@ mod tests {
     fn validate_names_the_bad_value() {
         let mut scene = cornell_box();
         assert_eq!(scene.validate(), Ok(()));
-        scene.triangles[7].v1.y = f32::NAN;
+        scene.geometry =
+            scene.geometry.map_positions(|p| if p.x == -1.0 { p * f32::NAN } else { p });
         let message = scene.validate().unwrap_err().to_string();
-        assert!(message.contains("triangle 7, vertex 1"), "{message}");
+        assert!(message.contains("vertex"), "{message}");
         let mut scene = cornell_box();
-        scene.light.position.x = f32::INFINITY;
+        scene.point_light_mut().position.x = f32::INFINITY;
         assert!(scene.validate().unwrap_err().to_string().contains("light's position"));
+        let mut scene = cornell_box();
+        scene.materials[2] = Material::diffuse("too bright", Vec3::splat(2.0));
+        let message = scene.validate().unwrap_err().to_string();
+        assert!(
+            message.contains("material 'too bright'") && message.contains("reflectance"),
+            "{message}"
+        );
+        let mut scene = cornell_box();
+        scene.materials.truncate(3);
+        let message = scene.validate().unwrap_err().to_string();
+        assert!(message.contains("names material"), "{message}");
     }
 }

@@ -8,11 +8,14 @@
 
 use glam::Vec3;
 
+use glam::Affine3A;
+
 use super::Scene;
 use crate::camera::Camera;
-use crate::light::PointLight;
-use crate::mesh::{Material, Mesh};
-use crate::triangle::Triangle;
+use crate::geometry::Geometry;
+use crate::light::{Light, PointLight};
+use crate::material::Material;
+use crate::mesh::{Mesh, MeshMaterial};
 
 /// A y-up model point in the lab's y-down frame (a half turn about x).
 #[inline]
@@ -21,26 +24,28 @@ pub fn model_to_lab(p: Vec3) -> Vec3 {
 }
 
 impl Scene {
-    /// The mesh in the lab's frame, each triangle coloured by its material's diffuse colour (grey
-    /// where it has none), lit by [`Scene::default_light`].
+    /// The mesh in the lab's frame with its materials: diffuse with the file's colour (grey where
+    /// a triangle names none), emitting its `Ke`. Lit by [`Scene::default_light`] unless some
+    /// material emits.
     pub fn from_mesh(mesh: &Mesh) -> Scene {
-        let triangles: Vec<Triangle> = mesh
-            .triangle_vertices()
-            .enumerate()
-            .map(|(i, t)| {
-                let albedo = mesh.material(i).map_or(Material::DEFAULT_DIFFUSE, |m| m.diffuse);
-                let [a, b, c] = t.map(model_to_lab);
-                Triangle::new(a, b, c, albedo)
-            })
+        let mut materials: Vec<Material> = mesh
+            .materials
+            .iter()
+            .map(|m| Material { emission: m.emission, ..Material::diffuse(&m.name, m.diffuse) })
             .collect();
-        let mut scene = Scene { name: mesh.name.clone(), triangles, light: PointLight::lab() };
-        scene.light = scene.default_light();
+        let default = materials.len() as u32;
+        materials.push(Material::diffuse("default", MeshMaterial::DEFAULT_DIFFUSE));
+        let mut geometry = Geometry::new();
+        // The half turn about x that `model_to_lab` is.
+        let to_lab = Affine3A::from_mat3(glam::Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0)));
+        geometry.add_mesh(mesh, &to_lab, |i| {
+            mesh.material_ids.get(i).copied().flatten().unwrap_or(default)
+        });
+        let mut scene = Scene { name: mesh.name.clone(), geometry, materials, lights: Vec::new() };
+        if !scene.has_area_lights() {
+            scene.lights.push(Light::Point(scene.default_light()));
+        }
         scene
-    }
-
-    /// The bounding box `(min, max)` of every triangle, or `None` for an empty scene.
-    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        crate::mesh::bounds_of(self.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]))
     }
 
     /// A light above the scene, a little to the right and in front of it (toward a camera that
@@ -99,11 +104,13 @@ mod tests {
     #[test]
     fn models_stand_upright_and_keep_their_handedness() {
         let scene = Scene::from_mesh(&tent());
-        let t = scene.triangles[0];
+        let [v0, v1, v2] = scene.geometry.triangle(0);
         // The apex is above the base: smaller y in the lab's y-down frame.
-        assert!(t.v2.y < t.v0.y);
+        assert!(v2.y < v0.y);
         // Left stays left (no mirroring): x is unchanged.
-        assert_eq!((t.v0.x, t.v1.x), (-1.0, 1.0));
+        assert_eq!((v0.x, v1.x), (-1.0, 1.0));
+        // The front (+z, counter-clockwise) side faces the camera, at −z in the lab's frame.
+        assert!(scene.geometry.normal(0).z < 0.0);
         // A proper rotation: the determinant of the map is +1.
         let m = glam::Mat3::from_cols(
             model_to_lab(Vec3::X),
@@ -111,7 +118,8 @@ mod tests {
             model_to_lab(Vec3::Z),
         );
         assert_eq!(m.determinant(), 1.0);
-        assert_eq!(t.albedo, Material::DEFAULT_DIFFUSE);
+        let material = &scene.materials[scene.geometry.material_id(0) as usize];
+        assert_eq!(material.bsdf.albedo(), MeshMaterial::DEFAULT_DIFFUSE);
     }
 
     #[test]
@@ -119,14 +127,14 @@ mod tests {
         let scene = Scene::from_mesh(&tent());
         let (lo, hi) = scene.bounds().unwrap();
         let camera = Camera::framing(lo, hi, 200, 100);
-        for t in &scene.triangles {
-            for v in [t.v0, t.v1, t.v2] {
+        for i in 0..scene.geometry.len() {
+            for v in scene.geometry.triangle(i) {
                 let p = camera.project(v).expect("in front of the camera");
                 let (x, y) = (p.x, p.y);
                 assert!((0.0..200.0).contains(&x) && (0.0..100.0).contains(&y), "{v} at {x},{y}");
             }
         }
-        let light = scene.light;
+        let light = scene.lab_light();
         assert!(light.position.y < lo.y, "the light is above the model");
         assert!(light.position.z < lo.z, "and in front of it");
         let centre = 0.5 * (lo + hi);

@@ -10,7 +10,7 @@
 //!
 //! **Materials.** Each `mtllib` is read relative to the OBJ's folder (a Windows path such as
 //! `.\scene.mtl` works too, and so does a list of names on one line). From an MTL file we keep
-//! each material's name, `Kd` (diffuse, [`Material::DEFAULT_DIFFUSE`] if absent) and `Ke`
+//! each material's name, `Kd` (diffuse, [`MeshMaterial::DEFAULT_DIFFUSE`] if absent) and `Ke`
 //! (emission, zero if absent); `Kd r` alone means grey, as the MTL specification allows.
 //! A library that cannot be read is a warning: the surfaces that name its materials get the
 //! default grey. A library that is malformed is an error naming the library and its line.
@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::file::{LoadError, LoadedMesh, Location, mesh_name, quoted, read_bytes};
-use crate::mesh::{CornerAttribute, Material, Mesh};
+use crate::mesh::{CornerAttribute, Mesh, MeshMaterial};
 
 /// The largest material library we read. Real ones are a few kilobytes.
 const LIBRARY_LIMIT_BYTES: u64 = 256 << 20;
@@ -225,7 +225,7 @@ struct Shared<'a> {
     /// The first error found by us rather than by tobj; the reader stops tobj once it is set.
     failure: RefCell<Option<LoadError>>,
     /// Every library's materials, in the order tobj numbers them.
-    materials: RefCell<Vec<Material>>,
+    materials: RefCell<Vec<MeshMaterial>>,
     warnings: RefCell<Vec<String>>,
     /// Whether some library could not be read (then unknown material names are expected).
     library_missing: Cell<bool>,
@@ -299,8 +299,8 @@ impl Shared<'_> {
 
 /// The materials of an MTL file, in file order: `newmtl`, `Kd` and `Ke`; the rest is ignored.
 /// An error is the line number and what was wrong.
-fn parse_mtl(text: &[u8]) -> Result<Vec<Material>, (u64, String)> {
-    let mut materials: Vec<Material> = Vec::new();
+fn parse_mtl(text: &[u8]) -> Result<Vec<MeshMaterial>, (u64, String)> {
+    let mut materials: Vec<MeshMaterial> = Vec::new();
     for (index, raw) in text.split(|&b| b == b'\n').enumerate() {
         let number = index as u64 + 1;
         let line = String::from_utf8_lossy(raw);
@@ -311,9 +311,9 @@ fn parse_mtl(text: &[u8]) -> Result<Vec<Material>, (u64, String)> {
                 if name.is_empty() {
                     return Err((number, "expected a material name after `newmtl`".into()));
                 }
-                materials.push(Material {
+                materials.push(MeshMaterial {
                     name: name.into(),
-                    diffuse: Material::DEFAULT_DIFFUSE,
+                    diffuse: MeshMaterial::DEFAULT_DIFFUSE,
                     emission: Vec3::ZERO,
                 });
             }
@@ -752,7 +752,7 @@ mod tests {
             ("red", Vec3::X, Vec3::ZERO),
             ("green", Vec3::Y, Vec3::new(0.5, 2.0, 3.0)),
             ("grey", Vec3::splat(0.25), Vec3::ZERO),
-            ("plain", Material::DEFAULT_DIFFUSE, Vec3::ZERO),
+            ("plain", MeshMaterial::DEFAULT_DIFFUSE, Vec3::ZERO),
         ];
         let found: Vec<(&str, Vec3, Vec3)> =
             mesh.materials.iter().map(|m| (m.name.as_str(), m.diffuse, m.emission)).collect();

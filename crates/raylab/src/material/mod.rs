@@ -1,0 +1,148 @@
+//! Materials: how surfaces scatter and emit light.
+//!
+//! A [`Material`] is a BSDF, whether it is two-sided, and the radiance it emits from its front
+//! side (an emissive material makes its triangles area lights). Names and parameters follow
+//! Mitsuba 3's plugins, so that its scenes translate one to one; like Mitsuba's, materials are
+//! **one-sided** unless wrapped in `twosided`: seen from behind (against the geometric normal)
+//! they are black.
+//!
+//! Each BSDF lives in its own file with `eval`, `pdf` and `sample` side by side, in the local
+//! shading frame (z is the shading normal). Directions follow Mitsuba's convention: `wi` points
+//! back toward where the light ends up (the camera side), `wo` is the direction sampled or
+//! evaluated toward the light; both point away from the surface. `eval` returns the BSDF times
+//! the cosine `|cos θo|`, and a sample's `weight` is `eval / pdf`.
+
+mod diffuse;
+
+use glam::{Vec2, Vec3};
+
+pub use diffuse::Diffuse;
+
+/// A surface's scattering, emission and sidedness.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// The name scenes refer to it by.
+    pub name: String,
+    /// How it scatters light.
+    pub bsdf: Bsdf,
+    /// Scatters from both sides (Mitsuba's `twosided`); otherwise black from behind.
+    pub two_sided: bool,
+    /// Radiance emitted from the front side; zero for surfaces that do not emit.
+    pub emission: Vec3,
+}
+
+impl Material {
+    /// A one-sided diffuse material that does not emit.
+    pub fn diffuse(name: &str, reflectance: Vec3) -> Material {
+        Material {
+            name: name.to_string(),
+            bsdf: Bsdf::Diffuse(Diffuse { reflectance }),
+            two_sided: false,
+            emission: Vec3::ZERO,
+        }
+    }
+
+    /// Whether it emits light.
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    /// Checks that every parameter is finite and in its range, naming the first that is not.
+    pub fn validate(&self) -> Result<(), String> {
+        if !self.emission.is_finite() || self.emission.min_element() < 0.0 {
+            return Err(format!("emission {} must be finite and not negative", self.emission));
+        }
+        self.bsdf.validate()
+    }
+}
+
+/// One sampled direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// The sampled direction `wo`, in the local frame.
+    pub wo: Vec3,
+    /// Its density per unit solid angle (for a delta lobe, the lobe's discrete probability).
+    pub pdf: f32,
+    /// `eval(wi, wo) / pdf`: what the path's throughput is multiplied by.
+    pub weight: Vec3,
+    /// The sample came from a delta (perfectly specular) lobe.
+    pub delta: bool,
+    /// The relative index of refraction along the sampled direction (1 unless it refracted).
+    pub eta: f32,
+}
+
+/// A bidirectional scattering distribution function.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Bsdf {
+    /// Lambertian reflection (Mitsuba's `diffuse`).
+    Diffuse(Diffuse),
+}
+
+impl Bsdf {
+    /// The BSDF times `|cos θo|` for light arriving from `wo` and leaving toward `wi` (local
+    /// frame). Zero for delta lobes.
+    #[inline]
+    pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
+        match self {
+            Bsdf::Diffuse(d) => d.eval(wi, wo),
+        }
+    }
+
+    /// The density with which [`sample`](Self::sample) picks `wo` given `wi`, per unit solid
+    /// angle (zero for delta lobes).
+    #[inline]
+    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        match self {
+            Bsdf::Diffuse(d) => d.pdf(wi, wo),
+        }
+    }
+
+    /// Samples `wo` given `wi` from two uniform numbers (`u1` picks a lobe, `u2` a direction), or
+    /// `None` where the BSDF absorbs.
+    #[inline]
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        match self {
+            Bsdf::Diffuse(d) => d.sample(wi, u1, u2),
+        }
+    }
+
+    /// Whether the BSDF has a lobe that is not a delta: light sampling can help it.
+    #[inline]
+    pub fn is_smooth(&self) -> bool {
+        match self {
+            Bsdf::Diffuse(_) => true,
+        }
+    }
+
+    /// The colour a surface shows in flat renderings (the lab's ρ, the albedo AOV): the diffuse
+    /// reflectance, or the lobe's tint.
+    pub fn albedo(&self) -> Vec3 {
+        match self {
+            Bsdf::Diffuse(d) => d.reflectance,
+        }
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        match self {
+            Bsdf::Diffuse(d) => unit_interval("reflectance", d.reflectance),
+        }
+    }
+}
+
+/// Checks that a colour is finite with every channel in `[0, 1]`.
+fn unit_interval(name: &str, value: Vec3) -> Result<(), String> {
+    if value.is_finite() && value.min_element() >= 0.0 && value.max_element() <= 1.0 {
+        Ok(())
+    } else {
+        Err(format!("{name} {value} must be between 0 and 1 in every channel"))
+    }
+}
+
+/// `cos θ` of a local direction.
+#[inline]
+pub(crate) fn cos_theta(w: Vec3) -> f32 {
+    w.z
+}
+
+#[cfg(test)]
+pub(crate) mod tests;
