@@ -93,6 +93,28 @@ impl Film {
         &mut self.pixels
     }
 
+    /// 8-bit RGB through a [`Display`] transform.
+    pub fn to_rgb8(&self, display: &Display) -> Result<RgbImage, FilmError> {
+        let mut bytes = Vec::new();
+        bytes.try_reserve_exact(self.pixels.len() * 3).map_err(|_| FilmError::OutOfMemory {
+            width: self.width,
+            height: self.height,
+            bytes: Film::bytes_needed(self.width, self.height),
+        })?;
+        bytes.extend(self.pixels.iter().flat_map(|p| p.to_array().map(|v| display.level(v))));
+        Ok(RgbImage::from_raw(self.width, self.height, bytes)
+            .expect("buffer has width×height×3 bytes"))
+    }
+
+    /// A film from linear pixels, row by row from the top-left.
+    ///
+    /// # Panics
+    /// If `pixels` does not hold `width×height` values.
+    pub fn from_pixels(width: u32, height: u32, pixels: Vec<Vec3>) -> Film {
+        assert_eq!(pixels.len(), width as usize * height as usize, "a value per pixel");
+        Film { width, height, pixels }
+    }
+
     /// 8-bit RGB as the lab displays it: each channel clamped to `[0, 1]`, times 255, rounded to
     /// the nearest level, no gamma.
     pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {
@@ -106,6 +128,74 @@ impl Film {
         Ok(RgbImage::from_raw(self.width, self.height, bytes)
             .expect("buffer has width×height×3 bytes"))
     }
+}
+
+/// How a film's linear radiance becomes 8-bit pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Display {
+    /// Radiance is multiplied by `2^exposure` first.
+    pub exposure: f32,
+    /// How values above 1 are brought into range.
+    pub tone_map: ToneMap,
+    /// sRGB-encode (the standard for PNG), or show linear values as the lab does.
+    pub srgb: bool,
+}
+
+impl Display {
+    /// The lab's display: clamped, linear, no exposure.
+    pub const LAB: Display = Display { exposure: 0.0, tone_map: ToneMap::Clamp, srgb: false };
+    /// Physically based renders: clamped, sRGB-encoded (what Mitsuba and pbrt write to PNG).
+    pub const SRGB: Display = Display { exposure: 0.0, tone_map: ToneMap::Clamp, srgb: true };
+
+    /// The 8-bit level of one linear channel.
+    #[inline]
+    pub fn level(&self, value: f32) -> u8 {
+        let value = value * self.exposure.exp2();
+        let value = match self.tone_map {
+            ToneMap::Clamp => value,
+            ToneMap::Reinhard => value / (1.0 + value.max(0.0)),
+            ToneMap::Aces => aces_filmic(value),
+        };
+        to_8bit_clamped(if self.srgb { srgb_encode(value) } else { value })
+    }
+}
+
+/// Tone mapping operators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ToneMap {
+    /// Values above 1 are clipped.
+    #[default]
+    Clamp,
+    /// `x / (1 + x)` per channel (Reinhard et al. 2002): nothing clips.
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve (2015): a film-like shoulder.
+    Aces,
+}
+
+impl std::str::FromStr for ToneMap {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "clamp" => Ok(ToneMap::Clamp),
+            "reinhard" => Ok(ToneMap::Reinhard),
+            "aces" => Ok(ToneMap::Aces),
+            _ => Err(format!("unknown tone mapping '{s}': expected clamp, reinhard or aces")),
+        }
+    }
+}
+
+/// Narkowicz's ACES filmic fit, `x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)`.
+#[inline]
+fn aces_filmic(x: f32) -> f32 {
+    let x = x.max(0.0);
+    (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in `[0, 1]` (clamped).
+#[inline]
+pub fn srgb_encode(linear: f32) -> f32 {
+    let x = linear.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
 }
 
 /// One channel as the lab shows it: clamp to `[0, 1]`, ×255, round. NaN shows as 0.
@@ -164,6 +254,25 @@ mod tests {
         }
         assert_eq!(to_8bit_clamped(f32::INFINITY), 255);
         assert_eq!(to_8bit_clamped(f32::NEG_INFINITY), 0);
+    }
+
+    #[test]
+    fn srgb_and_tone_maps_match_known_values() {
+        assert_eq!(srgb_encode(0.0), 0.0);
+        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
+        // 18 % grey is sRGB level 118 (0.4614).
+        assert!((srgb_encode(0.18) - 0.461_356).abs() < 1e-5, "{}", srgb_encode(0.18));
+        assert!((srgb_encode(0.002) - 0.025_84).abs() < 1e-6);
+        let d = Display { exposure: 1.0, tone_map: ToneMap::Clamp, srgb: false };
+        assert_eq!(d.level(0.25), 128, "one stop up doubles");
+        let reinhard = Display { tone_map: ToneMap::Reinhard, ..Display::LAB };
+        assert_eq!(reinhard.level(1.0), 128);
+        assert!(reinhard.level(100.0) < 255);
+        let aces = Display { tone_map: ToneMap::Aces, ..Display::LAB };
+        assert!(aces.level(0.0) == 0 && aces.level(100.0) == 255 && aces.level(0.5) > 100);
+        assert_eq!(Display::SRGB.level(0.18), 118);
+        assert_eq!("aces".parse::<ToneMap>(), Ok(ToneMap::Aces));
+        assert!("filmic".parse::<ToneMap>().unwrap_err().contains("reinhard"));
     }
 
     #[test]

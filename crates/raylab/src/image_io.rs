@@ -1,7 +1,8 @@
 //! Writing and reading images, safely.
 //!
 //! The format comes from the file's extension: `.png` (8-bit RGB) or `.ppm` (binary P6, which any
-//! image viewer and the lab's own tools read). Files are written to a temporary file in the same
+//! image viewer and the lab's own tools read) for pictures, and `.exr` (OpenEXR, 32-bit float,
+//! lossless ZIP compression) or `.pfm` (Portable Float Map) for linear radiance. Files are written to a temporary file in the same
 //! folder, synced and renamed into place, so a failed write never leaves a partial image behind
 //! and never destroys the previous one. (Only a kill in the moment of writing can leave a hidden
 //! `.NAME.*.tmp` file; the image itself is always whole or absent.)
@@ -10,13 +11,16 @@ use std::fs;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use image::{ImageEncoder, RgbImage};
+
+use crate::film::{Display, Film};
 
 /// Why an image could not be written or read. Every message names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum ImageIoError {
     /// The extension is not one raylab writes.
-    #[error("cannot write '{}': unknown image format {}; use .png or .ppm", .path.display(), describe_extension(.path))]
+    #[error("cannot write '{}': unknown image format {}; use .png, .ppm, .exr or .pfm", .path.display(), describe_extension(.path))]
     UnknownFormat {
         /// The file asked for.
         path: PathBuf,
@@ -45,6 +49,16 @@ pub enum ImageIoError {
         /// What the operating system said.
         source: io::Error,
     },
+    /// The OpenEXR decoder or encoder failed, or a float image is malformed.
+    #[error("cannot {action} '{}': {message}", .path.display())]
+    Float {
+        /// "write" or "read".
+        action: &'static str,
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
     /// The PNG decoder or encoder failed.
     #[error("cannot {action} '{}': {source}", .path.display())]
     Image {
@@ -71,6 +85,17 @@ pub enum ImageFormat {
     Png,
     /// Binary PPM (P6), 8-bit RGB.
     Ppm,
+    /// OpenEXR, linear 32-bit float RGB.
+    Exr,
+    /// Portable Float Map, linear 32-bit float RGB.
+    Pfm,
+}
+
+impl ImageFormat {
+    /// Whether the format keeps linear radiance (rather than 8-bit display levels).
+    pub fn is_float(self) -> bool {
+        matches!(self, ImageFormat::Exr | ImageFormat::Pfm)
+    }
 }
 
 impl ImageFormat {
@@ -80,6 +105,8 @@ impl ImageFormat {
         match ext.as_deref() {
             Some("png") => Ok(ImageFormat::Png),
             Some("ppm") => Ok(ImageFormat::Ppm),
+            Some("exr") => Ok(ImageFormat::Exr),
+            Some("pfm") => Ok(ImageFormat::Pfm),
             _ => Err(ImageIoError::UnknownFormat { path: path.to_path_buf() }),
         }
     }
@@ -148,6 +175,135 @@ pub fn check_writable(path: &Path) -> Result<ImageFormat, ImageIoError> {
     Ok(format)
 }
 
+/// Writes a film to `path` in the format its extension names, atomically: linear values for
+/// `.exr` and `.pfm`, through `display` for `.png` and `.ppm`.
+pub fn save_film(path: &Path, film: &Film, display: &Display) -> Result<(), ImageIoError> {
+    let format = output_format(path)?;
+    let float_error = |message: String| ImageIoError::Float {
+        action: "write",
+        path: path.to_path_buf(),
+        message,
+    };
+    match format {
+        ImageFormat::Exr => write_atomically(path, |out| {
+            use exr::prelude::*;
+            let (width, height) = (film.width() as usize, film.height() as usize);
+            let channels = SpecificChannels::rgb(|position: Vec2<usize>| {
+                let p = film.pixels()[position.y() * width + position.x()];
+                (p.x, p.y, p.z)
+            });
+            let layer = Layer::new(
+                (width, height),
+                LayerAttributes::named("rgb"),
+                Encoding::SMALL_LOSSLESS,
+                channels,
+            );
+            Image::from_layer(layer)
+                .write()
+                .to_buffered(out)
+                .map_err(|e| float_error(e.to_string()))
+        }),
+        ImageFormat::Pfm => write_atomically(path, |out| {
+            let write_error = |source: io::Error| ImageIoError::Io {
+                action: "write",
+                path: path.to_path_buf(),
+                source,
+            };
+            // Little-endian (negative scale), rows from the bottom up.
+            write!(out, "PF\n{} {}\n-1.0\n", film.width(), film.height()).map_err(write_error)?;
+            for row in film.pixels().chunks_exact(film.width() as usize).rev() {
+                for p in row {
+                    for v in p.to_array() {
+                        out.write_all(&v.to_le_bytes()).map_err(write_error)?;
+                    }
+                }
+            }
+            Ok(())
+        }),
+        _ => save_rgb8(path, &film.to_rgb8(display).map_err(|e| float_error(e.to_string()))?),
+    }
+}
+
+/// Reads a float image, `.pfm` or `.exr` (its first RGB layer), as a film.
+pub fn load_film(path: &Path) -> Result<Film, ImageIoError> {
+    let error =
+        |message: String| ImageIoError::Float { action: "read", path: path.to_path_buf(), message };
+    match ImageFormat::from_path(path) {
+        Ok(ImageFormat::Exr) => {
+            use exr::prelude::*;
+            let image = read_first_rgba_layer_from_file(
+                path,
+                |resolution, _| {
+                    (resolution.width(), vec![Vec3::ZERO; resolution.width() * resolution.height()])
+                },
+                |(width, pixels), position, (r, g, b, _a): (f32, f32, f32, f32)| {
+                    pixels[position.y() * *width + position.x()] = Vec3::new(r, g, b);
+                },
+            )
+            .map_err(|e| error(e.to_string()))?;
+            let size = image.layer_data.size;
+            let (_, pixels) = image.layer_data.channel_data.pixels;
+            Ok(Film::from_pixels(size.width() as u32, size.height() as u32, pixels))
+        }
+        Ok(ImageFormat::Pfm) => {
+            let bytes = fs::read(path).map_err(|source| ImageIoError::Io {
+                action: "read",
+                path: path.to_path_buf(),
+                source,
+            })?;
+            parse_pfm(&bytes).map_err(error)
+        }
+        _ => Err(error("not a float image: expected .pfm or .exr".into())),
+    }
+}
+
+/// Parses a colour Portable Float Map.
+fn parse_pfm(bytes: &[u8]) -> Result<Film, String> {
+    // Three whitespace-separated header tokens after "PF", then one whitespace byte.
+    let mut tokens = Vec::new();
+    let mut i = 0;
+    while tokens.len() < 4 {
+        while i < bytes.len() && bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        let start = i;
+        while i < bytes.len() && !bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if start == i {
+            return Err("the header ends early: expected PF, width, height and scale".into());
+        }
+        tokens.push(String::from_utf8_lossy(&bytes[start..i]).into_owned());
+    }
+    i += 1;
+    if tokens[0] != "PF" {
+        return Err(format!("expected 'PF' (colour PFM), found '{}'", tokens[0]));
+    }
+    let dimension = |t: &str| t.parse::<u32>().ok().filter(|&d| d > 0 && d <= 1 << 16);
+    let (Some(width), Some(height)) = (dimension(&tokens[1]), dimension(&tokens[2])) else {
+        return Err(format!("bad size '{} {}'", tokens[1], tokens[2]));
+    };
+    let scale: f32 = tokens[3].parse().map_err(|_| format!("bad scale '{}'", tokens[3]))?;
+    let data = bytes.get(i..).unwrap_or_default();
+    let needed = width as usize * height as usize * 12;
+    if data.len() != needed {
+        return Err(format!("expected {needed} bytes of pixels, found {}", data.len()));
+    }
+    let value = |k: usize| {
+        let b = [data[4 * k], data[4 * k + 1], data[4 * k + 2], data[4 * k + 3]];
+        if scale < 0.0 { f32::from_le_bytes(b) } else { f32::from_be_bytes(b) }
+    };
+    let mut pixels = vec![Vec3::ZERO; width as usize * height as usize];
+    for y in 0..height as usize {
+        let file_row = height as usize - 1 - y;
+        for x in 0..width as usize {
+            let k = 3 * (file_row * width as usize + x);
+            pixels[y * width as usize + x] = Vec3::new(value(k), value(k + 1), value(k + 2));
+        }
+    }
+    Ok(Film::from_pixels(width, height, pixels))
+}
+
 /// Writes `image` to `path` in the format its extension names, atomically: the file appears
 /// complete or not at all.
 pub fn save_rgb8(path: &Path, image: &RgbImage) -> Result<(), ImageIoError> {
@@ -175,6 +331,17 @@ pub fn save_rgb8(path: &Path, image: &RgbImage) -> Result<(), ImageIoError> {
                 write!(out, "P6\n{} {}\n255\n", image.width(), image.height())
                     .map_err(write_error)?;
                 out.write_all(image.as_raw()).map_err(write_error)
+            }
+            ImageFormat::Exr | ImageFormat::Pfm => {
+                let film = Film::from_pixels(
+                    image.width(),
+                    image.height(),
+                    image
+                        .pixels()
+                        .map(|p| Vec3::from_array(p.0.map(|v| v as f32 / 255.0)))
+                        .collect(),
+                );
+                save_film(path, &film, &Display::LAB)
             }
         }
     })
@@ -242,6 +409,31 @@ mod tests {
         assert_eq!(&bytes[11..], test_image().as_raw().as_slice());
         // Nothing but the two images is left in the folder.
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn float_images_round_trip_bit_for_bit() {
+        let dir = tempfile::tempdir().unwrap();
+        let pixels: Vec<Vec3> = (0..12)
+            .map(|i| Vec3::new(i as f32 * 1.5e-3, -(i as f32), 1e6 + i as f32 * 0.125))
+            .collect();
+        let film = Film::from_pixels(4, 3, pixels);
+        for name in ["a.exr", "a.pfm"] {
+            let path = dir.path().join(name);
+            save_film(&path, &film, &Display::LAB).unwrap();
+            assert_eq!(load_film(&path).unwrap(), film, "{name}");
+        }
+        // The PFM layout: header, then rows bottom-up, little-endian.
+        let bytes = fs::read(dir.path().join("a.pfm")).unwrap();
+        assert_eq!(&bytes[..12], b"PF\n4 3\n-1.0\n");
+        assert_eq!(&bytes[12..16], &film.pixel(0, 2).x.to_le_bytes());
+        // Malformed files are named with what is wrong.
+        let bad = dir.path().join("bad.pfm");
+        fs::write(&bad, b"PF\n4 3\n-1.0\n1234").unwrap();
+        let message = load_film(&bad).unwrap_err().to_string();
+        assert!(message.contains("bad.pfm") && message.contains("expected 144 bytes"), "{message}");
+        fs::write(&bad, b"Pf\n4 3\n-1.0\n").unwrap();
+        assert!(load_film(&bad).unwrap_err().to_string().contains("colour PFM"));
     }
 
     #[test]

@@ -6,7 +6,14 @@
 
 use std::f32::consts::PI;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+
+use crate::geometry::SurfaceInteraction;
+use crate::ray::{Ray, SurfacePoint};
+use crate::sampling::{
+    DiscreteDistribution, square_to_uniform_sphere, square_to_uniform_triangle, uniform_sphere_pdf,
+};
+use crate::scene::Scene;
 
 /// A light of the scene that is not a surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -54,6 +61,207 @@ impl PointLight {
         let r_dot_n = to_light.dot(normal).max(0.0);
         self.power * (r_dot_n / (4.0 * PI * r2 * r2.sqrt()))
     }
+}
+
+/// Every light of a scene, ready to be sampled: point lights, the emissive triangles (area
+/// lights) and the environment, chosen by power.
+///
+/// A triangle light is one-sided, as Mitsuba's `area` emitter: it emits its material's
+/// `emission` from its front (counter-clockwise) side only. Points on it are sampled uniformly by
+/// area and their density converted to solid angle at the shading point.
+#[derive(Clone, Debug)]
+pub struct LightSet {
+    lights: Vec<SampledLight>,
+    /// By power; `None` without lights.
+    distribution: Option<DiscreteDistribution>,
+    /// For each triangle, the index of its light, or `u32::MAX`.
+    triangle_light: Vec<u32>,
+    /// The environment's radiance and its index, if the scene has one.
+    environment: Option<(Vec3, u32)>,
+}
+
+#[derive(Clone, Debug)]
+enum SampledLight {
+    Point { position: Vec3, intensity: Vec3 },
+    Triangle { corners: [Vec3; 3], normal: Vec3, area: f32, radiance: Vec3 },
+    Environment { radiance: Vec3 },
+}
+
+/// A point sampled on a light, seen from a shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// The unit direction from the shading point toward the light.
+    pub direction: Vec3,
+    /// The radiance arriving from it (unoccluded).
+    pub radiance: Vec3,
+    /// The density per unit solid angle of this direction, times the light's selection
+    /// probability; for a point light, just that probability.
+    pub pdf: f32,
+    /// A point light: no other strategy can find it.
+    pub delta: bool,
+    /// The ray to test visibility with (from the shading point, ending just before the light).
+    pub shadow_ray: Ray,
+}
+
+/// The fraction of a shadow ray toward a point on a surface light that is tested: the rest
+/// (a relative 10⁻⁴) keeps the light's own triangle out of the test (PBR 4th ed.'s
+/// `ShadowEpsilon`).
+const SHADOW_RAY_LENGTH: f32 = 1.0 - 1e-4;
+
+impl LightSet {
+    /// The lights of `scene`.
+    pub fn new(scene: &Scene) -> LightSet {
+        let mut lights = Vec::new();
+        let mut triangle_light = vec![u32::MAX; scene.geometry.len()];
+        let mut environment = None;
+        let radius = scene.bounds().map_or(1.0, |(lo, hi)| 0.5 * (hi - lo).length());
+        for light in &scene.lights {
+            match light {
+                Light::Point(point) => lights.push(SampledLight::Point {
+                    position: point.position,
+                    intensity: point.intensity(),
+                }),
+                Light::Environment { radiance } => {
+                    environment = Some((*radiance, lights.len() as u32));
+                    lights.push(SampledLight::Environment { radiance: *radiance });
+                }
+            }
+        }
+        for (i, slot) in triangle_light.iter_mut().enumerate() {
+            let material = &scene.materials[scene.geometry.material_id(i) as usize];
+            let area = scene.geometry.area(i);
+            if material.is_emissive() && area > 0.0 {
+                *slot = lights.len() as u32;
+                lights.push(SampledLight::Triangle {
+                    corners: scene.geometry.triangle(i),
+                    normal: scene.geometry.normal(i),
+                    area,
+                    radiance: material.emission,
+                });
+            }
+        }
+        let powers: Vec<f32> = lights
+            .iter()
+            .map(|light| match light {
+                SampledLight::Point { intensity, .. } => 4.0 * PI * mean(*intensity),
+                SampledLight::Triangle { area, radiance, .. } => PI * area * mean(*radiance),
+                // Through a disk the size of the scene (PBR 4th ed. §12.5).
+                SampledLight::Environment { radiance } => PI * radius * radius * mean(*radiance),
+            })
+            .collect();
+        LightSet {
+            lights,
+            distribution: DiscreteDistribution::new(&powers),
+            triangle_light,
+            environment,
+        }
+    }
+
+    /// The number of lights (each emissive triangle counts as one).
+    pub fn len(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// Whether the scene has no light at all.
+    pub fn is_empty(&self) -> bool {
+        self.distribution.is_none()
+    }
+
+    /// Picks a light with `u_light` and a point on it with `u`, as seen from `point`; `None` when
+    /// there is nothing to sample or the point sees the light's back or nothing of it.
+    #[inline]
+    pub fn sample(&self, point: &SurfacePoint, u_light: f32, u: Vec2) -> Option<LightSample> {
+        let (index, selection, _) = self.distribution.as_ref()?.sample(u_light);
+        match self.lights[index] {
+            SampledLight::Point { position, intensity } => {
+                let to_light = position - point.p;
+                let distance_squared = to_light.length_squared();
+                if distance_squared == 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    direction: to_light / distance_squared.sqrt(),
+                    radiance: intensity / distance_squared,
+                    pdf: selection,
+                    delta: true,
+                    shadow_ray: point.spawn_ray_to(position),
+                })
+            }
+            SampledLight::Triangle { corners: [v0, v1, v2], normal, area, radiance } => {
+                let [b0, b1, b2] = square_to_uniform_triangle(u);
+                let target = b0 * v0 + b1 * v1 + b2 * v2;
+                let to_light = target - point.p;
+                let distance_squared = to_light.length_squared();
+                let direction = to_light / distance_squared.sqrt();
+                // One-sided: the light must face the point.
+                let cos_light = -direction.dot(normal);
+                if cos_light <= 0.0 || !distance_squared.is_normal() {
+                    return None;
+                }
+                let mut shadow_ray = point.spawn_ray_to(target);
+                shadow_ray.t_max = SHADOW_RAY_LENGTH;
+                Some(LightSample {
+                    direction,
+                    radiance,
+                    pdf: selection * distance_squared / (cos_light * area),
+                    delta: false,
+                    shadow_ray,
+                })
+            }
+            SampledLight::Environment { radiance } => {
+                let direction = square_to_uniform_sphere(u);
+                Some(LightSample {
+                    direction,
+                    radiance,
+                    pdf: selection * uniform_sphere_pdf(direction),
+                    delta: false,
+                    shadow_ray: point.spawn_ray(direction),
+                })
+            }
+        }
+    }
+
+    /// The radiance a ray from `origin` sees at `hit` on an emissive triangle, and the density
+    /// with which [`sample`](Self::sample) would have chosen that direction from `origin`; zero
+    /// and zero for a triangle that does not emit or is seen from behind.
+    #[inline]
+    pub fn emitted(&self, origin: Vec3, hit: &SurfaceInteraction) -> (Vec3, f32) {
+        let light = self.triangle_light[hit.triangle as usize];
+        if light == u32::MAX {
+            return (Vec3::ZERO, 0.0);
+        }
+        let SampledLight::Triangle { normal, area, radiance, .. } = self.lights[light as usize]
+        else {
+            unreachable!("triangle_light indexes triangle lights");
+        };
+        let to_light = hit.point.p - origin;
+        let distance_squared = to_light.length_squared();
+        let cos_light = -to_light.dot(normal) / distance_squared.sqrt();
+        if cos_light <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let selection = self.distribution.as_ref().map_or(0.0, |d| d.pmf(light as usize));
+        (radiance, selection * distance_squared / (cos_light * area))
+    }
+
+    /// The environment's radiance along a ray that leaves the scene, and the density with which
+    /// [`sample`](Self::sample) would have chosen its direction; zero without an environment.
+    #[inline]
+    pub fn environment(&self, direction: Vec3) -> (Vec3, f32) {
+        match self.environment {
+            Some((radiance, index)) => {
+                let selection = self.distribution.as_ref().map_or(0.0, |d| d.pmf(index as usize));
+                (radiance, selection * uniform_sphere_pdf(direction))
+            }
+            None => (Vec3::ZERO, 0.0),
+        }
+    }
+}
+
+/// The mean of a colour's channels.
+#[inline]
+fn mean(c: Vec3) -> f32 {
+    c.element_sum() / 3.0
 }
 
 #[cfg(test)]

@@ -1,17 +1,20 @@
 //! Integrators: what colour a camera ray sees.
 //!
 //! One file per integrator. [`Lab`] is the lab's direct-light model with shadows and a constant
-//! ambient term, with a [`Stage`] for each step of the lab.
+//! ambient term, with a [`Stage`] for each step of the lab; [`Path`] is the path tracer, which
+//! sees the light the lab leaves out (indirect light, soft shadows from area lights).
 //!
 //! An integrator draws every random number it needs from the [`Sampler`] it is given, which the
 //! renderer makes from (seed, pixel, sample index) alone: the same sample gives the same colour
 //! on any thread.
 
 mod lab;
+mod path;
 
 use glam::Vec3;
 
 pub use lab::{Lab, Stage};
+pub use path::{Path, PathSettings};
 
 use crate::ray::Ray;
 use crate::sampling::{Sampler, SamplerKind};

@@ -259,6 +259,66 @@ pub fn erf_inv(y: f32) -> f32 {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Discrete choices.
+
+/// A choice among `n` items with probabilities proportional to given weights, by a binary
+/// search of the cumulative distribution (Mitsuba's `DiscreteDistribution`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DiscreteDistribution {
+    /// `cdf[i]` = the sum of the weights before item `i`, normalized; `cdf[n] = 1`.
+    cdf: Vec<f32>,
+    pmf: Vec<f32>,
+}
+
+impl DiscreteDistribution {
+    /// A distribution over weights that are finite and not negative; `None` if they sum to 0.
+    pub fn new(weights: &[f32]) -> Option<DiscreteDistribution> {
+        let total: f64 = weights.iter().map(|&w| w.max(0.0) as f64).sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return None;
+        }
+        let mut cdf = Vec::with_capacity(weights.len() + 1);
+        let mut sum = 0.0f64;
+        cdf.push(0.0);
+        for &w in weights {
+            sum += w.max(0.0) as f64;
+            cdf.push((sum / total) as f32);
+        }
+        *cdf.last_mut().expect("pushed") = 1.0;
+        let pmf = weights.iter().map(|&w| (w.max(0.0) as f64 / total) as f32).collect();
+        Some(DiscreteDistribution { cdf, pmf })
+    }
+
+    /// The number of items.
+    pub fn len(&self) -> usize {
+        self.pmf.len()
+    }
+
+    /// Whether there are no items.
+    pub fn is_empty(&self) -> bool {
+        self.pmf.is_empty()
+    }
+
+    /// The probability of item `i`.
+    #[inline]
+    pub fn pmf(&self, i: usize) -> f32 {
+        self.pmf[i]
+    }
+
+    /// The item that `u ∈ [0, 1)` picks, its probability, and `u` rescaled to `[0, 1)` within the
+    /// item's interval (so it can be used again).
+    #[inline]
+    pub fn sample(&self, u: f32) -> (usize, f32, f32) {
+        // The last i with cdf[i] <= u, skipping items of probability zero.
+        let i = (self.cdf.partition_point(|&c| c <= u).max(1) - 1).min(self.pmf.len() - 1);
+        let pmf = self.pmf[i];
+        let reused =
+            if pmf > 0.0 { ((u - self.cdf[i]) / pmf).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 };
+        (i, pmf, reused)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Frames and heuristics.
 
 /// An orthonormal basis `(tangent, bitangent)` completing the unit vector `n` to a right-handed

@@ -201,3 +201,27 @@ fn samples_cover_the_pixel_evenly() {
         assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.01, "{mean}");
     }
 }
+
+#[test]
+fn discrete_distributions_pick_by_weight_and_skip_zeros() {
+    let d = DiscreteDistribution::new(&[1.0, 0.0, 3.0, 0.0]).unwrap();
+    assert_eq!(d.len(), 4);
+    assert_eq!((d.pmf(0), d.pmf(1), d.pmf(2)), (0.25, 0.0, 0.75));
+    assert_eq!(d.sample(0.0).0, 0);
+    assert_eq!(d.sample(0.2499).0, 0);
+    assert_eq!(d.sample(0.25).0, 2);
+    assert_eq!(d.sample(ONE_MINUS_EPSILON).0, 2);
+    let (i, pmf, reused) = d.sample(0.625);
+    assert_eq!((i, pmf), (2, 0.75));
+    assert!((reused - 0.5).abs() < 1e-6);
+    let mut counts = [0usize; 4];
+    let mut rng = Pcg32::new(1, 2);
+    for _ in 0..100_000 {
+        counts[d.sample(rng.next_f32()).0] += 1;
+    }
+    assert_eq!((counts[1], counts[3]), (0, 0));
+    assert!((counts[2] as f64 / 100_000.0 - 0.75).abs() < 0.01, "{counts:?}");
+    assert!(DiscreteDistribution::new(&[0.0, 0.0]).is_none());
+    assert!(DiscreteDistribution::new(&[]).is_none());
+    assert!(DiscreteDistribution::new(&[f32::INFINITY]).is_none());
+}

@@ -1,0 +1,121 @@
+//! Known answers of the path tracer (furnace tests): inside a closed surface of uniform diffuse
+//! albedo `a` that emits `Le` everywhere, the radiance is `Le/(1 − a)` in every direction, and
+//! a path of at most `d` segments sees `Le·(1 − aᵈ)/(1 − a)`.
+
+use glam::Vec3;
+use raylab::{
+    Accumulator, BruteForce, Camera, Geometry, Material, Path, PathSettings, SampleSettings,
+    SamplerKind, Scene,
+};
+
+/// A closed UV sphere of radius 1 about the origin whose triangles face inward (their
+/// counter-clockwise side toward the centre), all of material 0.
+fn inward_sphere(rings: u32, segments: u32) -> Geometry {
+    let point = |ring: u32, segment: u32| {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        let phi = 2.0 * std::f32::consts::PI * (segment % segments) as f32 / segments as f32;
+        Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+    };
+    let mut triangles = Vec::new();
+    for ring in 0..rings {
+        for segment in 0..segments {
+            let (a, b) = (point(ring, segment), point(ring, segment + 1));
+            let (c, d) = (point(ring + 1, segment), point(ring + 1, segment + 1));
+            for t in [[a, b, d], [a, d, c]] {
+                let normal = (t[1] - t[0]).cross(t[2] - t[0]);
+                if normal.length_squared() == 0.0 {
+                    continue; // The poles' zero-area triangles.
+                }
+                // Inward: the normal points toward the centre.
+                let centroid = (t[0] + t[1] + t[2]) / 3.0;
+                let corners = if normal.dot(centroid) < 0.0 { t } else { [t[0], t[2], t[1]] };
+                triangles.push((corners, 0));
+            }
+        }
+    }
+    let mut geometry = Geometry::new();
+    geometry.add_triangles("sphere", triangles);
+    geometry
+}
+
+fn furnace(albedo: f32, emission: f32) -> Scene {
+    let material = Material {
+        emission: Vec3::splat(emission),
+        ..Material::diffuse("inside", Vec3::splat(albedo))
+    };
+    Scene {
+        name: "furnace".into(),
+        geometry: inward_sphere(12, 24),
+        materials: vec![material],
+        lights: Vec::new(),
+    }
+}
+
+/// The mean radiance over a small image from the centre, and its standard error (from the
+/// spread of the pixels).
+fn mean_radiance(
+    scene: &Scene,
+    settings: PathSettings,
+    spp: u32,
+    kind: SamplerKind,
+) -> (Vec3, f32) {
+    let accel = BruteForce::new(&scene.vertices());
+    let path = Path::new(scene, &accel, settings);
+    let camera = Camera { position: Vec3::new(0.1, -0.2, 0.05), yaw: 0.7, ..Camera::lab(24, 24) };
+    let mut accumulator = Accumulator::new(24, 24).unwrap();
+    accumulator.settings =
+        SampleSettings { seed: 5, sampler: Some(kind), ..SampleSettings::default() };
+    for _ in 0..spp {
+        accumulator.add_sample(&camera, &path);
+    }
+    let film = accumulator.mean().unwrap();
+    let n = film.pixels().len() as f32;
+    let mean = film.pixels().iter().sum::<Vec3>() / n;
+    let variance = film.pixels().iter().map(|p| (p.x - mean.x).powi(2)).sum::<f32>() / (n - 1.0);
+    (mean, (variance / n).sqrt())
+}
+
+#[test]
+fn a_closed_emitting_sphere_shines_le_over_one_minus_a() {
+    for (albedo, emission) in [(0.5f32, 0.5f32), (0.8, 0.2), (0.0, 1.5)] {
+        let scene = furnace(albedo, emission);
+        let expected = emission / (1.0 - albedo);
+        let (mean, error) = mean_radiance(&scene, PathSettings::default(), 16, SamplerKind::Sobol);
+        // Every channel is the same; within four standard errors and 1 %.
+        assert!(mean.max_element() - mean.min_element() < 1e-6, "{mean}");
+        assert!(
+            (mean.x - expected).abs() <= (4.0 * error).max(0.01 * expected),
+            "a = {albedo}, Le = {emission}: {mean} vs {expected} (standard error {error})"
+        );
+    }
+}
+
+#[test]
+fn max_depth_counts_segments_as_mitsuba_does() {
+    let (albedo, emission) = (0.6f32, 1.0f32);
+    let scene = furnace(albedo, emission);
+    for depth in 0..=4u32 {
+        // d segments: Le·(1 + a + … + a^(d−1)).
+        let expected = emission * (1.0 - albedo.powi(depth as i32)) / (1.0 - albedo);
+        let settings = PathSettings { max_depth: Some(depth), ..PathSettings::default() };
+        let (mean, error) = mean_radiance(&scene, settings, 8, SamplerKind::Independent);
+        assert!(
+            (mean.x - expected).abs() <= (4.0 * error).max(0.005 * expected.max(0.1)),
+            "max depth {depth}: {mean} vs {expected}"
+        );
+    }
+}
+
+#[test]
+fn the_sphere_is_black_from_outside_and_one_sided() {
+    // Seen from outside, the triangles' back faces neither emit nor reflect.
+    let scene = furnace(0.5, 1.0);
+    let accel = BruteForce::new(&scene.vertices());
+    let path = Path::new(&scene, &accel, PathSettings::default());
+    let camera = Camera { position: Vec3::new(0.0, 0.0, -3.0), ..Camera::lab(16, 16) };
+    let mut accumulator = Accumulator::new(16, 16).unwrap();
+    for _ in 0..4 {
+        accumulator.add_sample(&camera, &path);
+    }
+    assert!(accumulator.mean().unwrap().pixels().iter().all(|&p| p == Vec3::ZERO));
+}
