@@ -8,10 +8,15 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use raylab::{Bvh, Film, Lab, image_io, render_samples};
+use raylab::film::{Display, ToneMap};
+use raylab::{
+    Accumulator, Aov, AovKind, Bvh, Film, Filter, Integrator, Lab, Path, PathSettings,
+    SampleSettings, SamplerKind, image_io,
+};
 
 use raylab::camera::tidy;
 
+use crate::args;
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup, tidy_vec3};
 use crate::system;
 
@@ -24,14 +29,47 @@ pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
 
-    /// Output image; the format comes from the extension (.png or .ppm).
+    /// Output image; the format comes from the extension: .png or .ppm (8-bit, through the
+    /// display transform), .exr or .pfm (linear radiance, 32-bit float).
     #[arg(short, long, value_name = "FILE", default_value = "render.png")]
     output: PathBuf,
 
-    /// Samples per pixel: 1 is the lab's ray through each pixel's centre; more spread over the
-    /// pixel and averaged (anti-aliasing), exactly as `raylab view` refines a still picture.
-    #[arg(long, value_name = "N", default_value = "1", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    spp: u32,
+    /// What to compute: lab (the lab's light model), path (path tracing), or the first hit's
+    /// albedo, normals or depth [default: the scene file's; path for scenes with area lights,
+    /// else lab].
+    #[arg(long, value_name = "NAME", value_parser = ["lab", "path", "albedo", "normals", "depth"])]
+    integrator: Option<String>,
+
+    /// Samples per pixel [default: the scene file's; else 1 for lab (the ray through each
+    /// pixel's centre, exactly as `raylab view` refines a still picture) and 16 otherwise].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    spp: Option<u32>,
+
+    /// Longest path in segments, as Mitsuba counts them (1: emitters seen directly, 2: direct
+    /// light, ...; -1: unlimited) [default: the scene file's, else unlimited].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(i64).range(-1..=65536))]
+    max_depth: Option<i64>,
+
+    /// Seed of every random number: the same seed, scene and samples give the same pixels on
+    /// any number of threads [default: the scene file's, else 0].
+    #[arg(long, value_name = "N")]
+    seed: Option<u64>,
+
+    /// Sample generator: sobol (Owen-scrambled, the default for path), independent, or lab.
+    #[arg(long, value_name = "NAME")]
+    sampler: Option<SamplerKind>,
+
+    /// Pixel filter: box (each pixel the mean over its area) or gaussian (σ = 0.5 px, radius 2).
+    #[arg(long, value_name = "NAME", value_parser = ["box", "gaussian"])]
+    filter: Option<String>,
+
+    /// Brightness of .png/.ppm output in stops: radiance is multiplied by 2^EV.
+    #[arg(long, value_name = "EV", default_value = "0", value_parser = args::finite_f32)]
+    exposure: f32,
+
+    /// Tone mapping of .png/.ppm output: clamp, reinhard or aces.
+    #[arg(long, value_name = "NAME", default_value = "clamp")]
+    tonemap: ToneMap,
 }
 
 /// The most samples per pixel `--spp` accepts.
@@ -42,40 +80,110 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let setup = args.scene.setup()?;
     let Setup { scene, camera, threads } = &setup;
     let (width, height) = (camera.width, camera.height);
-    image_io::check_writable(&args.output)?;
-    // With more than one sample, the sums and their mean: two films.
-    let films = if args.spp > 1 { 2 } else { 1 };
-    system::check_memory(films * Film::bytes_needed(width, height), width, height)?;
+    let format = image_io::check_writable(&args.output)?;
+    let settings = &scene.settings;
+    let integrator_name = args
+        .integrator
+        .clone()
+        .or_else(|| settings.integrator.clone())
+        .unwrap_or_else(|| if scene.has_area_lights() { "path".into() } else { "lab".into() });
+    let spp = args.spp.or(settings.spp).unwrap_or(if integrator_name == "lab" { 1 } else { 16 });
+    let max_depth = match args.max_depth {
+        Some(-1) => None,
+        Some(d) => Some(d as u32),
+        None => settings.max_depth.unwrap_or(None),
+    };
+    let sample_settings = SampleSettings {
+        seed: args.seed.or(settings.seed).unwrap_or(0),
+        sampler: args.sampler.or(settings.sampler),
+        filter: match args.filter.as_deref() {
+            Some("gaussian") => Filter::GAUSSIAN,
+            Some(_) => Filter::Box,
+            None => settings.filter.unwrap_or_default(),
+        },
+        ..SampleSettings::default()
+    };
+    // The sums and their mean: two films.
+    system::check_memory(Film::bytes_needed(width, height).saturating_mul(2), width, height)?;
     let pool = setup.thread_pool()?;
 
     let start = Instant::now();
     let accel = pool.install(|| Bvh::new(&scene.vertices()));
     let build = start.elapsed();
     let stage = args.scene.stage;
-    let integrator = Lab::new(scene, &accel, stage);
-    let progress = Progress::new(height as u64 * args.spp as u64);
+    let lab;
+    let path;
+    let aov;
+    let integrator: &dyn Integrator = match integrator_name.as_str() {
+        "lab" => {
+            lab = Lab::new(scene, &accel, stage);
+            &lab
+        }
+        "path" => {
+            path = Path::new(scene, &accel, PathSettings { max_depth, ..PathSettings::default() });
+            &path
+        }
+        other => {
+            let kind = match other {
+                "albedo" => AovKind::Albedo,
+                "normals" => AovKind::Normals,
+                _ => AovKind::Depth,
+            };
+            aov = Aov::new(scene, &accel, kind);
+            &aov
+        }
+    };
+    let progress = Progress::new(height as u64 * spp as u64, width as u64);
     let start = Instant::now();
-    let film = pool.install(|| {
-        render_samples(camera, &integrator, args.spp, &|rows| progress.advance(rows))
+    let film = pool.install(|| -> Result<Film> {
+        let mut accumulator = Accumulator::new(width, height)?;
+        accumulator.settings = sample_settings;
+        for _ in 0..spp {
+            accumulator
+                .add_sample_with_progress(camera, integrator, &|rows| progress.advance(rows));
+        }
+        Ok(accumulator.mean()?)
     })?;
     let elapsed = start.elapsed();
     progress.finish();
 
-    image_io::save_rgb8(&args.output, &film.to_rgb8_clamped()?)?;
-    let samples =
-        if args.spp == 1 { String::new() } else { format!(", {} samples per pixel", args.spp) };
-    let report = format!(
-        "{}: {width}×{height}, {} ({} triangles) stage {stage}{samples}, {:.1} ms on {threads} \
-         thread{} (+{:.1} ms BVH build)\n{camera}\nlight at {} power {}\n",
+    let display = if integrator_name == "lab" {
+        Display { exposure: args.exposure, tone_map: args.tonemap, srgb: false }
+    } else {
+        Display { exposure: args.exposure, tone_map: args.tonemap, srgb: true }
+    };
+    image_io::save_film(&args.output, &film, &display)?;
+    let samples = width as f64 * height as f64 * spp as f64;
+    let what = match integrator_name.as_str() {
+        "lab" => format!("stage {stage}"),
+        "path" => format!(
+            "path tracing, max depth {}",
+            max_depth.map_or("unlimited".to_string(), |d| d.to_string())
+        ),
+        other => other.to_string(),
+    };
+    let spp_text = if spp == 1 { String::new() } else { format!(", {spp} samples per pixel") };
+    let mut report = format!(
+        "{}: {width}×{height}, {} ({} triangles) {what}{spp_text}, {:.1} ms on {threads} \
+         thread{} (+{:.1} ms BVH build), {:.2} M samples/s\n{camera}\n",
         args.output.display(),
         scene.name,
         scene.geometry.len(),
         elapsed.as_secs_f64() * 1e3,
         if *threads == 1 { "" } else { "s" },
         build.as_secs_f64() * 1e3,
-        tidy_vec3(scene.lab_light().position),
-        tidy(scene.lab_light().power.x),
+        samples / elapsed.as_secs_f64().max(1e-9) / 1e6,
     );
+    if integrator_name == "lab" {
+        let light = scene.lab_light();
+        report +=
+            &format!("light at {} power {}\n", tidy_vec3(light.position), tidy(light.power.x));
+    }
+    if format.is_float() {
+        let mean = film.pixels().iter().map(|p| p.as_dvec3()).sum::<glam::DVec3>()
+            / film.pixels().len() as f64;
+        report += &format!("mean radiance ({:.6}, {:.6}, {:.6})\n", mean.x, mean.y, mean.z);
+    }
     // The image is written; a closed or full standard output is not worth a failure, but it
     // must not be a panic either (`println!` would panic).
     match std::io::stdout().lock().write_all(report.as_bytes()) {
@@ -95,14 +203,25 @@ struct Progress {
 }
 
 impl Progress {
-    fn new(rows: u64) -> Self {
+    /// A bar over `rows` rows of `width` pixels (rows of every pass).
+    fn new(rows: u64, width: u64) -> Self {
         let bar = ProgressBar::with_draw_target(Some(rows), ProgressDrawTarget::hidden());
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} rows, {elapsed} elapsed, ~{eta} left",
-            )
-            .expect("the template is valid"),
+        let style = ProgressStyle::with_template(
+            "{bar:40} {percent}%, {samples_per_second} samples/s, {elapsed} elapsed, ~{eta} left",
+        )
+        .expect("the template is valid")
+        .with_key(
+            "samples_per_second",
+            move |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let rate = state.per_sec() * width as f64;
+                let _ = if rate >= 1e6 {
+                    write!(w, "{:.2} M", rate / 1e6)
+                } else {
+                    write!(w, "{:.0} k", rate / 1e3)
+                };
+            },
         );
+        bar.set_style(style);
         Progress {
             bar,
             start: Instant::now(),

@@ -15,28 +15,30 @@ const MAX_THREADS: usize = 1024;
 
 #[derive(Args, Debug)]
 pub struct SceneArgs {
-    /// The scene: `cornell`, the lab's Cornell box (30 triangles, y down), or a model file
-    /// (.obj with its .mtl, .ply, either optionally .gz; y up, framed by the camera unless
-    /// --camera is given).
+    /// The scene: `cornell`, the lab's Cornell box (30 triangles, y down), a scene file (.toml,
+    /// see docs/scene-format.md) or a model file (.obj with its .mtl, .ply, either optionally
+    /// .gz; y up, framed by the camera unless --camera is given).
     #[arg(default_value = "cornell", value_name = "SCENE|MODEL")]
     pub scene: String,
 
-    /// Image size in pixels.
-    #[arg(long, value_name = "WxH", default_value = "500x500", value_parser = args::size, allow_hyphen_values = true)]
-    pub size: Size,
+    /// Image size in pixels [default: the scene file's, else 500x500].
+    #[arg(long, value_name = "WxH", value_parser = args::size, allow_hyphen_values = true)]
+    pub size: Option<Size>,
 
     /// Camera position (lab axes: x right, y down, z forward) [default: the lab's (0, 0, -3) for
     /// `cornell`; for a model, in front of it, framing its bounding box].
     #[arg(long, value_name = "X,Y,Z", value_parser = args::vec3, allow_hyphen_values = true)]
     pub camera: Option<Vec3>,
 
-    /// Camera yaw in degrees: rotation about the vertical axis, positive toward +x (the lab's R(y)).
-    #[arg(long, value_name = "DEG", default_value = "0", value_parser = args::finite_f32, allow_hyphen_values = true)]
-    pub yaw: f32,
+    /// Camera yaw in degrees: rotation about the vertical axis, positive toward +x (the lab's
+    /// R(y)) [default: 0, or the scene file's camera].
+    #[arg(long, value_name = "DEG", value_parser = args::finite_f32, allow_hyphen_values = true)]
+    pub yaw: Option<f32>,
 
-    /// Camera pitch in degrees, positive looking up, between -89 and 89 (the lab has none).
-    #[arg(long, value_name = "DEG", default_value = "0", value_parser = args::pitch_deg, allow_hyphen_values = true)]
-    pub pitch: f32,
+    /// Camera pitch in degrees, positive looking up, between -89 and 89 (the lab has none)
+    /// [default: 0, or the scene file's camera].
+    #[arg(long, value_name = "DEG", value_parser = args::pitch_deg, allow_hyphen_values = true)]
+    pub pitch: Option<f32>,
 
     /// Focal length in pixels [default: the image width, as the lab's f = 500 for 500×500, which
     /// is a 53.13° horizontal field of view: fov = 2·atan(W / 2f), not 90°].
@@ -56,6 +58,16 @@ pub struct SceneArgs {
     /// irradiance of 1 at its centre].
     #[arg(long, value_name = "WATTS", value_parser = args::non_negative_f32)]
     pub light_power: Option<f32>,
+
+    /// Radius of the camera's thin lens in scene units, for depth of field [default: 0, a
+    /// pinhole: everything sharp].
+    #[arg(long, value_name = "R", value_parser = args::non_negative_f32)]
+    pub aperture: Option<f32>,
+
+    /// Distance along the view direction that the lens keeps sharp [default: the scene file's,
+    /// else the distance to what the image's centre sees].
+    #[arg(long, value_name = "D", value_parser = args::positive_f32)]
+    pub focus_distance: Option<f32>,
 
     /// How much of the lab's light model to show (see below).
     #[arg(long, value_name = "STAGE", default_value = "ambient")]
@@ -87,6 +99,7 @@ impl SceneArgs {
     /// Loads and checks everything before any rendering, so that no work is lost to a bad value.
     pub fn setup(&self) -> Result<Setup> {
         let (mut scene, is_model) = load_scene(&self.scene)?;
+        let scene_camera = scene.camera;
         if let Some(position) = self.light {
             scene.point_light_mut().position = position;
         }
@@ -95,11 +108,19 @@ impl SceneArgs {
         }
         scene.validate()?;
 
-        let Size { width, height } = self.size;
+        let Size { width, height } = self.size.unwrap_or(match scene.settings.size {
+            Some((width, height)) => Size { width, height },
+            None => Size { width: 500, height: 500 },
+        });
+        // The scene file's camera, or the lab's; options override its parts.
+        let base = match scene_camera {
+            Some(settings) => settings.camera(width, height),
+            None => Camera::lab(width, height),
+        };
         let focal_length_px = match (self.focal, self.fov) {
             (Some(focal), _) => focal,
             (None, Some(fov)) => Camera::focal_length_for_fov(width, fov),
-            (None, None) => Camera::lab(width, height).focal_length_px,
+            (None, None) => base.focal_length_px,
         };
         if !focal_length_px.is_finite() {
             bail!(
@@ -109,18 +130,26 @@ impl SceneArgs {
         }
         let default_position = match scene.bounds() {
             Some((lo, hi)) if is_model => Camera::framing(lo, hi, width, height).position,
-            _ => Camera::lab(width, height).position,
+            _ => base.position,
         };
-        let camera = Camera {
+        let mut camera = Camera {
             position: self.camera.unwrap_or(default_position),
-            yaw: self.yaw.to_radians(),
-            pitch: self.pitch.to_radians(),
+            yaw: self.yaw.map_or(base.yaw, f32::to_radians),
+            pitch: self.pitch.map_or(base.pitch, f32::to_radians),
             focal_length_px,
             width,
             height,
-            aperture_radius: 0.0,
-            focus_distance: 1.0,
+            aperture_radius: self.aperture.unwrap_or(base.aperture_radius),
+            focus_distance: self.focus_distance.unwrap_or(base.focus_distance),
         };
+        if camera.has_lens() && self.focus_distance.is_none() && scene_camera.is_none() {
+            // Focus on what the image's centre sees.
+            let centre = camera.ray(width as f32 / 2.0, height as f32 / 2.0);
+            let bvh = raylab::Bvh::new(&scene.vertices());
+            if let Some(hit) = raylab::Accelerator::closest_hit(&bvh, &centre) {
+                camera.focus_distance = (hit.t * centre.direction.dot(camera.forward())).max(1e-6);
+            }
+        }
         let threads = match self.threads {
             None | Some(0) => system::cores(),
             Some(n) if n > MAX_THREADS => bail!("--threads {n} is more than {MAX_THREADS}"),
@@ -150,6 +179,10 @@ fn load_scene(name: &str) -> Result<(Scene, bool)> {
         // Neither a built-in name nor a file: say what the built-in scenes are.
         Err(unknown) if !looks_like_a_file => return Err(unknown.into()),
         Err(_) => {}
+    }
+    let lower = name.to_ascii_lowercase();
+    if lower.ends_with(".toml") {
+        return Ok((raylab::scene::load_scene_file(path)?, false));
     }
     let loaded = raylab::scene::load_mesh(path)?;
     for warning in &loaded.warnings {

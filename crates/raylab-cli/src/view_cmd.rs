@@ -93,7 +93,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         );
     }
     // The picture's sums, the window's words and their spare: about twice a film.
-    system::check_memory(2 * Film::bytes_needed(width, height), width, height)?;
+    system::check_memory(Film::bytes_needed(width, height).saturating_mul(2), width, height)?;
     if let Some(path) = &args.screenshot {
         image_io::check_writable(path)?;
     }

@@ -49,7 +49,7 @@ pub use bvh::{BuildSettings, Bvh};
 pub use camera::{Camera, RayGenerator};
 pub use film::{Film, FilmError};
 pub use geometry::{Geometry, SurfaceInteraction};
-pub use integrator::{Integrator, Lab, Path, PathSettings, Stage};
+pub use integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
 pub use light::{Light, LightSet, PointLight};
 pub use material::{Bsdf, Material};
 pub use mesh::{Mesh, MeshMaterial};

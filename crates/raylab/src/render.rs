@@ -93,7 +93,7 @@ impl Default for SampleSettings {
 /// [`rayon::ThreadPool::install`] to choose the thread count.
 pub fn render(
     camera: &Camera,
-    integrator: &impl Integrator,
+    integrator: &(impl Integrator + ?Sized),
     progress: &(dyn Fn(u32) + Sync),
 ) -> Result<Film, FilmError> {
     render_samples(camera, integrator, 1, progress)
@@ -104,7 +104,7 @@ pub fn render(
 /// an [`Accumulator`] given the same samples.
 pub fn render_samples(
     camera: &Camera,
-    integrator: &impl Integrator,
+    integrator: &(impl Integrator + ?Sized),
     samples: u32,
     progress: &(dyn Fn(u32) + Sync),
 ) -> Result<Film, FilmError> {
@@ -118,7 +118,7 @@ pub fn render_samples(
 /// Adds sample `sample` of every pixel to `pixels` (the camera's image, row by row).
 fn add_pass(
     camera: &Camera,
-    integrator: &impl Integrator,
+    integrator: &(impl Integrator + ?Sized),
     settings: &SampleSettings,
     sample: u32,
     pixels: &mut [Vec3],
@@ -217,7 +217,7 @@ impl Accumulator {
     ///
     /// # Panics
     /// If the camera's image size is not the accumulator's.
-    pub fn add_sample(&mut self, camera: &Camera, integrator: &impl Integrator) {
+    pub fn add_sample(&mut self, camera: &Camera, integrator: &(impl Integrator + ?Sized)) {
         self.add_sample_with_progress(camera, integrator, &|_| {});
     }
 
@@ -225,7 +225,7 @@ impl Accumulator {
     pub fn add_sample_with_progress(
         &mut self,
         camera: &Camera,
-        integrator: &impl Integrator,
+        integrator: &(impl Integrator + ?Sized),
         progress: &(dyn Fn(u32) + Sync),
     ) {
         assert_eq!(

@@ -47,7 +47,7 @@ fn furnace(albedo: f32, emission: f32) -> Scene {
         name: "furnace".into(),
         geometry: inward_sphere(12, 24),
         materials: vec![material],
-        lights: Vec::new(),
+        ..Scene::default()
     }
 }
 

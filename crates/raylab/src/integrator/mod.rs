@@ -8,11 +8,13 @@
 //! renderer makes from (seed, pixel, sample index) alone: the same sample gives the same colour
 //! on any thread.
 
+mod aov;
 mod lab;
 mod path;
 
 use glam::Vec3;
 
+pub use aov::{Aov, AovKind};
 pub use lab::{Lab, Stage};
 pub use path::{Path, PathSettings};
 

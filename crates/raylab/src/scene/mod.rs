@@ -14,6 +14,7 @@ mod file;
 mod model;
 mod obj;
 mod ply;
+mod scene_file;
 
 use glam::Vec3;
 
@@ -23,6 +24,7 @@ pub use file::{
     LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh, read_limit_bytes,
 };
 pub use model::model_to_lab;
+pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
 
 use crate::accel::Hit;
 use crate::geometry::{Geometry, SurfaceInteraction};
@@ -64,8 +66,8 @@ pub enum SceneError {
 /// Names accepted by [`Scene::built_in`].
 pub const BUILT_IN_SCENES: &[&str] = &["cornell"];
 
-/// Geometry, materials and lights.
-#[derive(Clone, Debug, PartialEq)]
+/// Geometry, materials, lights, and the camera and render settings a scene file gives.
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Scene {
     /// A short name, used in messages.
     pub name: String,
@@ -75,6 +77,84 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Lights that are not surfaces: point lights and the environment.
     pub lights: Vec<Light>,
+    /// The camera a scene file sets up, if any.
+    pub camera: Option<CameraSettings>,
+    /// The render settings a scene file gives; the command line overrides them.
+    pub settings: RenderSettings,
+}
+
+/// A camera as a scene describes it, independent of the image size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraSettings {
+    /// Position, in the lab's frame.
+    pub position: Vec3,
+    /// Yaw in radians (the lab's `R(y)`).
+    pub yaw: f32,
+    /// Pitch in radians, positive looking up.
+    pub pitch: f32,
+    /// The field of view in degrees, and the axis it spans.
+    pub fov_deg: f32,
+    /// Which image axis the field of view spans.
+    pub fov_axis: FovAxis,
+    /// Thin-lens radius (0: pinhole).
+    pub aperture_radius: f32,
+    /// Focus distance along the view direction.
+    pub focus_distance: f32,
+}
+
+/// The image axis a field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum FovAxis {
+    /// The width.
+    #[default]
+    X,
+    /// The height.
+    Y,
+    /// The shorter side.
+    Smaller,
+    /// The longer side.
+    Larger,
+}
+
+impl CameraSettings {
+    /// The camera for a `width×height` image.
+    pub fn camera(&self, width: u32, height: u32) -> crate::Camera {
+        let span = match self.fov_axis {
+            FovAxis::X => width,
+            FovAxis::Y => height,
+            FovAxis::Smaller => width.min(height),
+            FovAxis::Larger => width.max(height),
+        };
+        crate::Camera {
+            position: self.position,
+            yaw: self.yaw,
+            pitch: self.pitch,
+            focal_length_px: crate::Camera::focal_length_for_fov(span, self.fov_deg),
+            width,
+            height,
+            aperture_radius: self.aperture_radius,
+            focus_distance: self.focus_distance,
+        }
+    }
+}
+
+/// Render settings a scene file may give (each `None` leaves the renderer's default).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct RenderSettings {
+    /// Image size in pixels.
+    pub size: Option<(u32, u32)>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Longest path in segments; `Some(None)` is unlimited.
+    pub max_depth: Option<Option<u32>>,
+    /// The seed.
+    pub seed: Option<u64>,
+    /// The integrator's name (`lab`, `path`, `albedo`, `normals`, `depth`).
+    pub integrator: Option<String>,
+    /// The sampler.
+    pub sampler: Option<crate::SamplerKind>,
+    /// The pixel filter.
+    pub filter: Option<crate::Filter>,
 }
 
 impl Scene {
@@ -85,7 +165,13 @@ impl Scene {
         materials: Vec<Material>,
         light: PointLight,
     ) -> Scene {
-        Scene { name: name.to_string(), geometry, materials, lights: vec![Light::Point(light)] }
+        Scene {
+            name: name.to_string(),
+            geometry,
+            materials,
+            lights: vec![Light::Point(light)],
+            ..Scene::default()
+        }
     }
 
     /// A built-in scene by name: `cornell`, the lab's Cornell box.
@@ -227,6 +313,8 @@ impl Scene {
             geometry: self.geometry.map_positions(|p| p * factor),
             materials: self.materials.clone(),
             lights,
+            camera: self.camera,
+            settings: self.settings.clone(),
         }
     }
 }

@@ -41,7 +41,7 @@ impl Scene {
         geometry.add_mesh(mesh, &to_lab, |i| {
             mesh.material_ids.get(i).copied().flatten().unwrap_or(default)
         });
-        let mut scene = Scene { name: mesh.name.clone(), geometry, materials, lights: Vec::new() };
+        let mut scene = Scene { name: mesh.name.clone(), geometry, materials, ..Scene::default() };
         if !scene.has_area_lights() {
             scene.lights.push(Light::Point(scene.default_light()));
         }

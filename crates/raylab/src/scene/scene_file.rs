@@ -1,0 +1,612 @@
+//! Scene files: a small TOML format for camera, materials, shapes, lights and render settings
+//! (the reference is `docs/scene-format.md`).
+//!
+//! Scene files are **y-up**, as Mitsuba, glTF and Blender are; the loader turns everything into
+//! the lab's y-down frame with [`model_to_lab`](super::model_to_lab). Materials keep Mitsuba's
+//! names and parameters. Every mistake is one line naming the file, the line and the column, and
+//! what was expected.
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, Mat3, Mat4, Vec3};
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::{CameraSettings, FovAxis, RenderSettings, Scene};
+use crate::geometry::Geometry;
+use crate::light::{Light, PointLight};
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::render::Filter;
+use crate::sampling::SamplerKind;
+
+/// A scene file that cannot be used: the file, where in it, and what is wrong.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("{}:{line}:{column}: {message}", .path.display())]
+pub struct SceneFileError {
+    /// The scene file.
+    pub path: PathBuf,
+    /// Line, from 1.
+    pub line: usize,
+    /// Column, from 1.
+    pub column: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// The most bytes a scene file may have (it holds no geometry, only references to it).
+const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
+
+/// Loads a scene file; meshes it names are read relative to its folder.
+pub fn load_scene_file(path: &Path) -> std::result::Result<Scene, SceneFileError> {
+    let whole = |message: String| SceneFileError { path: path.into(), line: 1, column: 1, message };
+    let metadata = std::fs::metadata(path).map_err(|e| whole(format!("cannot read: {e}")))?;
+    if metadata.len() > MAX_SCENE_FILE_BYTES {
+        return Err(whole(format!("{} bytes is too large for a scene file", metadata.len())));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| whole(format!("cannot read: {e}")))?;
+    parse_scene(&text, path)
+}
+
+/// Parses a scene file's text; `path` names it in messages and meshes are found beside it.
+pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneFileError> {
+    let at = |span: Option<Range<usize>>, message: String| {
+        let offset = span.map_or(0, |s| s.start).min(text.len());
+        let before = &text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        SceneFileError { path: path.into(), line, column, message }
+    };
+    let document: Document =
+        toml::from_str(text).map_err(|e| at(e.span(), e.message().trim().replace('\n', " ")))?;
+    let folder = path.parent().unwrap_or(Path::new("."));
+    Builder { at: &at, folder }.build(document, path)
+}
+
+// ---------------------------------------------------------------------------------------------
+// The document, as written.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Document {
+    render: Option<Spanned<RenderDoc>>,
+    camera: Option<Spanned<CameraDoc>>,
+    #[serde(default)]
+    materials: BTreeMap<String, Spanned<MaterialDoc>>,
+    #[serde(default)]
+    shapes: Vec<Spanned<ShapeDoc>>,
+    #[serde(default)]
+    lights: Vec<Spanned<LightDoc>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderDoc {
+    size: Option<[u32; 2]>,
+    spp: Option<u32>,
+    max_depth: Option<i64>,
+    seed: Option<u64>,
+    integrator: Option<Spanned<String>>,
+    sampler: Option<Spanned<String>>,
+    filter: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDoc {
+    position: [f32; 3],
+    target: Option<[f32; 3]>,
+    up: Option<Spanned<[f32; 3]>>,
+    yaw: Option<f32>,
+    pitch: Option<f32>,
+    fov: Option<f32>,
+    fov_axis: Option<Spanned<String>>,
+    aperture_radius: Option<f32>,
+    focus_distance: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
+enum MaterialDoc {
+    Diffuse { reflectance: [f32; 3] },
+    Twosided { bsdf: Box<MaterialDoc> },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShapeDoc {
+    #[serde(rename = "type")]
+    kind: Spanned<String>,
+    /// For `mesh`: the file.
+    file: Option<Spanned<String>>,
+    /// The material; for meshes, `None` keeps the file's own (MTL) materials.
+    material: Option<Spanned<String>>,
+    /// Radiance emitted from the front side: makes the shape an area light.
+    emission: Option<[f32; 3]>,
+    /// A 4×4 matrix, row by row (Mitsuba's `to_world`), applied after the rest.
+    to_world: Option<[[f32; 4]; 4]>,
+    scale: Option<Spanned<toml::Value>>,
+    rotate: Option<RotateDoc>,
+    translate: Option<[f32; 3]>,
+    /// For `sphere`.
+    center: Option<[f32; 3]>,
+    radius: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RotateDoc {
+    axis: [f32; 3],
+    angle: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
+enum LightDoc {
+    Point { position: [f32; 3], intensity: Option<[f32; 3]>, power: Option<[f32; 3]> },
+    Environment { radiance: [f32; 3] },
+}
+
+// ---------------------------------------------------------------------------------------------
+// Building the scene.
+
+struct Builder<'a, F> {
+    at: &'a F,
+    folder: &'a Path,
+}
+
+type Result<T> = std::result::Result<T, SceneFileError>;
+
+impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
+    fn error<T>(&self, span: Range<usize>, message: impl Into<String>) -> Result<T> {
+        Err((self.at)(Some(span), message.into()))
+    }
+
+    fn build(&self, document: Document, path: &Path) -> Result<Scene> {
+        let name = path.file_name().map_or("scene".into(), |n| n.to_string_lossy().into_owned());
+        let mut scene = Scene { name, ..Scene::default() };
+        let mut material_index = BTreeMap::new();
+        for (name, doc) in &document.materials {
+            let material = self.material(name, doc.get_ref(), doc.span())?;
+            material_index.insert(name.clone(), scene.materials.len() as u32);
+            scene.materials.push(material);
+        }
+        let mut geometry = Geometry::new();
+        for shape in &document.shapes {
+            self.shape(shape, &mut scene.materials, &material_index, &mut geometry)?;
+        }
+        scene.geometry = geometry;
+        for light in &document.lights {
+            scene.lights.push(self.light(light)?);
+        }
+        if let Some(camera) = &document.camera {
+            scene.camera = Some(self.camera(camera)?);
+        }
+        if let Some(render) = &document.render {
+            scene.settings = self.render(render)?;
+        }
+        scene.validate().map_err(|e| (self.at)(None, e.to_string()))?;
+        Ok(scene)
+    }
+
+    fn material(&self, name: &str, doc: &MaterialDoc, span: Range<usize>) -> Result<Material> {
+        let material = match doc {
+            MaterialDoc::Diffuse { reflectance } => {
+                Material::diffuse(name, Vec3::from_array(*reflectance))
+            }
+            MaterialDoc::Twosided { bsdf } => {
+                Material { two_sided: true, ..self.material(name, bsdf, span.clone())? }
+            }
+        };
+        match material.validate() {
+            Ok(()) => Ok(material),
+            Err(problem) => self.error(span, format!("material '{name}': {problem}")),
+        }
+    }
+
+    fn shape(
+        &self,
+        shape: &Spanned<ShapeDoc>,
+        materials: &mut Vec<Material>,
+        index: &BTreeMap<String, u32>,
+        geometry: &mut Geometry,
+    ) -> Result<()> {
+        let doc = shape.get_ref();
+        let kind = doc.kind.get_ref().as_str();
+        if !["rectangle", "cube", "sphere", "mesh"].contains(&kind) {
+            return self.error(
+                doc.kind.span(),
+                format!("unknown shape type '{kind}': expected rectangle, cube, sphere or mesh"),
+            );
+        }
+        let transform = to_lab() * self.transform(doc)?;
+        // The named material, with the shape's emission if it has one (a copy per shape).
+        let mut material = match &doc.material {
+            Some(name) => match index.get(name.get_ref()) {
+                Some(&m) => Some(m),
+                None => {
+                    let known: Vec<&str> = index.keys().map(String::as_str).collect();
+                    return self.error(
+                        name.span(),
+                        format!(
+                            "no material named '{}' (defined: {})",
+                            name.get_ref(),
+                            known.join(", ")
+                        ),
+                    );
+                }
+            },
+            None => None,
+        };
+        if let Some(emission) = doc.emission {
+            let base = material.map_or_else(
+                || Material::diffuse("emitter", Vec3::ZERO),
+                |m| materials[m as usize].clone(),
+            );
+            let emission = Vec3::from_array(emission);
+            if !emission.is_finite() || emission.min_element() < 0.0 {
+                return self.error(
+                    shape.span(),
+                    format!("emission {emission} must be finite and not negative"),
+                );
+            }
+            material = Some(materials.len() as u32);
+            materials.push(Material {
+                emission,
+                name: format!("{} (emitting)", base.name),
+                ..base
+            });
+        }
+        let mesh = match kind {
+            "rectangle" => rectangle(),
+            "cube" => cube(),
+            "sphere" => {
+                let centre = Vec3::from_array(doc.center.unwrap_or([0.0; 3]));
+                let radius = doc.radius.unwrap_or(1.0);
+                if !(radius > 0.0 && radius.is_finite() && centre.is_finite()) {
+                    return self.error(
+                        shape.span(),
+                        "a sphere needs a finite center and a radius above 0",
+                    );
+                }
+                sphere(centre, radius)
+            }
+            "mesh" => {
+                let Some(file) = &doc.file else {
+                    return self.error(
+                        shape.span(),
+                        "a mesh needs `file = \"…\"` (.obj, .ply, optionally .gz)",
+                    );
+                };
+                let mesh_path = self.folder.join(file.get_ref());
+                let loaded = super::load_mesh(&mesh_path)
+                    .map_err(|e| (self.at)(Some(file.span()), e.to_string()))?;
+                if material.is_none() {
+                    // The file's own materials, as diffuse with their Kd and Ke.
+                    let base = materials.len() as u32;
+                    materials.extend(loaded.mesh.materials.iter().map(|m| Material {
+                        emission: m.emission,
+                        ..Material::diffuse(&m.name, m.diffuse)
+                    }));
+                    let default = materials.len() as u32;
+                    materials.push(Material::diffuse(
+                        "default",
+                        crate::mesh::MeshMaterial::DEFAULT_DIFFUSE,
+                    ));
+                    let ids = &loaded.mesh.material_ids;
+                    geometry.add_mesh(&loaded.mesh, &transform, |i| {
+                        ids.get(i).copied().flatten().map_or(default, |m| base + m)
+                    });
+                    return Ok(());
+                }
+                loaded.mesh
+            }
+            other => {
+                return self.error(
+                    doc.kind.span(),
+                    format!(
+                        "unknown shape type '{other}': expected rectangle, cube, sphere or mesh"
+                    ),
+                );
+            }
+        };
+        let Some(material) = material else {
+            return self.error(
+                shape.span(),
+                format!("a {kind} needs `material = \"name\"` or `emission`"),
+            );
+        };
+        geometry.add_mesh(&Mesh { name: kind.to_string(), ..mesh }, &transform, |_| material);
+        Ok(())
+    }
+
+    /// scale, then rotate, then translate, then `to_world`: in the file's y-up frame.
+    fn transform(&self, doc: &ShapeDoc) -> Result<Affine3A> {
+        let mut transform = Affine3A::IDENTITY;
+        if let Some(scale) = &doc.scale {
+            let factors = match scale.get_ref() {
+                toml::Value::Float(f) => Vec3::splat(*f as f32),
+                toml::Value::Integer(i) => Vec3::splat(*i as f32),
+                toml::Value::Array(a) if a.len() == 3 => {
+                    let mut v = [0.0f32; 3];
+                    for (slot, x) in v.iter_mut().zip(a) {
+                        *slot = match x {
+                            toml::Value::Float(f) => *f as f32,
+                            toml::Value::Integer(i) => *i as f32,
+                            _ => return self.error(scale.span(), "scale: expected numbers"),
+                        };
+                    }
+                    Vec3::from_array(v)
+                }
+                _ => return self.error(scale.span(), "scale: expected a number or [x, y, z]"),
+            };
+            if !factors.is_finite() || factors.cmpeq(Vec3::ZERO).any() {
+                return self
+                    .error(scale.span(), format!("scale {factors} must be finite and not zero"));
+            }
+            transform = Affine3A::from_scale(factors);
+        }
+        if let Some(rotate) = &doc.rotate {
+            let axis = Vec3::from_array(rotate.axis).normalize_or_zero();
+            if axis == Vec3::ZERO || !rotate.angle.is_finite() {
+                return (Err((self.at)(
+                    None,
+                    "rotate needs a non-zero axis and a finite angle (degrees)".into(),
+                )))?;
+            }
+            transform = Affine3A::from_axis_angle(axis, rotate.angle.to_radians()) * transform;
+        }
+        if let Some(t) = doc.translate {
+            transform = Affine3A::from_translation(Vec3::from_array(t)) * transform;
+        }
+        if let Some(m) = doc.to_world {
+            // Rows as written; glam is column-major.
+            let matrix = Mat4::from_cols_array_2d(&m).transpose();
+            let last = matrix.row(3);
+            if !matrix.is_finite() || last != glam::Vec4::W || matrix.determinant() == 0.0 {
+                return Err((self.at)(
+                    None,
+                    "to_world must be a finite, invertible affine matrix (last row 0 0 0 1)".into(),
+                ));
+            }
+            transform = Affine3A::from_mat4(matrix) * transform;
+        }
+        Ok(transform)
+    }
+
+    fn light(&self, light: &Spanned<LightDoc>) -> Result<Light> {
+        let light = match light.get_ref() {
+            LightDoc::Point { position, intensity, power } => {
+                let power = match (intensity, power) {
+                    (Some(i), None) => Vec3::from_array(*i) * (4.0 * std::f32::consts::PI),
+                    (None, Some(p)) => Vec3::from_array(*p),
+                    _ => {
+                        return self
+                            .error(light.span(), "a point light needs one of intensity or power");
+                    }
+                };
+                Light::Point(PointLight {
+                    position: super::model_to_lab(Vec3::from_array(*position)),
+                    power,
+                })
+            }
+            LightDoc::Environment { radiance } => {
+                Light::Environment { radiance: Vec3::from_array(*radiance) }
+            }
+        };
+        Ok(light)
+    }
+
+    fn camera(&self, camera: &Spanned<CameraDoc>) -> Result<CameraSettings> {
+        let doc = camera.get_ref();
+        let position = Vec3::from_array(doc.position);
+        let (yaw, pitch) = match (doc.target, doc.yaw, doc.pitch) {
+            (Some(target), None, None) => {
+                let forward = super::model_to_lab(Vec3::from_array(target) - position);
+                if forward.length_squared() == 0.0 || !forward.is_finite() {
+                    return self.error(camera.span(), "the camera's target is its position");
+                }
+                let forward = forward.normalize();
+                if let Some(up) = &doc.up
+                    && (Vec3::from_array(*up.get_ref()).normalize_or_zero() - Vec3::Y).length()
+                        > 1e-4
+                {
+                    return self.error(
+                        up.span(),
+                        "camera: only up = [0, 1, 0] is supported (a camera that rolls is not, yet)",
+                    );
+                }
+                (forward.x.atan2(forward.z), (-forward.y).clamp(-1.0, 1.0).asin())
+            }
+            (None, yaw, pitch) => {
+                (yaw.unwrap_or(0.0).to_radians(), pitch.unwrap_or(0.0).to_radians())
+            }
+            _ => {
+                return self
+                    .error(camera.span(), "camera: give either target or yaw/pitch, not both");
+            }
+        };
+        let fov_deg = doc.fov.unwrap_or(53.130_1);
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return self
+                .error(camera.span(), format!("fov {fov_deg} must be between 0 and 180 degrees"));
+        }
+        let fov_axis = match doc.fov_axis.as_ref().map(|s| (s.get_ref().as_str(), s.span())) {
+            None | Some(("x", _)) => FovAxis::X,
+            Some(("y", _)) => FovAxis::Y,
+            Some(("smaller", _)) => FovAxis::Smaller,
+            Some(("larger", _)) => FovAxis::Larger,
+            Some((other, span)) => {
+                return self.error(
+                    span,
+                    format!("unknown fov_axis '{other}': expected x, y, smaller or larger"),
+                );
+            }
+        };
+        let aperture_radius = doc.aperture_radius.unwrap_or(0.0);
+        let focus_distance = doc.focus_distance.unwrap_or(1.0);
+        let finite =
+            position.is_finite() && aperture_radius.is_finite() && focus_distance.is_finite();
+        if !(finite && aperture_radius >= 0.0 && focus_distance > 0.0) {
+            return self.error(
+                camera.span(),
+                "camera: position, aperture_radius (≥ 0) and focus_distance (> 0) must be finite",
+            );
+        }
+        Ok(CameraSettings {
+            position: super::model_to_lab(position),
+            yaw,
+            pitch,
+            fov_deg,
+            fov_axis,
+            aperture_radius,
+            focus_distance,
+        })
+    }
+
+    fn render(&self, render: &Spanned<RenderDoc>) -> Result<RenderSettings> {
+        let doc = render.get_ref();
+        let mut settings = RenderSettings {
+            size: doc.size.map(|[w, h]| (w, h)),
+            spp: doc.spp,
+            seed: doc.seed,
+            ..RenderSettings::default()
+        };
+        if let Some((w, h)) = settings.size
+            && (w == 0 || h == 0 || w > 1 << 16 || h > 1 << 16)
+        {
+            return self
+                .error(render.span(), format!("size {w}×{h}: each side must be 1 to 65536"));
+        }
+        if settings.spp == Some(0) {
+            return self.error(render.span(), "spp must be at least 1");
+        }
+        settings.max_depth = match doc.max_depth {
+            None => None,
+            Some(-1) => Some(None),
+            Some(d) if (0..=1 << 16).contains(&d) => Some(Some(d as u32)),
+            Some(d) => {
+                return self.error(
+                    render.span(),
+                    format!("max_depth {d}: expected -1 (unlimited) or 0 to 65536"),
+                );
+            }
+        };
+        if let Some(integrator) = &doc.integrator {
+            let name = integrator.get_ref().as_str();
+            if !["lab", "path", "albedo", "normals", "depth"].contains(&name) {
+                return self.error(
+                    integrator.span(),
+                    format!(
+                        "unknown integrator '{name}': expected lab, path, albedo, normals or depth"
+                    ),
+                );
+            }
+            settings.integrator = Some(name.to_string());
+        }
+        if let Some(sampler) = &doc.sampler {
+            settings.sampler = Some(
+                sampler
+                    .get_ref()
+                    .parse::<SamplerKind>()
+                    .map_err(|e| (self.at)(Some(sampler.span()), e))?,
+            );
+        }
+        if let Some(filter) = &doc.filter {
+            settings.filter = Some(match filter.get_ref().as_str() {
+                "box" => Filter::Box,
+                "gaussian" => Filter::GAUSSIAN,
+                other => {
+                    return self.error(
+                        filter.span(),
+                        format!("unknown filter '{other}': expected box or gaussian"),
+                    );
+                }
+            });
+        }
+        Ok(settings)
+    }
+}
+
+/// The half turn about x from the file's y-up frame to the lab's y-down frame.
+fn to_lab() -> Affine3A {
+    Affine3A::from_mat3(Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0)))
+}
+
+/// Mitsuba's `rectangle`: `[−1, 1]²` in the plane z = 0, facing +z.
+fn rectangle() -> Mesh {
+    Mesh {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        ..Mesh::default()
+    }
+}
+
+/// Mitsuba's `cube`: `[−1, 1]³`, facing out.
+fn cube() -> Mesh {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = Vec3::from_array(std::array::from_fn(|i| if i == axis { sign } else { 0.0 }));
+            let u =
+                Vec3::from_array(std::array::from_fn(
+                    |i| if i == (axis + 1) % 3 { 1.0 } else { 0.0 },
+                ));
+            let v = n.cross(u);
+            let base = positions.len() as u32;
+            positions.extend([n - u - v, n + u - v, n + u + v, n - u + v]);
+            triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+        }
+    }
+    Mesh { positions, triangles, ..Mesh::default() }
+}
+
+/// A UV sphere facing out, with per-vertex normals (smooth shading).
+fn sphere(centre: Vec3, radius: f32) -> Mesh {
+    let (rings, segments) = (48u32, 96u32);
+    let mut positions = Vec::new();
+    for ring in 0..=rings {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        for segment in 0..segments {
+            let phi = 2.0 * std::f32::consts::PI * segment as f32 / segments as f32;
+            positions.push(Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            ));
+        }
+    }
+    let index = |ring: u32, segment: u32| ring * segments + segment % segments;
+    let mut triangles = Vec::new();
+    for ring in 0..rings {
+        for segment in 0..segments {
+            let (a, b) = (index(ring, segment), index(ring, segment + 1));
+            let (c, d) = (index(ring + 1, segment), index(ring + 1, segment + 1));
+            if ring > 0 {
+                triangles.push([a, c, b]);
+            }
+            if ring + 1 < rings {
+                triangles.push([b, c, d]);
+            }
+        }
+    }
+    let normals =
+        crate::mesh::CornerAttribute { values: positions.clone(), triangles: triangles.clone() };
+    Mesh {
+        positions: positions.iter().map(|&p| centre + radius * p).collect(),
+        triangles,
+        normals: Some(normals),
+        ..Mesh::default()
+    }
+}
+
+#[cfg(test)]
+mod tests;

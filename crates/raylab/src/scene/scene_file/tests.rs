@@ -1,0 +1,171 @@
+//! The scene format: every part parsed, and every mistake a one-line error with its place.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::*;
+
+fn parse(text: &str) -> std::result::Result<Scene, SceneFileError> {
+    parse_scene(text, Path::new("test.toml"))
+}
+
+fn error(text: &str) -> String {
+    parse(text).unwrap_err().to_string()
+}
+
+const ROOM: &str = r#"
+[render]
+size = [64, 48]
+spp = 16
+max_depth = 8
+integrator = "path"
+filter = "gaussian"
+
+[camera]
+position = [0, 0, 3.9]
+target = [0, 0, 0]
+up = [0, 1, 0]
+fov = 39.3077
+
+[materials.white]
+type = "diffuse"
+reflectance = [0.8, 0.7, 0.6]
+
+[materials.both]
+type = "twosided"
+bsdf = { type = "diffuse", reflectance = [0.1, 0.2, 0.3] }
+
+[[shapes]]
+type = "rectangle"
+material = "white"
+rotate = { axis = [1, 0, 0], angle = -90 }
+translate = [0, -1, 0]
+
+[[shapes]]
+type = "rectangle"
+emission = [10, 10, 10]
+scale = 0.25
+to_world = [[1, 0, 0, 0], [0, 0, -1, 0.99], [0, 1, 0, 0], [0, 0, 0, 1]]
+
+[[shapes]]
+type = "sphere"
+center = [0.3, -0.5, 0]
+radius = 0.25
+material = "both"
+
+[[lights]]
+type = "environment"
+radiance = [0.1, 0.1, 0.1]
+"#;
+
+#[test]
+fn a_room_parses_into_the_lab_frame() {
+    let scene = parse(ROOM).unwrap();
+    assert_eq!(scene.settings.size, Some((64, 48)));
+    assert_eq!(scene.settings.spp, Some(16));
+    assert_eq!(scene.settings.max_depth, Some(Some(8)));
+    assert_eq!(scene.settings.integrator.as_deref(), Some("path"));
+    assert_eq!(scene.settings.filter, Some(Filter::GAUSSIAN));
+    // The camera at y-up (0, 0, 3.9) looking at −z is the lab's camera at (0, 0, −3.9), yaw 0.
+    let camera = scene.camera.unwrap();
+    assert_eq!(camera.position, Vec3::new(0.0, 0.0, -3.9));
+    assert!(camera.yaw.abs() < 1e-6 && camera.pitch.abs() < 1e-6, "{camera:?}");
+    assert!((camera.camera(64, 48).fov_x_deg() - 39.3077).abs() < 1e-3);
+    // The floor: y-up −1 is the lab's +1 (down), facing up (−y in the lab).
+    let floor = scene.geometry.triangle(0);
+    assert!(floor.iter().all(|p| (p.y - 1.0).abs() < 1e-6), "{floor:?}");
+    assert!(
+        (scene.geometry.normal(0) - Vec3::NEG_Y).length() < 1e-6,
+        "{}",
+        scene.geometry.normal(0)
+    );
+    // The light: at y-up 0.99 (lab −0.99), facing down (+y in the lab), a quarter of [-1, 1]².
+    let light = scene.geometry.triangle(2);
+    assert!(light.iter().all(|p| (p.y + 0.99).abs() < 1e-6 && p.x.abs() <= 0.25 + 1e-6));
+    assert!((scene.geometry.normal(2) - Vec3::Y).length() < 1e-6);
+    let emitting = &scene.materials[scene.geometry.material_id(2) as usize];
+    assert_eq!(emitting.emission, Vec3::splat(10.0));
+    assert!(scene.has_area_lights());
+    // The sphere faces out and is two-sided.
+    let sphere_triangle = 4 + 100;
+    let [a, b, c] = scene.geometry.triangle(sphere_triangle);
+    let centre = crate::scene::model_to_lab(Vec3::new(0.3, -0.5, 0.0));
+    assert!(scene.geometry.normal(sphere_triangle).dot((a + b + c) / 3.0 - centre) > 0.0);
+    assert!(scene.materials[scene.geometry.material_id(sphere_triangle) as usize].two_sided);
+    assert_eq!(scene.lights, vec![Light::Environment { radiance: Vec3::splat(0.1) }]);
+}
+
+#[test]
+fn mistakes_name_the_line_and_column() {
+    let cases = [
+        ("[camera]\nposition = [0, 0]\n", "test.toml:2:12:", "expected an array of length 3"),
+        ("[render]\nspp = 0\n", "test.toml:1:1:", "spp must be at least 1"),
+        ("[render]\nintegrator = \"bdpt\"\n", "test.toml:2:14:", "unknown integrator 'bdpt'"),
+        (
+            "[[shapes]]\ntype = \"torus\"\nmaterial = \"x\"\n",
+            "test.toml:2:8:",
+            "unknown shape type 'torus'",
+        ),
+        (
+            "[[shapes]]\ntype = \"cube\"\nmaterial = \"gold\"\n",
+            "test.toml:3:12:",
+            "no material named 'gold'",
+        ),
+        (
+            "[materials.a]\ntype = \"diffuse\"\nreflectance = [2, 0, 0]\n",
+            "test.toml:1:1:",
+            "reflectance",
+        ),
+        ("[materials.a]\ntype = \"velvet\"\n", "test.toml:2:", "velvet"),
+        ("colour = 3\n", "test.toml:1:1:", "unknown field `colour`"),
+        (
+            "[camera]\nposition = [0, 0, 0]\ntarget = [0, 0, -1]\nup = [0, 0, 1]\n",
+            "test.toml:4:6:",
+            "roll",
+        ),
+        ("[render]\nmax_depth = -2\n", "test.toml:1:1:", "max_depth -2"),
+        ("[[shapes]]\ntype = \"mesh\"\nfile = \"missing.obj\"\n", "test.toml:3:8:", "missing.obj"),
+        (
+            "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\n",
+            "test.toml:1:1:",
+            "intensity or power",
+        ),
+        (
+            "[[shapes]]\ntype = \"cube\"\nemission = [1, 1, 1]\nscale = 0\n",
+            "test.toml:4:9:",
+            "not zero",
+        ),
+        ("[camera\n", "test.toml:1:8:", ""),
+    ];
+    for (text, place, message) in cases {
+        let e = error(text);
+        assert!(e.starts_with(place) && e.contains(message), "{text:?}: {e}");
+        assert!(!e.contains('\n'), "one line: {e}");
+    }
+}
+
+#[test]
+fn meshes_load_beside_the_scene_file_with_their_own_materials() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("m.mtl"), "newmtl glow\nKd 0.5 0.5 0.5\nKe 2 3 4\n").unwrap();
+    std::fs::write(
+        dir.path().join("tri.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glow\nf 1 2 3\n",
+    )
+    .unwrap();
+    let scene_path = dir.path().join("s.toml");
+    std::fs::write(
+        &scene_path,
+        "[[shapes]]\ntype = \"mesh\"\nfile = \"tri.obj\"\ntranslate = [0, 0, 1]\n",
+    )
+    .unwrap();
+    let scene = load_scene_file(&scene_path).unwrap();
+    assert_eq!(scene.geometry.len(), 1);
+    // Translated along y-up +z: the lab's −z.
+    assert_eq!(scene.geometry.triangle(0)[0], Vec3::new(0.0, 0.0, -1.0));
+    let material = &scene.materials[scene.geometry.material_id(0) as usize];
+    assert_eq!((material.name.as_str(), material.emission), ("glow", Vec3::new(2.0, 3.0, 4.0)));
+    let e = load_scene_file(&dir.path().join("absent.toml")).unwrap_err().to_string();
+    assert!(e.contains("absent.toml:1:1: cannot read"), "{e}");
+}
