@@ -1,0 +1,155 @@
+//! The path tracer against Mitsuba 3 on Mitsuba's own Cornell box (`scenes/cornell-mitsuba.toml`).
+//!
+//! The reference `tests/data/mitsuba-cbox-64.pfm` is Mitsuba 3.9.1's `path` integrator (max depth
+//! 8, box filter) at 64×64 with 65,536 samples per pixel, made by
+//! `tools/mitsuba/cbox_reference.py --variant llvm_ad_rgb --size 64 --spp 4096 --passes 16
+//! --seed 2000` (its own noise is about 0.0016 RMS). Mitsuba is not needed to run these tests.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use raylab::film::Display;
+use raylab::image_compare::save_failure_images;
+use raylab::{
+    Accumulator, Bvh, Film, Path as PathTracer, PathSettings, SampleSettings, SamplerKind, Scene,
+    image_io,
+};
+
+fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn scene() -> Scene {
+    raylab::scene::load_scene_file(&repository().join("scenes/cornell-mitsuba.toml")).unwrap()
+}
+
+fn reference() -> Film {
+    image_io::load_film(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba-cbox-64.pfm"),
+    )
+    .unwrap()
+}
+
+/// Renders the scene at 64×64 with its own camera and max depth.
+fn render(scene: &Scene, spp: u32, settings: SampleSettings) -> Film {
+    let camera = scene.camera.unwrap().camera(64, 64);
+    let bvh = Bvh::new(&scene.vertices());
+    let max_depth = scene.settings.max_depth.unwrap();
+    let path = PathTracer::new(scene, &bvh, PathSettings { max_depth, ..PathSettings::default() });
+    let mut accumulator = Accumulator::new(64, 64).unwrap();
+    accumulator.settings = settings;
+    for _ in 0..spp {
+        accumulator.add_sample(&camera, &path);
+    }
+    accumulator.mean().unwrap()
+}
+
+fn rmse(a: &Film, b: &Film) -> f64 {
+    let sum: f64 = a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .map(|(p, q)| (p.as_dvec3() - q.as_dvec3()).length_squared())
+        .sum();
+    (sum / (3 * a.pixels().len()) as f64).sqrt()
+}
+
+fn mean(film: &Film) -> DVec3 {
+    film.pixels().iter().map(|p| p.as_dvec3()).sum::<DVec3>() / film.pixels().len() as f64
+}
+
+/// Fails with both pictures (sRGB) and their difference saved for a look.
+fn fail(name: &str, actual: &Film, expected: &Film, message: String) -> ! {
+    let to8 = |film: &Film| film.to_rgb8(&Display::SRGB).unwrap();
+    let folder = save_failure_images(name, &to8(actual), &to8(expected)).unwrap();
+    panic!("{message}; the images are in {}", folder.display());
+}
+
+#[test]
+fn the_cornell_box_matches_mitsuba() {
+    let scene = scene();
+    let reference = reference();
+    let film = render(&scene, 256, SampleSettings { seed: 1, ..SampleSettings::default() });
+    let (ours, theirs) = (mean(&film), mean(&reference));
+    let relative = (ours - theirs) / theirs;
+    let error = rmse(&film, &reference);
+    eprintln!("mean {ours:?} vs Mitsuba {theirs:?} ({relative:?}); RMSE {error:.5}");
+    if relative.abs().max_element() > 0.005 || error > 0.012 {
+        fail(
+            "mitsuba-cbox",
+            &film,
+            &reference,
+            format!("mean {ours} vs {theirs} (relative {relative}), RMSE {error}"),
+        );
+    }
+}
+
+#[test]
+fn error_falls_as_one_over_the_square_root_of_the_samples() {
+    let scene = scene();
+    let reference = reference();
+    for kind in [SamplerKind::Independent, SamplerKind::Sobol] {
+        let samples = [4u32, 16, 64, 256];
+        let errors: Vec<f64> = samples
+            .into_iter()
+            .map(|spp| {
+                let settings =
+                    SampleSettings { seed: 3, sampler: Some(kind), ..SampleSettings::default() };
+                rmse(&render(&scene, spp, settings), &reference)
+            })
+            .collect();
+        // The least-squares slope of log error against log samples: −½ for 1/√spp. The
+        // reference's own noise (0.0016) is taken out of each error first.
+        let points: Vec<(f64, f64)> = samples
+            .iter()
+            .zip(&errors)
+            .map(|(&n, &e)| ((n as f64).ln(), (e * e - 0.0016f64.powi(2)).max(1e-12).sqrt().ln()))
+            .collect();
+        let mean_x = points.iter().map(|p| p.0).sum::<f64>() / points.len() as f64;
+        let mean_y = points.iter().map(|p| p.1).sum::<f64>() / points.len() as f64;
+        let slope = points.iter().map(|p| (p.0 - mean_x) * (p.1 - mean_y)).sum::<f64>()
+            / points.iter().map(|p| (p.0 - mean_x).powi(2)).sum::<f64>();
+        eprintln!("{kind:?}: RMSE at {samples:?} spp: {errors:?}, slope {slope:.3}");
+        // Every step lowers the error, at the rate of 1/√spp or faster.
+        assert!(errors.windows(2).all(|pair| pair[1] < pair[0]), "{kind:?}: {errors:?}");
+        assert!((-0.75..=-0.42).contains(&slope), "{kind:?}: slope {slope}, errors {errors:?}");
+    }
+}
+
+#[test]
+fn sobol_samples_beat_independent_ones() {
+    let scene = scene();
+    let reference = reference();
+    let error = |kind| {
+        let settings = SampleSettings { seed: 9, sampler: Some(kind), ..SampleSettings::default() };
+        rmse(&render(&scene, 16, settings), &reference)
+    };
+    let (sobol, independent) = (error(SamplerKind::Sobol), error(SamplerKind::Independent));
+    eprintln!("16 spp: Sobol' {sobol:.5}, independent {independent:.5}");
+    assert!(sobol < 0.85 * independent, "Sobol' {sobol} vs independent {independent}");
+}
+
+#[test]
+fn the_same_pixels_for_any_thread_count_and_tiling() {
+    let scene = scene();
+    let films: Vec<Film> = [(1, (8, 8)), (2, (8, 8)), (2, (3, 5)), (3, (64, 1))]
+        .into_iter()
+        .map(|(threads, tile)| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let settings = SampleSettings { seed: 4, tile, ..SampleSettings::default() };
+            pool.install(|| render(&scene, 3, settings))
+        })
+        .collect();
+    for film in &films[1..] {
+        assert!(
+            film.pixels()
+                .iter()
+                .zip(films[0].pixels())
+                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits))
+        );
+    }
+    // A different seed gives different pixels.
+    let other = render(&scene, 3, SampleSettings { seed: 5, ..SampleSettings::default() });
+    assert_ne!(other, films[0]);
+    assert!(films[0].pixels().iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
+}
