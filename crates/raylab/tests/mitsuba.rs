@@ -110,9 +110,11 @@ fn error_falls_as_one_over_the_square_root_of_the_samples() {
         let slope = points.iter().map(|p| (p.0 - mean_x) * (p.1 - mean_y)).sum::<f64>()
             / points.iter().map(|p| (p.0 - mean_x).powi(2)).sum::<f64>();
         eprintln!("{kind:?}: RMSE at {samples:?} spp: {errors:?}, slope {slope:.3}");
-        // Every step lowers the error, at the rate of 1/√spp or faster.
+        // Every step lowers the error: independent samples at the rate of 1/√spp, scrambled
+        // Sobol' points at that rate or faster (Owen scrambling reaches spp^−¾ on smooth parts).
         assert!(errors.windows(2).all(|pair| pair[1] < pair[0]), "{kind:?}: {errors:?}");
-        assert!((-0.75..=-0.42).contains(&slope), "{kind:?}: slope {slope}, errors {errors:?}");
+        let expected = if kind == SamplerKind::Sobol { -1.0..=-0.42 } else { -0.6..=-0.42 };
+        assert!(expected.contains(&slope), "{kind:?}: slope {slope}, errors {errors:?}");
     }
 }
 

@@ -154,17 +154,30 @@ impl Sampler {
         }
     }
 
+    /// The scrambling seeds of a dimension: three well-mixed 32-bit words (the index shuffle and
+    /// the two coordinates' scrambles).
+    #[inline]
+    fn dimension_seeds(&self, dimension: u32) -> [u32; 3] {
+        let base = (self.pixel_seed as u32) ^ (self.pixel_seed >> 32) as u32;
+        let d = dimension.wrapping_mul(0x9e37_79b9);
+        [
+            hash32(base ^ d),
+            hash32(base.wrapping_add(d) ^ 0x5bd1_e995),
+            hash32(base ^ d ^ 0x68e3_1da4),
+        ]
+    }
+
     /// The next number in `[0, 1)`.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         match self.kind {
             SamplerKind::Sobol => {
-                let dimension = self.dimension;
+                let [shuffle, scramble, _] = self.dimension_seeds(self.dimension);
                 self.dimension += 1;
-                let seed = mix64(self.pixel_seed ^ (dimension as u64).wrapping_mul(0x9e37_79b9));
-                let index = nested_uniform_scramble(self.index, seed as u32);
-                let x = nested_uniform_scramble(index.reverse_bits(), (seed >> 32) as u32);
-                u32_to_unit(x)
+                let index = nested_uniform_scramble(self.index, shuffle);
+                // The first Sobol' dimension is the bit-reversed index; Owen-scrambling it is
+                // reverse(LK(reverse(reverse(index)))) = reverse(LK(index)).
+                u32_to_unit(laine_karras_permutation(index, scramble).reverse_bits())
             }
             _ => {
                 self.dimension += 1;
@@ -178,11 +191,10 @@ impl Sampler {
     pub fn next_2d(&mut self) -> Vec2 {
         match self.kind {
             SamplerKind::Sobol => {
-                let dimension = self.dimension;
+                let seeds = self.dimension_seeds(self.dimension);
                 self.dimension += 2;
-                let seed = mix64(self.pixel_seed ^ (dimension as u64).wrapping_mul(0x9e37_79b9));
-                let p = shuffled_scrambled_sobol_2d(self.index, seed);
-                Vec2::new(u32_to_unit(p[0]), u32_to_unit(p[1])).min(Vec2::splat(ONE_MINUS_EPSILON))
+                let p = shuffled_scrambled_sobol_2d(self.index, seeds);
+                Vec2::new(u32_to_unit(p[0]), u32_to_unit(p[1]))
             }
             _ => {
                 self.dimension += 2;
@@ -192,20 +204,59 @@ impl Sampler {
     }
 }
 
-/// The second dimension of the Sobol' sequence (the first is the bit reversal of the index),
-/// as 32-bit fixed point.
+/// A 32-bit integer hash with full avalanche (Wellons' `lowbias32`).
 #[inline]
-fn sobol_second_dimension(mut index: u32) -> u32 {
-    let mut v = 1u32 << 31;
-    let mut result = 0;
-    while index != 0 {
-        if index & 1 != 0 {
-            result ^= v;
-        }
-        index >>= 1;
-        v ^= v >> 1;
+fn hash32(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^ (x >> 16)
+}
+
+/// The second dimension of the Sobol' sequence (the first is the bit reversal of the index),
+/// as 32-bit fixed point: the XOR of the direction numbers of the index's set bits, a byte of
+/// the index at a time from tables (no branch per bit).
+#[inline]
+fn sobol_second_dimension(index: u32) -> u32 {
+    let [b0, b1, b2, b3] = index.to_le_bytes();
+    SOBOL_SECOND_DIMENSION[0][b0 as usize]
+        ^ SOBOL_SECOND_DIMENSION[1][b1 as usize]
+        ^ SOBOL_SECOND_DIMENSION[2][b2 as usize]
+        ^ SOBOL_SECOND_DIMENSION[3][b3 as usize]
+}
+
+/// `SOBOL_SECOND_DIMENSION[k][b]`: the XOR of the direction numbers of bits `8k..8k+8` set in `b`.
+static SOBOL_SECOND_DIMENSION: [[u32; 256]; 4] = sobol_second_dimension_tables();
+
+/// The tables, built at compile time from the direction numbers `v₀ = 2³¹`, `vₖ = vₖ₋₁ ⊕ (vₖ₋₁ ≫ 1)`.
+const fn sobol_second_dimension_tables() -> [[u32; 256]; 4] {
+    let mut directions = [0u32; 32];
+    directions[0] = 1 << 31;
+    let mut k = 1;
+    while k < 32 {
+        directions[k] = directions[k - 1] ^ (directions[k - 1] >> 1);
+        k += 1;
     }
-    result
+    let mut tables = [[0u32; 256]; 4];
+    let mut byte = 0;
+    while byte < 4 {
+        let mut value = 0;
+        while value < 256 {
+            let mut result = 0;
+            let mut bit = 0;
+            while bit < 8 {
+                if value & (1 << bit) != 0 {
+                    result ^= directions[byte * 8 + bit];
+                }
+                bit += 1;
+            }
+            tables[byte][value] = result;
+            value += 1;
+        }
+        byte += 1;
+    }
+    tables
 }
 
 /// Laine and Karras' hash-based permutation of the bits of `x` from high to low, each bit's flip
@@ -227,14 +278,14 @@ fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
 }
 
 /// Point `index` of a 2D Sobol' set whose order is shuffled and whose coordinates are
-/// Owen-scrambled, each by its own part of `seed` (Burley 2020, listing 5).
+/// Owen-scrambled, each by its own seed (Burley 2020, listing 5).
 #[inline]
-fn shuffled_scrambled_sobol_2d(index: u32, seed: u64) -> [u32; 2] {
-    let index = nested_uniform_scramble(index, seed as u32);
-    let x = index.reverse_bits();
-    let y = sobol_second_dimension(index);
-    let s = mix64(seed);
-    [nested_uniform_scramble(x, s as u32), nested_uniform_scramble(y, (s >> 32) as u32)]
+fn shuffled_scrambled_sobol_2d(index: u32, [shuffle, seed_x, seed_y]: [u32; 3]) -> [u32; 2] {
+    let index = nested_uniform_scramble(index, shuffle);
+    // x = reverse(index) scrambled: reverse(LK(reverse(reverse(index)))) = reverse(LK(index)).
+    let x = laine_karras_permutation(index, seed_x).reverse_bits();
+    let y = nested_uniform_scramble(sobol_second_dimension(index), seed_y);
+    [x, y]
 }
 
 #[cfg(test)]
@@ -247,6 +298,25 @@ mod tests {
         let mut rng = Pcg32::new(42, 54);
         let first: Vec<u32> = (0..6).map(|_| rng.next_u32()).collect();
         assert_eq!(first, [0xa15c02b7, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e]);
+    }
+
+    #[test]
+    fn the_second_sobol_dimension_tables_equal_the_bit_by_bit_definition() {
+        let bit_by_bit = |mut index: u32| {
+            let (mut v, mut result) = (1u32 << 31, 0);
+            while index != 0 {
+                if index & 1 != 0 {
+                    result ^= v;
+                }
+                index >>= 1;
+                v ^= v >> 1;
+            }
+            result
+        };
+        let mut rng = Pcg32::new(5, 6);
+        for index in (0..4096).chain((0..10_000).map(|_| rng.next_u32())).chain([u32::MAX]) {
+            assert_eq!(sobol_second_dimension(index), bit_by_bit(index), "{index}");
+        }
     }
 
     #[test]
