@@ -17,7 +17,7 @@
 
 use glam::Vec2;
 
-use super::{ONE_MINUS_EPSILON, pixel_hash, sample_offset};
+use super::{pixel_hash, sample_offset};
 
 /// SplitMix64's finalizer: a bijective 64-bit mix with full avalanche.
 #[inline]
