@@ -119,3 +119,58 @@ fn the_sphere_is_black_from_outside_and_one_sided() {
     }
     assert!(accumulator.mean().unwrap().pixels().iter().all(|&p| p == Vec3::ZERO));
 }
+
+/// A sphere of `material` (TOML) in a uniform white environment, seen from outside: the mean
+/// radiance of the pixels on the sphere and its standard error.
+fn sphere_in_white_furnace(material: &str) -> (f32, f32) {
+    let text = format!(
+        "[materials.m]\n{material}\n\n[[shapes]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"m\"\n\n\
+         [[lights]]\ntype = \"environment\"\nradiance = [1, 1, 1]\n"
+    );
+    let scene = raylab::scene::parse_scene(&text, std::path::Path::new("furnace.toml")).unwrap();
+    let accel = raylab::Bvh::new(&scene.vertices());
+    let path = Path::new(&scene, &accel, PathSettings::default());
+    // Close enough that the sphere fills the middle of the picture.
+    let camera = Camera { position: Vec3::new(0.0, 0.0, -2.5), ..Camera::lab(24, 24) };
+    let mut accumulator = Accumulator::new(24, 24).unwrap();
+    accumulator.settings = SampleSettings { seed: 2, ..SampleSettings::default() };
+    for _ in 0..64 {
+        accumulator.add_sample(&camera, &path);
+    }
+    let film = accumulator.mean().unwrap();
+    // The central 8×8 pixels all see the sphere.
+    let values: Vec<f32> = (8..16)
+        .flat_map(|y| (8..16).map(move |x| (x, y)))
+        .map(|(x, y)| film.pixel(x, y).y)
+        .collect();
+    let n = values.len() as f32;
+    let mean = values.iter().sum::<f32>() / n;
+    let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / (n - 1.0);
+    (mean, (variance / n).sqrt())
+}
+
+#[test]
+fn no_material_creates_energy_in_a_white_furnace_and_smooth_glass_disappears() {
+    let materials = [
+        ("diffuse white", "type = \"diffuse\"\nreflectance = [1, 1, 1]", true),
+        ("mirror", "type = \"conductor\"", true),
+        ("gold", "type = \"roughconductor\"\nmaterial = \"Au\"\nalpha = 0.3", false),
+        ("glass", "type = \"dielectric\"", true),
+        ("rough glass", "type = \"roughdielectric\"\nalpha = 0.2", false),
+        ("plastic", "type = \"plastic\"\ndiffuse_reflectance = [1, 1, 1]", false),
+    ];
+    for (name, material, lossless) in materials {
+        let (mean, error) = sphere_in_white_furnace(material);
+        eprintln!("{name}: {mean} ± {error}");
+        // Never more light than the furnace holds.
+        assert!(mean <= 1.0 + 4.0 * error + 1e-3, "{name} creates energy: {mean} ± {error}");
+        if lossless {
+            // A white diffuser, a perfect mirror and smooth glass send every bit of it on: they
+            // are invisible.
+            assert!(
+                (mean - 1.0).abs() <= 4.0 * error + 0.005,
+                "{name} is visible: {mean} ± {error}"
+            );
+        }
+    }
+}

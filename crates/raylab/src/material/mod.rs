@@ -12,11 +12,24 @@
 //! evaluated toward the light; both point away from the surface. `eval` returns the BSDF times
 //! the cosine `|cos θo|`, and a sample's `weight` is `eval / pdf`.
 
+mod conductor;
+mod dielectric;
 mod diffuse;
+pub mod fresnel;
+pub mod microfacet;
+mod plastic;
+mod rough_conductor;
+mod rough_dielectric;
 
 use glam::{Vec2, Vec3};
 
+pub use conductor::{Conductor, METALS};
+pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use microfacet::Ggx;
+pub use plastic::Plastic;
+pub use rough_conductor::RoughConductor;
+pub use rough_dielectric::RoughDielectric;
 
 /// A surface's scattering, emission and sidedness.
 #[derive(Clone, Debug, PartialEq)]
@@ -76,6 +89,30 @@ pub struct BsdfSample {
 pub enum Bsdf {
     /// Lambertian reflection (Mitsuba's `diffuse`).
     Diffuse(Diffuse),
+    /// A smooth metal (Mitsuba's `conductor`).
+    Conductor(Conductor),
+    /// A rough metal (Mitsuba's `roughconductor`).
+    RoughConductor(RoughConductor),
+    /// Smooth glass (Mitsuba's `dielectric`).
+    Dielectric(Dielectric),
+    /// Rough glass (Mitsuba's `roughdielectric`).
+    RoughDielectric(RoughDielectric),
+    /// A diffuse base under a smooth coating (Mitsuba's `plastic`).
+    Plastic(Plastic),
+}
+
+/// Calls the same method on whichever BSDF it is.
+macro_rules! each_bsdf {
+    ($self:expr, $b:ident => $call:expr) => {
+        match $self {
+            Bsdf::Diffuse($b) => $call,
+            Bsdf::Conductor($b) => $call,
+            Bsdf::RoughConductor($b) => $call,
+            Bsdf::Dielectric($b) => $call,
+            Bsdf::RoughDielectric($b) => $call,
+            Bsdf::Plastic($b) => $call,
+        }
+    };
 }
 
 impl Bsdf {
@@ -83,35 +120,27 @@ impl Bsdf {
     /// frame). Zero for delta lobes.
     #[inline]
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
-        match self {
-            Bsdf::Diffuse(d) => d.eval(wi, wo),
-        }
+        each_bsdf!(self, b => b.eval(wi, wo))
     }
 
     /// The density with which [`sample`](Self::sample) picks `wo` given `wi`, per unit solid
     /// angle (zero for delta lobes).
     #[inline]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        match self {
-            Bsdf::Diffuse(d) => d.pdf(wi, wo),
-        }
+        each_bsdf!(self, b => b.pdf(wi, wo))
     }
 
     /// Samples `wo` given `wi` from two uniform numbers (`u1` picks a lobe, `u2` a direction), or
     /// `None` where the BSDF absorbs.
     #[inline]
     pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        match self {
-            Bsdf::Diffuse(d) => d.sample(wi, u1, u2),
-        }
+        each_bsdf!(self, b => b.sample(wi, u1, u2))
     }
 
     /// Whether the BSDF has a lobe that is not a delta: light sampling can help it.
     #[inline]
     pub fn is_smooth(&self) -> bool {
-        match self {
-            Bsdf::Diffuse(_) => true,
-        }
+        !matches!(self, Bsdf::Conductor(_) | Bsdf::Dielectric(_))
     }
 
     /// The colour a surface shows in flat renderings (the lab's ρ, the albedo AOV): the diffuse
@@ -119,12 +148,49 @@ impl Bsdf {
     pub fn albedo(&self) -> Vec3 {
         match self {
             Bsdf::Diffuse(d) => d.reflectance,
+            Bsdf::Conductor(c) => c.reflectance(1.0),
+            Bsdf::RoughConductor(r) => r.conductor.reflectance(1.0),
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) => Vec3::ONE,
+            Bsdf::Plastic(p) => p.diffuse_reflectance,
         }
     }
 
     fn validate(&self) -> Result<(), String> {
+        let positive_ior = |eta: f32| {
+            if eta.is_finite() && eta > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("the relative index of refraction {eta} must be finite and above 0"))
+            }
+        };
+        let roughness = |g: &Ggx| {
+            if g.alpha_u.is_finite() && g.alpha_v.is_finite() && g.alpha_u > 0.0 && g.alpha_v > 0.0
+            {
+                Ok(())
+            } else {
+                Err(format!("alpha ({}, {}) must be finite and above 0", g.alpha_u, g.alpha_v))
+            }
+        };
+        let conductor = |c: &Conductor| {
+            if c.eta.is_finite()
+                && c.k.is_finite()
+                && c.eta.min_element() >= 0.0
+                && c.k.min_element() >= 0.0
+            {
+                unit_interval("specular_reflectance", c.specular_reflectance)
+            } else {
+                Err(format!("eta {} and k {} must be finite and not negative", c.eta, c.k))
+            }
+        };
         match self {
             Bsdf::Diffuse(d) => unit_interval("reflectance", d.reflectance),
+            Bsdf::Conductor(c) => conductor(c),
+            Bsdf::RoughConductor(r) => conductor(&r.conductor).and(roughness(&r.distribution)),
+            Bsdf::Dielectric(d) => positive_ior(d.eta),
+            Bsdf::RoughDielectric(r) => positive_ior(r.eta).and(roughness(&r.distribution)),
+            Bsdf::Plastic(p) => positive_ior(p.eta)
+                .and(unit_interval("diffuse_reflectance", p.diffuse_reflectance))
+                .and(unit_interval("specular_reflectance", p.specular_reflectance)),
         }
     }
 }

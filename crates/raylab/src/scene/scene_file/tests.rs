@@ -169,3 +169,71 @@ fn meshes_load_beside_the_scene_file_with_their_own_materials() {
     let e = load_scene_file(&dir.path().join("absent.toml")).unwrap_err().to_string();
     assert!(e.contains("absent.toml:1:1: cannot read"), "{e}");
 }
+
+#[test]
+fn every_material_type_parses_with_mitsuba_s_names_and_defaults() {
+    let scene = parse(
+        r#"
+[materials.gold]
+type = "roughconductor"
+material = "Au"
+alpha_u = 0.2
+alpha_v = 0.05
+
+[materials.mirror]
+type = "conductor"
+
+[materials.glass]
+type = "dielectric"
+int_ior = "bk7"
+
+[materials.frosted]
+type = "roughdielectric"
+int_ior = 1.33
+ext_ior = "air"
+alpha = 0.3
+
+[materials.red_plastic]
+type = "plastic"
+diffuse_reflectance = [0.6, 0.1, 0.1]
+nonlinear = true
+"#,
+    )
+    .unwrap();
+    let by_name = |name: &str| &scene.materials.iter().find(|m| m.name == name).unwrap().bsdf;
+    let Bsdf::RoughConductor(gold) = by_name("gold") else { panic!() };
+    assert_eq!((gold.distribution.alpha_u, gold.distribution.alpha_v), (0.2, 0.05));
+    assert_eq!(gold.conductor.eta, Vec3::new(0.183, 0.421, 1.373));
+    let Bsdf::Conductor(mirror) = by_name("mirror") else { panic!() };
+    assert!((mirror.reflectance(0.5) - Vec3::ONE).abs().max_element() < 1e-5, "a perfect mirror");
+    let Bsdf::Dielectric(glass) = by_name("glass") else { panic!() };
+    assert!((glass.eta - 1.5046 / 1.000_277).abs() < 1e-6);
+    let Bsdf::RoughDielectric(frosted) = by_name("frosted") else { panic!() };
+    assert!((frosted.eta - 1.33 / 1.000_277).abs() < 1e-6 && frosted.distribution.alpha_u == 0.3);
+    let Bsdf::Plastic(plastic) = by_name("red_plastic") else { panic!() };
+    assert!(plastic.nonlinear && (plastic.eta - 1.49 / 1.000_277).abs() < 1e-6);
+    assert_eq!(plastic.specular_reflectance, Vec3::ONE);
+}
+
+#[test]
+fn material_mistakes_are_named() {
+    let cases = [
+        ("[materials.a]\ntype = \"conductor\"\nmaterial = \"Pt\"\n", "unknown metal 'Pt'"),
+        (
+            "[materials.a]\ntype = \"dielectric\"\nint_ior = \"glass\"\n",
+            "unknown index of refraction 'glass'",
+        ),
+        ("[materials.a]\ntype = \"roughconductor\"\ndistribution = \"beckmann\"\n", "only ggx"),
+        ("[materials.a]\ntype = \"roughconductor\"\nalpha = -1\n", "alpha"),
+        ("[materials.a]\ntype = \"roughconductor\"\nalhpa = 0.1\n", "alhpa"),
+        (
+            "[materials.a]\ntype = \"plastic\"\ndiffuse_reflectance = [1.5, 0, 0]\n",
+            "diffuse_reflectance",
+        ),
+        ("[materials.a]\ntype = \"dielectric\"\nint_ior = 0\n", "index of refraction"),
+    ];
+    for (text, message) in cases {
+        let e = error(text);
+        assert!(e.starts_with("test.toml:") && e.contains(message), "{text:?}: {e}");
+    }
+}
