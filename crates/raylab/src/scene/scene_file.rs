@@ -411,11 +411,16 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
     ) -> Result<()> {
         let doc = shape.get_ref();
         let kind = doc.kind.get_ref().as_str();
-        if !["rectangle", "cube", "sphere", "mesh"].contains(&kind) {
+        if !["rectangle", "cube", "sphere", "mesh", "cornell"].contains(&kind) {
             return self.error(
                 doc.kind.span(),
-                format!("unknown shape type '{kind}': expected rectangle, cube, sphere or mesh"),
+                format!(
+                    "unknown shape type '{kind}': expected rectangle, cube, sphere, mesh or cornell"
+                ),
             );
+        }
+        if kind == "cornell" {
+            return self.lab_cornell_box(shape, index, geometry);
         }
         let transform = to_lab() * self.transform(doc)?;
         // The named material, with the shape's emission if it has one (a copy per shape).
@@ -515,6 +520,44 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             );
         };
         geometry.add_mesh(&Mesh { name: kind.to_string(), ..mesh }, &transform, |_| material);
+        Ok(())
+    }
+
+    /// The lab's Cornell box (30 triangles in `[−1, 1]³`), each face with the scene's material
+    /// named after its lab colour (red, yellow, green, cyan, blue, purple, white).
+    fn lab_cornell_box(
+        &self,
+        shape: &Spanned<ShapeDoc>,
+        index: &BTreeMap<String, u32>,
+        geometry: &mut Geometry,
+    ) -> Result<()> {
+        let doc = shape.get_ref();
+        if doc.material.is_some() || doc.emission.is_some() || doc.file.is_some() {
+            return self.error(shape.span(), "the cornell shape takes its materials by colour name, not `material`, `emission` or `file`");
+        }
+        let lab = super::cornell_box();
+        let mut corners = Vec::new();
+        for i in 0..lab.geometry.len() {
+            let colour = &lab.materials[lab.geometry.material_id(i) as usize].name;
+            let Some(&material) = index.get(colour) else {
+                return self.error(
+                    shape.span(),
+                    format!("the cornell shape needs a material named '{colour}'"),
+                );
+            };
+            // Back to the file's y-up frame (the half turn is its own inverse).
+            corners.push((lab.geometry.triangle(i).map(super::model_to_lab), material));
+        }
+        let mut triangles = Geometry::new();
+        triangles.add_triangles("cornell", corners);
+        let transform = to_lab() * self.transform(doc)?;
+        let mesh = Mesh {
+            name: "cornell".into(),
+            positions: (0..triangles.len()).flat_map(|i| triangles.triangle(i)).collect(),
+            triangles: (0..triangles.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
+            ..Mesh::default()
+        };
+        geometry.add_mesh(&mesh, &transform, |i| triangles.material_id(i));
         Ok(())
     }
 
