@@ -9,7 +9,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use raylab::interactive::{Controller, FrameRenderer, Motion, Pose, View, rgb8_from_0rgb};
+use raylab::interactive::{
+    Controller, FrameRenderer, Motion, Pose, View, ViewMode, rgb8_from_0rgb,
+};
 use raylab::{Bvh, Film, Scene, image_io};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup};
@@ -27,6 +29,7 @@ Keys (motion is per second, not per frame):
   Q / E              light up / down
   + / - , wheel      faster / slower (×√2 a step)
   1 2 3 4 5          lab stage: flat, direct, reflected, shadows, ambient
+  6 7 8 9            path tracing, albedo, normals, depth
   P                  screenshot to raylab-view-N.png (the path is printed)
   R                  reset camera and light
   H                  print these keys
@@ -63,6 +66,12 @@ pub struct ViewArgs {
     /// --screenshot: after writing it).
     #[arg(long, value_name = "N", conflicts_with = "headless", value_parser = clap::value_parser!(u32).range(1..))]
     exit_after_frames: Option<u32>,
+
+    /// What to show first: lab (the lab's light model), path (path tracing), albedo, normals or
+    /// depth; keys 1-9 switch [default: the scene file's; path for scenes with area lights,
+    /// else lab].
+    #[arg(long, value_name = "NAME", value_parser = ["lab", "path", "albedo", "normals", "depth"])]
+    integrator: Option<String>,
 
     /// A still picture refines up to this many samples per pixel.
     #[arg(long, value_name = "N", default_value = "1024", value_parser = clap::value_parser!(u32).range(1..=65536))]
@@ -112,7 +121,14 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     };
     let view = View {
         pose: home,
-        stage: args.scene.stage,
+        mode: {
+            let name = args.integrator.clone().or_else(|| scene.settings.integrator.clone());
+            let name = name.unwrap_or_else(|| {
+                if scene.has_area_lights() { "path".into() } else { "lab".into() }
+            });
+            ViewMode::from_name(&name, args.scene.stage)
+                .expect("checked by clap and the scene file")
+        },
         width: camera.width,
         height: camera.height,
         focal_per_width: camera.focal_length_px / camera.width as f32,

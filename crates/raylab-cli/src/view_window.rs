@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Result, anyhow, bail};
 use raylab::Stage;
+use raylab::interactive::ViewMode;
 use raylab::interactive::{Controller, FrameInfo, FrameRenderer, Motion, View};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
@@ -405,14 +406,15 @@ impl<'a> App<'a> {
             if info.scale > 1 { format!(" at 1/{}", info.scale) } else { String::new() };
         let state = if info.samples >= self.session.max_spp { " (done)" } else { "" };
         screen.window.set_title(&format!(
-            "raylab — {} — {:.0} fps, {:.1} ms/frame, {} spp{resolution}{state} — stage {} — \
+            "raylab — {} — {:.0} fps, {:.1} ms/frame, {} spp{resolution}{state} — {} — \
              arrows move/turn, PgUp/PgDn up/down, WASDQE light, drag look, +/- speed, 1-5 stage, \
+             6-9 path/albedo/normals/depth, \
              P screenshot, R reset, H keys, Esc quit",
             self.session.scene.name,
             if self.recent.len() > 1 { fps } else { 0.0 },
             info.render_time.as_secs_f64() * 1e3,
             info.samples,
-            self.view.stage,
+            self.view.mode,
         ));
     }
 
@@ -468,8 +470,8 @@ impl<'a> App<'a> {
                 }
             }
             _ => {
-                if let Some(stage) = stage_for(code) {
-                    self.view.stage = stage;
+                if let Some(mode) = mode_for(code) {
+                    self.view.mode = mode;
                     self.publish_view();
                 }
             }
@@ -496,17 +498,21 @@ fn motion_for(code: KeyCode) -> Option<Motion> {
     })
 }
 
-/// The lab stage a number key shows.
-fn stage_for(code: KeyCode) -> Option<Stage> {
+/// What a number key shows: 1–5 the lab's stages, 6 path tracing, 7–9 albedo, normals, depth.
+fn mode_for(code: KeyCode) -> Option<ViewMode> {
     let index = match code {
         KeyCode::Digit1 | KeyCode::Numpad1 => 0,
         KeyCode::Digit2 | KeyCode::Numpad2 => 1,
         KeyCode::Digit3 | KeyCode::Numpad3 => 2,
         KeyCode::Digit4 | KeyCode::Numpad4 => 3,
         KeyCode::Digit5 | KeyCode::Numpad5 => 4,
+        KeyCode::Digit6 | KeyCode::Numpad6 => return Some(ViewMode::Path),
+        KeyCode::Digit7 | KeyCode::Numpad7 => return Some(ViewMode::Albedo),
+        KeyCode::Digit8 | KeyCode::Numpad8 => return Some(ViewMode::Normals),
+        KeyCode::Digit9 | KeyCode::Numpad9 => return Some(ViewMode::Depth),
         _ => return None,
     };
-    Some(Stage::ALL[index])
+    Some(ViewMode::Lab(Stage::ALL[index]))
 }
 
 impl ApplicationHandler<FrameReady> for App<'_> {
@@ -632,9 +638,11 @@ mod tests {
         let stages =
             [KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5];
         for (code, stage) in stages.into_iter().zip(Stage::ALL) {
-            assert_eq!(stage_for(code), Some(stage));
+            assert_eq!(mode_for(code), Some(ViewMode::Lab(stage)));
         }
-        assert_eq!(stage_for(KeyCode::Numpad5), Some(Stage::Ambient));
-        assert_eq!(stage_for(KeyCode::Digit6), None);
+        assert_eq!(mode_for(KeyCode::Numpad5), Some(ViewMode::Lab(Stage::Ambient)));
+        assert_eq!(mode_for(KeyCode::Digit6), Some(ViewMode::Path));
+        assert_eq!(mode_for(KeyCode::Numpad9), Some(ViewMode::Depth));
+        assert_eq!(mode_for(KeyCode::Digit0), None);
     }
 }

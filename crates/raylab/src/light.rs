@@ -157,6 +157,16 @@ impl LightSet {
         }
     }
 
+    /// Moves the first point light to `position` (as `raylab view` moves the light); nothing
+    /// without a point light.
+    pub fn move_first_point_light(&mut self, position: Vec3) {
+        if let Some(SampledLight::Point { position: at, .. }) =
+            self.lights.iter_mut().find(|l| matches!(l, SampledLight::Point { .. }))
+        {
+            *at = position;
+        }
+    }
+
     /// The number of lights (each emissive triangle counts as one).
     pub fn len(&self) -> usize {
         self.lights.len()

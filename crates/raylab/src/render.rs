@@ -17,7 +17,7 @@ use image::RgbImage;
 use rayon::prelude::*;
 
 use crate::camera::Camera;
-use crate::film::{Film, FilmError, to_8bit_clamped};
+use crate::film::{Display, Film, FilmError, to_8bit_clamped};
 use crate::integrator::Integrator;
 use crate::ray::Ray;
 use crate::sampling::{Sampler, SamplerKind, square_to_truncated_gaussian};
@@ -265,11 +265,23 @@ impl Accumulator {
     /// # Panics
     /// If `out` does not hold `width×height` words.
     pub fn write_0rgb(&self, out: &mut [u32], width: u32, height: u32) {
+        self.write_0rgb_shown(out, width, height, &Display::LAB);
+    }
+
+    /// [`write_0rgb`](Self::write_0rgb) through a display transform (the lab's is the clamp
+    /// without gamma).
+    ///
+    /// # Panics
+    /// If `out` does not hold `width×height` words.
+    pub fn write_0rgb_shown(&self, out: &mut [u32], width: u32, height: u32, display: &Display) {
         assert_eq!(out.len(), width as usize * height as usize, "a word per window pixel");
         let (source_width, source_height) = (self.width() as usize, self.height() as usize);
         let factor = self.mean_factor();
+        let lab = *display == Display::LAB;
         let word = |sum: &Vec3| {
-            let [r, g, b] = (*sum * factor).to_array().map(to_8bit_clamped);
+            let mean = (*sum * factor).to_array();
+            let [r, g, b] =
+                if lab { mean.map(to_8bit_clamped) } else { mean.map(|v| display.level(v)) };
             (r as u32) << 16 | (g as u32) << 8 | b as u32
         };
         if (source_width, source_height) == (width as usize, height as usize) {

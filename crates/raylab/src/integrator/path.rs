@@ -14,6 +14,8 @@
 //! Surfaces follow their materials' sidedness: one-sided materials are black from behind, and
 //! area lights emit from their front side only.
 
+use std::borrow::Cow;
+
 use glam::{Vec2, Vec3};
 
 use super::Integrator;
@@ -44,14 +46,24 @@ impl Default for PathSettings {
 pub struct Path<'a, A: ?Sized> {
     scene: &'a Scene,
     accel: &'a A,
-    lights: LightSet,
+    lights: Cow<'a, LightSet>,
     settings: PathSettings,
 }
 
 impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// A path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
     pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
-        Path { scene, accel, lights: LightSet::new(scene), settings }
+        Path { scene, accel, lights: Cow::Owned(LightSet::new(scene)), settings }
+    }
+
+    /// A path tracer with lights made before (`raylab view` keeps them from frame to frame).
+    pub fn with_lights(
+        scene: &'a Scene,
+        accel: &'a A,
+        lights: &'a LightSet,
+        settings: PathSettings,
+    ) -> Self {
+        Path { scene, accel, lights: Cow::Borrowed(lights), settings }
     }
 
     /// The lights it samples.

@@ -9,21 +9,77 @@ use std::time::{Duration, Instant};
 
 use image::RgbImage;
 
+use glam::Vec3;
+
 use super::Pose;
 use crate::accel::Accelerator;
 use crate::camera::Camera;
-use crate::film::FilmError;
-use crate::integrator::{Lab, Stage};
+use crate::film::{Display, FilmError};
+use crate::integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
+use crate::light::LightSet;
+use crate::ray::Ray;
 use crate::render::Accumulator;
+use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 
-/// Everything a frame shows: the pose, the lab's stage and the window's size.
+/// What a frame computes: the lab's light model at one of its stages, path tracing, or a
+/// first-hit image (see [`crate::integrator`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewMode {
+    /// The lab's model at a stage.
+    Lab(Stage),
+    /// Path tracing, refined progressively while the view is still.
+    Path,
+    /// The first surface's albedo.
+    Albedo,
+    /// The first surface's shading normal, shown as `(n + 1)/2`.
+    Normals,
+    /// The distance to the first surface, shown relative to the scene's size.
+    Depth,
+}
+
+impl ViewMode {
+    /// The mode a command-line integrator name (`lab`, `path`, `albedo`, `normals`, `depth`)
+    /// names; `lab` shows `stage`.
+    pub fn from_name(name: &str, stage: Stage) -> Option<ViewMode> {
+        Some(match name {
+            "lab" => ViewMode::Lab(stage),
+            "path" => ViewMode::Path,
+            "albedo" => ViewMode::Albedo,
+            "normals" => ViewMode::Normals,
+            "depth" => ViewMode::Depth,
+            _ => return None,
+        })
+    }
+
+    /// How its radiance is shown: the lab's linear clamp, sRGB for the physically based modes.
+    pub fn display(self) -> Display {
+        match self {
+            ViewMode::Lab(_) | ViewMode::Normals | ViewMode::Depth => Display::LAB,
+            ViewMode::Path | ViewMode::Albedo => Display::SRGB,
+        }
+    }
+}
+
+impl std::fmt::Display for ViewMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ViewMode::Lab(stage) => write!(f, "stage {stage}"),
+            ViewMode::Path => f.write_str("path tracing"),
+            ViewMode::Albedo => f.write_str("albedo"),
+            ViewMode::Normals => f.write_str("normals"),
+            ViewMode::Depth => f.write_str("depth"),
+        }
+    }
+}
+
+/// Everything a frame shows: the pose, what to compute and the window's size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     /// The camera's position and direction, and the light's position.
     pub pose: Pose,
-    /// The lab's stage to show.
-    pub stage: Stage,
+    /// What to compute.
+    pub mode: ViewMode,
     /// Window width in pixels, at least 1.
     pub width: u32,
     /// Window height in pixels, at least 1.
@@ -94,6 +150,8 @@ pub fn next_scale(scale: u32, elapsed: Duration, budget: Duration) -> u32 {
 pub struct FrameRenderer {
     picture: Option<(View, u32, Accumulator)>,
     scale: u32,
+    /// The path tracer's lights, for the point light's position they were made with.
+    lights: Option<(Vec3, LightSet)>,
     /// A moving frame should take at most this long; `None` renders every frame at full
     /// resolution (for benchmarks).
     pub budget: Option<Duration>,
@@ -105,7 +163,13 @@ impl FrameRenderer {
     /// A renderer with a moving-frame budget (`None`: always full resolution) that refines a
     /// still picture up to `max_samples` samples per pixel.
     pub fn new(budget: Option<Duration>, max_samples: u32) -> FrameRenderer {
-        FrameRenderer { picture: None, scale: 1, budget, max_samples: max_samples.max(1) }
+        FrameRenderer {
+            picture: None,
+            scale: 1,
+            lights: None,
+            budget,
+            max_samples: max_samples.max(1),
+        }
     }
 
     /// Whether `view` is already shown with every sample it will get: no frame is needed.
@@ -147,9 +211,41 @@ impl FrameRenderer {
             }
         }
         let (_, _, picture) = self.picture.as_mut().expect("a picture was just made");
-        let mut lab = Lab::new(scene, accel, view.stage);
-        lab.light.position = view.pose.light;
-        picture.add_sample(&camera, &lab);
+        match view.mode {
+            ViewMode::Lab(stage) => {
+                let mut lab = Lab::new(scene, accel, stage);
+                lab.light.position = view.pose.light;
+                picture.add_sample(&camera, &lab);
+            }
+            ViewMode::Path => {
+                let light = view.pose.light;
+                if self.lights.as_ref().is_none_or(|(at, _)| *at != light) {
+                    // The scene's point light, where the controller moved it.
+                    let mut moved = LightSet::new(scene);
+                    moved.move_first_point_light(light);
+                    self.lights = Some((light, moved));
+                }
+                let lights = &self.lights.as_ref().expect("made above").1;
+                picture.add_sample(
+                    &camera,
+                    &Path::with_lights(scene, accel, lights, PathSettings::default()),
+                );
+            }
+            ViewMode::Albedo => {
+                picture.add_sample(&camera, &Aov::new(scene, accel, AovKind::Albedo))
+            }
+            ViewMode::Normals => {
+                picture.add_sample(&camera, &ShownNormals(Aov::new(scene, accel, AovKind::Normals)))
+            }
+            ViewMode::Depth => {
+                let size = scene
+                    .bounds()
+                    .map_or(1.0, |(lo, hi)| (hi - lo).length())
+                    .max(f32::MIN_POSITIVE);
+                picture
+                    .add_sample(&camera, &ShownDepth(Aov::new(scene, accel, AovKind::Depth), size));
+            }
+        }
         let words = view.width as usize * view.height as usize;
         if window.len() != words {
             // Only when the size changes: every word is written below.
@@ -161,7 +257,7 @@ impl FrameRenderer {
             })?;
             window.resize(words, 0);
         }
-        picture.write_0rgb(window, view.width, view.height);
+        picture.write_0rgb_shown(window, view.width, view.height, &view.mode.display());
         let render_time = start.elapsed();
         if moving && let Some(budget) = self.budget {
             self.scale = next_scale(scale, render_time, budget);
@@ -176,9 +272,37 @@ impl FrameRenderer {
     /// If `out` does not hold `width×height` words.
     pub fn write_0rgb(&self, out: &mut [u32], width: u32, height: u32) {
         match &self.picture {
-            Some((_, _, picture)) => picture.write_0rgb(out, width, height),
+            Some((view, _, picture)) => {
+                picture.write_0rgb_shown(out, width, height, &view.mode.display())
+            }
             None => out.fill(0),
         }
+    }
+}
+
+/// Normals as colours: `(n + 1)/2`.
+struct ShownNormals<'a, A: ?Sized>(Aov<'a, A>);
+
+impl<A: Accelerator + ?Sized> Integrator for ShownNormals<'_, A> {
+    fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
+        let n = self.0.radiance(ray, sampler);
+        if n == Vec3::ZERO { n } else { (n + Vec3::ONE) * 0.5 }
+    }
+    fn sampler_kind(&self) -> SamplerKind {
+        SamplerKind::Lab
+    }
+}
+
+/// Depth as grey: near is bright, a scene's diagonal away is black.
+struct ShownDepth<'a, A: ?Sized>(Aov<'a, A>, f32);
+
+impl<A: Accelerator + ?Sized> Integrator for ShownDepth<'_, A> {
+    fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
+        let depth = self.0.radiance(ray, sampler).x;
+        if depth == 0.0 { Vec3::ZERO } else { Vec3::splat((1.0 - depth / self.1).max(0.0)) }
+    }
+    fn sampler_kind(&self) -> SamplerKind {
+        SamplerKind::Lab
     }
 }
 
@@ -207,7 +331,7 @@ mod tests {
                 pitch: 0.0,
                 light: Vec3::new(0.0, -0.5, -0.7),
             },
-            stage: Stage::Ambient,
+            mode: ViewMode::Lab(Stage::Ambient),
             width,
             height,
             focal_per_width: 1.0,
@@ -311,6 +435,43 @@ mod tests {
         view.width = 50;
         let info = renderer.frame(&scene, &accel, &view, &mut words).unwrap();
         assert!(info.moving && info.samples == 1 && words.len() == 50 * 48);
+    }
+
+    #[test]
+    fn still_path_tracing_refines_to_the_render_and_shows_srgb() {
+        let scene = Scene::built_in("cornell").unwrap();
+        let accel = BruteForce::new(&scene.vertices());
+        let view = View { mode: ViewMode::Path, ..lab_view(24, 16) };
+        let mut renderer = FrameRenderer::new(None, 8);
+        let mut words = Vec::new();
+        for _ in 0..3 {
+            renderer.frame(&scene, &accel, &view, &mut words).unwrap();
+        }
+        // Three still frames are `render_samples` of three samples with the same path tracer.
+        let path = Path::new(&scene, &accel, PathSettings::default());
+        let film = render_samples(&view.camera(1), &path, 3, &|_| {}).unwrap();
+        let expected = film.to_rgb8(&Display::SRGB).unwrap();
+        assert_eq!(rgb(&words, &view), expected);
+        // The lab's point light moved by the controller moves in the path tracer too.
+        let mut moved = view;
+        moved.pose.light = Vec3::new(0.5, 0.5, 0.5);
+        renderer.frame(&scene, &accel, &moved, &mut words).unwrap();
+        let mut scene_moved = scene.clone();
+        scene_moved.point_light_mut().position = moved.pose.light;
+        let path = Path::new(&scene_moved, &accel, PathSettings::default());
+        let film = render_samples(&moved.camera(1), &path, 1, &|_| {}).unwrap();
+        assert_eq!(rgb(&words, &moved), film.to_rgb8(&Display::SRGB).unwrap());
+        // Every mode renders, and switching modes starts a new picture.
+        for mode in
+            [ViewMode::Albedo, ViewMode::Normals, ViewMode::Depth, ViewMode::Lab(Stage::Flat)]
+        {
+            let info = renderer.frame(&scene, &accel, &View { mode, ..view }, &mut words).unwrap();
+            assert_eq!(info.samples, 1, "{mode}");
+            assert!(words.iter().any(|&w| w != 0), "{mode} shows something");
+        }
+        assert_eq!(ViewMode::from_name("path", Stage::Flat), Some(ViewMode::Path));
+        assert_eq!(ViewMode::from_name("lab", Stage::Flat), Some(ViewMode::Lab(Stage::Flat)));
+        assert_eq!(ViewMode::Lab(Stage::Shadows).to_string(), "stage shadows");
     }
 
     #[test]

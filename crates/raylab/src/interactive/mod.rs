@@ -18,4 +18,4 @@ mod controller;
 mod frame;
 
 pub use controller::{Controller, MAX_PITCH, Motion, Pose, SPEED_STEP, TURN_RATE};
-pub use frame::{FrameInfo, FrameRenderer, MAX_SCALE, View, next_scale, rgb8_from_0rgb};
+pub use frame::{FrameInfo, FrameRenderer, MAX_SCALE, View, ViewMode, next_scale, rgb8_from_0rgb};
