@@ -12,7 +12,7 @@ use clap::Args;
 use raylab::interactive::{
     Controller, FrameRenderer, Motion, Pose, View, ViewMode, rgb8_from_0rgb,
 };
-use raylab::{Bvh, Film, Scene, image_io};
+use raylab::{Bvh, Film, PathSettings, SampleSettings, Scene, image_io};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup};
 use crate::{stats, system, view_window};
@@ -86,6 +86,9 @@ pub struct Session<'a> {
     pub controller: Controller,
     pub view: View,
     pub max_spp: u32,
+    /// The scene file's path-tracing and sampling settings.
+    pub path_settings: PathSettings,
+    pub sample_settings: SampleSettings,
     pub screenshot: Option<&'a Path>,
     pub exit_after_frames: Option<u32>,
 }
@@ -131,7 +134,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         },
         width: camera.width,
         height: camera.height,
-        focal_per_width: camera.focal_length_px / camera.width as f32,
+        focal: (camera.width, camera.focal_length_px),
+        lens: (camera.aperture_radius, camera.focus_distance),
     };
     let session = Session {
         scene,
@@ -140,6 +144,16 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         controller: Controller::new(home, motion_speed(scene)),
         view,
         max_spp: args.max_spp,
+        path_settings: PathSettings {
+            max_depth: scene.settings.max_depth.unwrap_or(None),
+            ..PathSettings::default()
+        },
+        sample_settings: SampleSettings {
+            seed: scene.settings.seed.unwrap_or(0),
+            sampler: scene.settings.sampler,
+            filter: scene.settings.filter.unwrap_or_default(),
+            ..SampleSettings::default()
+        },
         screenshot: args.screenshot.as_deref(),
         exit_after_frames: args.exit_after_frames,
     };
@@ -185,6 +199,8 @@ fn headless(mut session: Session, frames: u32, still: bool) -> Result<()> {
     let Session { scene, accel, pool, ref mut controller, mut view, .. } = session;
     // Benchmarks measure full-resolution frames: no budget.
     let mut renderer = FrameRenderer::new(None, session.max_spp);
+    renderer.path_settings = session.path_settings;
+    renderer.sample_settings = session.sample_settings;
     let mut times = Vec::with_capacity(frames as usize);
     let mut words = Vec::new();
     let run_start = Instant::now();

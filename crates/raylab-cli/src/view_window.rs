@@ -179,6 +179,8 @@ fn render_thread(session: &Session, shared: &Shared, proxy: EventLoopProxy<Frame
 /// Renders the latest view whenever it is not done, and hands over frames one at a time.
 fn render_loop(session: &Session, shared: &Shared, proxy: &EventLoopProxy<FrameReady>) {
     let mut renderer = FrameRenderer::new(Some(MOVING_BUDGET), session.max_spp);
+    renderer.path_settings = session.path_settings;
+    renderer.sample_settings = session.sample_settings;
     loop {
         let (view, mut words) = {
             let mut state = shared.lock();
@@ -553,7 +555,7 @@ impl ApplicationHandler<FrameReady> for App<'_> {
                 if self.dragging
                     && let Some(last) = self.cursor
                 {
-                    let focal = self.view.focal_per_width * self.view.width as f32;
+                    let focal = self.view.focal_length_px(self.view.width);
                     let now = self.now();
                     self.controller.drag(
                         (position.x - last.x) as f32,

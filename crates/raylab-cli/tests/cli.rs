@@ -340,3 +340,105 @@ fn bench_generates_traces_and_reports() {
     assert_eq!(text(&out.stderr).lines().count(), 1);
     assert!(text(&out.stderr).contains("shadow.rays"), "{}", text(&out.stderr));
 }
+
+fn scene_file(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(name).display().to_string()
+}
+
+#[test]
+fn scene_files_render_path_traced_radiance_to_exr_and_pfm() {
+    let dir = tempfile::tempdir().unwrap();
+    let cbox = scene_file("cornell-mitsuba.toml");
+    for name in ["cbox.exr", "cbox.pfm"] {
+        let out =
+            raylab(dir.path(), &["render", &cbox, "--size", "32x32", "--spp", "4", "-o", name]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let stdout = text(&out.stdout);
+        assert!(stdout.contains("path tracing, max depth 8, 4 samples per pixel"), "{stdout}");
+        assert!(stdout.contains("M samples/s") && stdout.contains("mean radiance ("), "{stdout}");
+        let film = raylab::image_io::load_film(&dir.path().join(name)).unwrap();
+        assert_eq!((film.width(), film.height()), (32, 32));
+        // Linear radiance: the light's pixels are far above 1.
+        assert!(film.pixels().iter().any(|p| p.x > 10.0), "{name}");
+    }
+    // Seeds change the noise, and the same seed gives the same file.
+    let render = |seed: &str, name: &str| {
+        let args = ["render", &cbox, "--size", "16x16", "--spp", "2", "--seed", seed, "-o", name];
+        assert!(raylab(dir.path(), &args).status.success());
+        std::fs::read(dir.path().join(name)).unwrap()
+    };
+    assert_eq!(render("7", "a.pfm"), render("7", "b.pfm"));
+    assert_ne!(render("7", "a.pfm"), render("8", "c.pfm"));
+    // The other integrators and the display options.
+    for args in [
+        &["--integrator", "albedo"][..],
+        &["--integrator", "normals"],
+        &["--integrator", "depth"],
+        &["--tonemap", "aces", "--exposure", "1"],
+        &["--filter", "gaussian", "--sampler", "independent", "--max-depth", "2"],
+        &["--aperture", "0.1", "--focus-distance", "4"],
+    ] {
+        let mut all = vec!["render", &cbox, "--size", "16x16", "--spp", "2", "-o", "x.png"];
+        all.extend_from_slice(args);
+        let out = raylab(dir.path(), &all);
+        assert!(out.status.success(), "{args:?}: {}", text(&out.stderr));
+    }
+    // Every shipped scene loads and renders.
+    for name in ["cornell-lab.toml", "showcase.toml"] {
+        let out = raylab(
+            dir.path(),
+            &["render", &scene_file(name), "--size", "8x6", "--spp", "1", "-o", "s.png"],
+        );
+        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+    }
+}
+
+#[test]
+fn a_bad_scene_file_is_one_line_with_its_place_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bad.toml"), "[camera]\nposition = [0, 0, 1]\nfov = 500\n")
+        .unwrap();
+    std::fs::write(
+        dir.path().join("typo.toml"),
+        "[[shapes]]\ntype = \"sphere\"\nmaterial = \"gold\"\n",
+    )
+    .unwrap();
+    for (file, expected) in [
+        ("bad.toml", "bad.toml:1:1: fov 500"),
+        ("typo.toml", "typo.toml:3:12: no material named 'gold'"),
+    ] {
+        let out = raylab(dir.path(), &["render", file, "-o", "out.exr"]);
+        assert_eq!(out.status.code(), Some(1), "{file}");
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains(expected), "{stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "one line: {stderr}");
+        assert!(!dir.path().join("out.exr").exists());
+    }
+}
+
+#[test]
+fn view_headless_path_traces_a_scene_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let cbox = scene_file("cornell-mitsuba.toml");
+    let args = [
+        "view",
+        &cbox,
+        "--headless",
+        "--still",
+        "--frames",
+        "3",
+        "--size",
+        "24x24",
+        "--screenshot",
+        "v.png",
+    ];
+    let out = raylab(dir.path(), &args);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("frame 3: "), "{}", text(&out.stdout));
+    // The screenshot is the sRGB picture of `render --spp 3`.
+    let rendered =
+        raylab(dir.path(), &["render", &cbox, "--size", "24x24", "--spp", "3", "-o", "r.png"]);
+    assert!(rendered.status.success());
+    let load = |name: &str| image::open(dir.path().join(name)).unwrap().to_rgb8();
+    assert!(load("v.png") == load("r.png"));
+}

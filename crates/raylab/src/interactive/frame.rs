@@ -18,7 +18,7 @@ use crate::film::{Display, FilmError};
 use crate::integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
 use crate::light::LightSet;
 use crate::ray::Ray;
-use crate::render::Accumulator;
+use crate::render::{Accumulator, SampleSettings};
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 
@@ -84,9 +84,12 @@ pub struct View {
     pub width: u32,
     /// Window height in pixels, at least 1.
     pub height: u32,
-    /// The focal length as a fraction of the width: 1 is the lab's `f = W` (53.13°). Kept as a
-    /// ratio so that the field of view stays when the window is resized.
-    pub focal_per_width: f32,
+    /// The focal length in pixels for an image `focal_width` pixels wide: the lab's `f = W` is
+    /// `(W, W)`. Other widths scale it, so the field of view stays when the window is resized;
+    /// at `focal_width` itself it is exact, so a still view is the render of the same camera.
+    pub focal: (u32, f32),
+    /// The thin lens: radius and focus distance (a radius of 0 is a pinhole).
+    pub lens: (f32, f32),
 }
 
 impl View {
@@ -100,12 +103,18 @@ impl View {
             position: self.pose.position,
             yaw: self.pose.yaw,
             pitch: self.pose.pitch,
-            focal_length_px: self.focal_per_width * width as f32,
+            focal_length_px: self.focal_length_px(width),
             width,
             height,
-            aperture_radius: 0.0,
-            focus_distance: 1.0,
+            aperture_radius: self.lens.0,
+            focus_distance: self.lens.1,
         }
+    }
+
+    /// The focal length in pixels for an image `width` pixels wide.
+    pub fn focal_length_px(&self, width: u32) -> f32 {
+        let (base_width, focal) = self.focal;
+        if width == base_width { focal } else { focal / base_width.max(1) as f32 * width as f32 }
     }
 }
 
@@ -157,6 +166,10 @@ pub struct FrameRenderer {
     pub budget: Option<Duration>,
     /// A still picture stops refining at this many samples per pixel.
     pub max_samples: u32,
+    /// The path tracer's settings (the scene file's max depth).
+    pub path_settings: PathSettings,
+    /// How pictures draw their samples (the scene file's seed, sampler and filter).
+    pub sample_settings: SampleSettings,
 }
 
 impl FrameRenderer {
@@ -169,6 +182,8 @@ impl FrameRenderer {
             lights: None,
             budget,
             max_samples: max_samples.max(1),
+            path_settings: PathSettings::default(),
+            sample_settings: SampleSettings::default(),
         }
     }
 
@@ -205,7 +220,8 @@ impl FrameRenderer {
                 }
                 _ => {
                     self.picture = None;
-                    let picture = Accumulator::new(camera.width, camera.height)?;
+                    let mut picture = Accumulator::new(camera.width, camera.height)?;
+                    picture.settings = self.sample_settings;
                     self.picture = Some((*view, scale, picture));
                 }
             }
@@ -228,7 +244,7 @@ impl FrameRenderer {
                 let lights = &self.lights.as_ref().expect("made above").1;
                 picture.add_sample(
                     &camera,
-                    &Path::with_lights(scene, accel, lights, PathSettings::default()),
+                    &Path::with_lights(scene, accel, lights, self.path_settings),
                 );
             }
             ViewMode::Albedo => {
@@ -334,7 +350,8 @@ mod tests {
             mode: ViewMode::Lab(Stage::Ambient),
             width,
             height,
-            focal_per_width: 1.0,
+            focal: (width, width as f32),
+            lens: (0.0, 1.0),
         }
     }
 
