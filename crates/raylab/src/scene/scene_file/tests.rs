@@ -237,3 +237,21 @@ fn material_mistakes_are_named() {
         assert!(e.starts_with("test.toml:") && e.contains(message), "{text:?}: {e}");
     }
 }
+
+#[test]
+fn the_documented_example_parses() {
+    let doc = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md"),
+    )
+    .unwrap();
+    let example = doc
+        .split("## A complete example")
+        .nth(1)
+        .and_then(|rest| rest.split("```toml\n").nth(1))
+        .and_then(|rest| rest.split("```").next())
+        .expect("docs/scene-format.md has its example");
+    let scene = parse(example).unwrap();
+    assert_eq!(scene.settings.size, Some((640, 480)));
+    assert!(scene.has_area_lights());
+    assert_eq!(scene.geometry.len(), 2 + 9024 + 2);
+}
