@@ -2,7 +2,8 @@
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
@@ -63,6 +64,11 @@ pub struct RenderArgs {
     #[arg(long, value_name = "NAME", value_parser = ["box", "gaussian"])]
     filter: Option<String>,
 
+    /// Render progressively for this long, then write the picture with the samples per pixel
+    /// reached (at least one; at most --spp when it is given).
+    #[arg(long, value_name = "SECONDS", value_parser = args::positive_f32)]
+    time_limit: Option<f32>,
+
     /// Brightness of .png/.ppm output in stops: radiance is multiplied by 2^EV.
     #[arg(long, value_name = "EV", default_value = "0", value_parser = args::finite_f32)]
     exposure: f32,
@@ -87,7 +93,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .clone()
         .or_else(|| settings.integrator.clone())
         .unwrap_or_else(|| if scene.has_area_lights() { "path".into() } else { "lab".into() });
-    let spp = args.spp.or(settings.spp).unwrap_or(if integrator_name == "lab" { 1 } else { 16 });
+    let spp = match (args.time_limit, args.spp) {
+        // With a time limit, the passes stop at the time (or at an --spp asked for).
+        (Some(_), None) => MAX_SPP,
+        _ => args.spp.or(settings.spp).unwrap_or(if integrator_name == "lab" { 1 } else { 16 }),
+    };
+    let deadline = args.time_limit.map(Duration::from_secs_f32);
     let max_depth = match args.max_depth {
         Some(-1) => None,
         Some(d) => Some(d as u32),
@@ -133,16 +144,19 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             &aov
         }
     };
-    let progress = Progress::new(height as u64 * spp as u64, width as u64);
+    let progress = Progress::new(height as u64 * spp as u64, width as u64, deadline);
     let start = Instant::now();
-    let film = pool.install(|| -> Result<Film> {
+    let (film, spp) = pool.install(|| -> Result<(Film, u32)> {
         let mut accumulator = Accumulator::new(width, height)?;
         accumulator.settings = sample_settings;
         for _ in 0..spp {
             accumulator
                 .add_sample_with_progress(camera, integrator, &|rows| progress.advance(rows));
+            if deadline.is_some_and(|limit| start.elapsed() >= limit) {
+                break;
+            }
         }
-        Ok(accumulator.mean()?)
+        Ok((accumulator.mean()?, accumulator.samples()))
     })?;
     let elapsed = start.elapsed();
     progress.finish();
@@ -195,25 +209,34 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 }
 
 /// A progress bar that appears only on a terminal and only once a render has taken a while.
+/// It counts rows rendered, or, with a time limit, milliseconds of it; either way it shows the
+/// samples per second and the time left.
 struct Progress {
     bar: ProgressBar,
     start: Instant,
     on_terminal: bool,
     shown: AtomicBool,
+    rows_done: Arc<AtomicU64>,
+    deadline: Option<Duration>,
 }
 
 impl Progress {
-    /// A bar over `rows` rows of `width` pixels (rows of every pass).
-    fn new(rows: u64, width: u64) -> Self {
-        let bar = ProgressBar::with_draw_target(Some(rows), ProgressDrawTarget::hidden());
+    /// A bar over `rows` rows of `width` pixels (rows of every pass), or over the time limit.
+    fn new(rows: u64, width: u64, deadline: Option<Duration>) -> Self {
+        let length = deadline.map_or(rows, |limit| limit.as_millis().max(1) as u64);
+        let bar = ProgressBar::with_draw_target(Some(length), ProgressDrawTarget::hidden());
+        let rows_done = Arc::new(AtomicU64::new(0));
+        let start = Instant::now();
+        let counted = Arc::clone(&rows_done);
         let style = ProgressStyle::with_template(
             "{bar:40} {percent}%, {samples_per_second} samples/s, {elapsed} elapsed, ~{eta} left",
         )
         .expect("the template is valid")
         .with_key(
             "samples_per_second",
-            move |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
-                let rate = state.per_sec() * width as f64;
+            move |_: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let samples = counted.load(Ordering::Relaxed) as f64 * width as f64;
+                let rate = samples / start.elapsed().as_secs_f64().max(1e-9);
                 let _ = if rate >= 1e6 {
                     write!(w, "{:.2} M", rate / 1e6)
                 } else {
@@ -224,14 +247,20 @@ impl Progress {
         bar.set_style(style);
         Progress {
             bar,
-            start: Instant::now(),
+            start,
             on_terminal: std::io::stderr().is_terminal(),
             shown: AtomicBool::new(false),
+            rows_done,
+            deadline,
         }
     }
 
     fn advance(&self, rows: u32) {
-        self.bar.inc(rows as u64);
+        self.rows_done.fetch_add(rows as u64, Ordering::Relaxed);
+        match self.deadline {
+            Some(_) => self.bar.set_position(self.start.elapsed().as_millis() as u64),
+            None => self.bar.inc(rows as u64),
+        }
         if self.on_terminal
             && self.start.elapsed() > PROGRESS_AFTER
             && !self.shown.swap(true, Ordering::Relaxed)

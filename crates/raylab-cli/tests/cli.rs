@@ -442,3 +442,31 @@ fn view_headless_path_traces_a_scene_file() {
     let load = |name: &str| image::open(dir.path().join(name)).unwrap().to_rgb8();
     assert!(load("v.png") == load("r.png"));
 }
+
+#[test]
+fn a_time_limit_renders_progressively_until_then() {
+    let dir = tempfile::tempdir().unwrap();
+    let cbox = scene_file("cornell-mitsuba.toml");
+    let start = std::time::Instant::now();
+    let out = raylab(
+        dir.path(),
+        &["render", &cbox, "--size", "16x16", "--time-limit", "0.3", "-o", "t.pfm"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let spp: u32 = stdout
+        .split(" samples per pixel")
+        .next()
+        .and_then(|s| s.rsplit(", ").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    // Many passes of a tiny image fit in 0.3 s, and the whole run is not much longer.
+    assert!(spp > 4, "{stdout}");
+    assert!(start.elapsed().as_secs_f64() < 30.0);
+    // With --spp, at most that many.
+    let out = raylab(
+        dir.path(),
+        &["render", &cbox, "--size", "8x8", "--time-limit", "30", "--spp", "3", "-o", "u.pfm"],
+    );
+    assert!(text(&out.stdout).contains(", 3 samples per pixel"), "{}", text(&out.stdout));
+}
