@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::film::{Display, ToneMap};
@@ -64,6 +64,11 @@ pub struct RenderArgs {
     #[arg(long, value_name = "NAME", value_parser = ["box", "gaussian"])]
     filter: Option<String>,
 
+    /// Extra layers for .exr output, comma-separated: albedo, normals, depth (the first hit's,
+    /// averaged over the same samples as the image).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = ["albedo", "normals", "depth"])]
+    aov: Vec<String>,
+
     /// Render progressively for this long, then write the picture with the samples per pixel
     /// reached (at least one; at most --spp when it is given).
     #[arg(long, value_name = "SECONDS", value_parser = args::positive_f32)]
@@ -87,6 +92,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let Setup { scene, camera, threads } = &setup;
     let (width, height) = (camera.width, camera.height);
     let format = image_io::check_writable(&args.output)?;
+    if !args.aov.is_empty() && format != image_io::ImageFormat::Exr {
+        bail!(
+            "--aov writes extra layers into an OpenEXR file: the output must end in .exr, not {}",
+            args.output.display()
+        );
+    }
     let settings = &scene.settings;
     let integrator_name = args
         .integrator
@@ -158,6 +169,25 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         Ok((accumulator.mean()?, accumulator.samples()))
     })?;
+    // The extra layers, over the same samples.
+    let mut layers = Vec::new();
+    for name in &args.aov {
+        let kind = match name.as_str() {
+            "albedo" => AovKind::Albedo,
+            "normals" => AovKind::Normals,
+            _ => AovKind::Depth,
+        };
+        let aov = Aov::new(scene, &accel, kind);
+        let layer = pool.install(|| -> Result<Film> {
+            let mut accumulator = Accumulator::new(width, height)?;
+            accumulator.settings = sample_settings;
+            for _ in 0..spp {
+                accumulator.add_sample(camera, &aov);
+            }
+            Ok(accumulator.mean()?)
+        })?;
+        layers.push((name.as_str(), layer));
+    }
     let elapsed = start.elapsed();
     progress.finish();
 
@@ -166,7 +196,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     } else {
         Display { exposure: args.exposure, tone_map: args.tonemap, srgb: true }
     };
-    image_io::save_film(&args.output, &film, &display)?;
+    if layers.is_empty() {
+        image_io::save_film(&args.output, &film, &display)?;
+    } else {
+        let layers: Vec<(&str, &Film)> = layers.iter().map(|(name, film)| (*name, film)).collect();
+        image_io::save_exr_layers(&args.output, &film, &layers)?;
+    }
     let samples = width as f64 * height as f64 * spp as f64;
     let what = match integrator_name.as_str() {
         "lab" => format!("stage {stage}"),

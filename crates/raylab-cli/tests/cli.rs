@@ -369,6 +369,31 @@ fn scene_files_render_path_traced_radiance_to_exr_and_pfm() {
     };
     assert_eq!(render("7", "a.pfm"), render("7", "b.pfm"));
     assert_ne!(render("7", "a.pfm"), render("8", "c.pfm"));
+    // AOVs as extra EXR layers, averaged over the same samples.
+    let args = [
+        "render",
+        &cbox,
+        "--size",
+        "16x16",
+        "--spp",
+        "2",
+        "--aov",
+        "albedo,depth",
+        "-o",
+        "aov.exr",
+    ];
+    assert!(raylab(dir.path(), &args).status.success());
+    let channels = raylab::image_io::load_exr_channels(&dir.path().join("aov.exr")).unwrap();
+    let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["B", "G", "R", "albedo.B", "albedo.G", "albedo.R", "depth.Z"]);
+    let depth = &channels[6].1;
+    // The box's back wall is 4.9 from the camera; the centre pixel sees the tall box, nearer.
+    assert!(
+        depth.iter().all(|&d| (0.0..=6.0).contains(&d)) && depth[8 * 16 + 8] > 3.0,
+        "{depth:?}"
+    );
+    let out = raylab(dir.path(), &["render", &cbox, "--aov", "albedo", "-o", "aov.png"]);
+    assert!(text(&out.stderr).contains("must end in .exr"), "{}", text(&out.stderr));
     // The other integrators and the display options.
     for args in [
         &["--integrator", "albedo"][..],

@@ -224,6 +224,71 @@ pub fn save_film(path: &Path, film: &Film, display: &Display) -> Result<(), Imag
     }
 }
 
+/// Writes an OpenEXR file with the beauty image as its `R`, `G`, `B` channels and each extra
+/// film as channels `NAME.R`, `NAME.G`, `NAME.B` (the layer convention of Nuke and Blender), or
+/// `NAME.Z` alone for a film named `depth`. Atomic, as every write.
+///
+/// # Panics
+/// If a film's size is not the beauty's.
+pub fn save_exr_layers(
+    path: &Path,
+    beauty: &Film,
+    layers: &[(&str, &Film)],
+) -> Result<(), ImageIoError> {
+    use exr::prelude::*;
+    let (width, height) = (beauty.width() as usize, beauty.height() as usize);
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
+    let mut add = |name: String, film: &Film, axis: usize| {
+        assert_eq!(
+            (film.width(), film.height()),
+            (beauty.width(), beauty.height()),
+            "{name}: a layer of the image's size"
+        );
+        let samples = film.pixels().iter().map(|p| p[axis]).collect();
+        channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(samples)));
+    };
+    for (axis, channel) in ["R", "G", "B"].into_iter().enumerate() {
+        add(channel.to_string(), beauty, axis);
+    }
+    for (name, film) in layers {
+        if *name == "depth" {
+            add("depth.Z".to_string(), film, 0);
+        } else {
+            for (axis, channel) in ["R", "G", "B"].into_iter().enumerate() {
+                add(format!("{name}.{channel}"), film, axis);
+            }
+        }
+    }
+    let layer = Layer::new(
+        (width, height),
+        LayerAttributes::named("rgb"),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    write_atomically(path, |out| {
+        Image::from_layer(layer).write().to_buffered(out).map_err(|e| ImageIoError::Float {
+            action: "write",
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
+    })
+}
+
+/// Reads every channel of an OpenEXR file's first layer by name, row by row from the top.
+pub fn load_exr_channels(path: &Path) -> Result<Vec<(String, Vec<f32>)>, ImageIoError> {
+    use exr::prelude::*;
+    let error =
+        |message: String| ImageIoError::Float { action: "read", path: path.to_path_buf(), message };
+    let image = read_all_flat_layers_from_file(path).map_err(|e| error(e.to_string()))?;
+    let layer = image.layer_data.first().ok_or_else(|| error("no layer".into()))?;
+    Ok(layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect())
+}
+
 /// Reads a float image, `.pfm` or `.exr` (its first RGB layer), as a film.
 pub fn load_film(path: &Path) -> Result<Film, ImageIoError> {
     let error =
@@ -434,6 +499,25 @@ mod tests {
         assert!(message.contains("bad.pfm") && message.contains("expected 144 bytes"), "{message}");
         fs::write(&bad, b"Pf\n4 3\n-1.0\n").unwrap();
         assert!(load_film(&bad).unwrap_err().to_string().contains("colour PFM"));
+    }
+
+    #[test]
+    fn exr_layers_keep_every_channel_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let film =
+            |v: f32| Film::from_pixels(3, 2, (0..6).map(|i| Vec3::new(v, i as f32, -v)).collect());
+        let path = dir.path().join("aov.exr");
+        save_exr_layers(&path, &film(1.0), &[("albedo", &film(2.0)), ("depth", &film(3.0))])
+            .unwrap();
+        let channels = load_exr_channels(&path).unwrap();
+        let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["B", "G", "R", "albedo.B", "albedo.G", "albedo.R", "depth.Z"]);
+        let channel = |name: &str| &channels.iter().find(|(n, _)| n == name).unwrap().1;
+        assert_eq!(channel("albedo.R"), &vec![2.0; 6]);
+        assert_eq!(channel("G"), &(0..6).map(|i| i as f32).collect::<Vec<_>>());
+        assert_eq!(channel("depth.Z"), &vec![3.0; 6]);
+        // The beauty reads back as the film.
+        assert_eq!(load_film(&path).unwrap(), film(1.0));
     }
 
     #[test]
