@@ -12,7 +12,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::film::{Display, ToneMap};
 use raylab::{
     Accumulator, Aov, AovKind, Bvh, Film, Filter, Integrator, Lab, Path, PathSettings,
-    SampleSettings, SamplerKind, image_io,
+    SampleSettings, SamplerKind, TriangleSampling, image_io,
 };
 
 use raylab::camera::tidy;
@@ -50,6 +50,11 @@ pub struct RenderArgs {
     /// light, ...; -1: unlimited) [default: the scene file's, else unlimited].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(i64).range(-1..=65536))]
     max_depth: Option<i64>,
+
+    /// How points on area lights are sampled: area (uniformly, as Mitsuba) or solid-angle (less
+    /// noise from large lights close by).
+    #[arg(long, value_name = "HOW", default_value = "area")]
+    light_sampling: TriangleSampling,
 
     /// Seed of every random number: the same seed, scene and samples give the same pixels on
     /// any number of threads [default: the scene file's, else 0].
@@ -142,7 +147,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             &lab
         }
         "path" => {
-            path = Path::new(scene, &accel, PathSettings { max_depth, ..PathSettings::default() });
+            let settings = PathSettings {
+                max_depth,
+                light_sampling: args.light_sampling,
+                ..PathSettings::default()
+            };
+            path = Path::new(scene, &accel, settings);
             &path
         }
         other => {

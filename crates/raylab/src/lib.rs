@@ -50,7 +50,7 @@ pub use camera::{Camera, RayGenerator};
 pub use film::{Film, FilmError};
 pub use geometry::{Geometry, SurfaceInteraction};
 pub use integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
-pub use light::{Light, LightSet, PointLight};
+pub use light::{Light, LightSet, PointLight, TriangleSampling};
 pub use material::{Bsdf, Material};
 pub use mesh::{Mesh, MeshMaterial};
 pub use ray::{Ray, SurfacePoint};

@@ -11,7 +11,8 @@ use glam::{Vec2, Vec3};
 use crate::geometry::SurfaceInteraction;
 use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{
-    DiscreteDistribution, square_to_uniform_sphere, square_to_uniform_triangle, uniform_sphere_pdf,
+    DiscreteDistribution, sample_spherical_triangle, spherical_triangle_area,
+    square_to_uniform_sphere, square_to_uniform_triangle, uniform_sphere_pdf,
 };
 use crate::scene::Scene;
 
@@ -78,7 +79,35 @@ pub struct LightSet {
     triangle_light: Vec<u32>,
     /// The environment's radiance and its index, if the scene has one.
     environment: Option<(Vec3, u32)>,
+    /// How points on triangle lights are chosen.
+    triangle_sampling: TriangleSampling,
 }
+
+/// How points on triangle lights are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TriangleSampling {
+    /// Uniformly by area (Mitsuba's choice): simple, noisy for large lights close by.
+    #[default]
+    Area,
+    /// Uniformly in the solid angle the triangle subtends (Arvo 1995), where that is neither
+    /// tiny nor nearly a hemisphere (PBR 4th ed.'s bounds); by area elsewhere.
+    SolidAngle,
+}
+
+impl std::str::FromStr for TriangleSampling {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "area" => Ok(TriangleSampling::Area),
+            "solid-angle" => Ok(TriangleSampling::SolidAngle),
+            _ => Err(format!("unknown light sampling '{s}': expected area or solid-angle")),
+        }
+    }
+}
+
+/// Solid angles within which triangle lights are sampled by solid angle (PBR 4th ed.,
+/// `MinSphericalSampleArea` and `MaxSphericalSampleArea`).
+const SOLID_ANGLE_SAMPLING: std::ops::Range<f32> = 3e-4..6.22;
 
 #[derive(Clone, Debug)]
 enum SampledLight {
@@ -154,7 +183,24 @@ impl LightSet {
             distribution: DiscreteDistribution::new(&powers),
             triangle_light,
             environment,
+            triangle_sampling: TriangleSampling::Area,
         }
+    }
+
+    /// The same lights, with triangle lights sampled as `sampling` says.
+    pub fn with_triangle_sampling(mut self, sampling: TriangleSampling) -> LightSet {
+        self.triangle_sampling = sampling;
+        self
+    }
+
+    /// The solid angle of a triangle light seen from `p`, when it is sampled by solid angle.
+    #[inline]
+    fn solid_angle(&self, corners: [Vec3; 3], p: Vec3) -> Option<f32> {
+        if self.triangle_sampling == TriangleSampling::Area {
+            return None;
+        }
+        let omega = spherical_triangle_area(corners, p);
+        SOLID_ANGLE_SAMPLING.contains(&omega).then_some(omega)
     }
 
     /// Moves the first point light to `position` (as `raylab view` moves the light); nothing
@@ -197,8 +243,13 @@ impl LightSet {
                     shadow_ray: point.spawn_ray_to(position),
                 })
             }
-            SampledLight::Triangle { corners: [v0, v1, v2], normal, area, radiance } => {
-                let [b0, b1, b2] = square_to_uniform_triangle(u);
+            SampledLight::Triangle { corners, normal, area, radiance } => {
+                let [v0, v1, v2] = corners;
+                let solid_angle = self.solid_angle(corners, point.p);
+                let ([b0, b1, b2], solid_angle_pdf) = match solid_angle {
+                    Some(_) => sample_spherical_triangle(corners, point.p, u)?,
+                    None => (square_to_uniform_triangle(u), 0.0),
+                };
                 let target = b0 * v0 + b1 * v1 + b2 * v2;
                 let to_light = target - point.p;
                 let distance_squared = to_light.length_squared();
@@ -210,10 +261,14 @@ impl LightSet {
                 }
                 let mut shadow_ray = point.spawn_ray_to(target);
                 shadow_ray.t_max = SHADOW_RAY_LENGTH;
+                let pdf = match solid_angle {
+                    Some(_) => solid_angle_pdf,
+                    None => distance_squared / (cos_light * area),
+                };
                 Some(LightSample {
                     direction,
                     radiance,
-                    pdf: selection * distance_squared / (cos_light * area),
+                    pdf: selection * pdf,
                     delta: false,
                     shadow_ray,
                 })
@@ -240,7 +295,8 @@ impl LightSet {
         if light == u32::MAX {
             return (Vec3::ZERO, 0.0);
         }
-        let SampledLight::Triangle { normal, area, radiance, .. } = self.lights[light as usize]
+        let SampledLight::Triangle { corners, normal, area, radiance } =
+            self.lights[light as usize]
         else {
             unreachable!("triangle_light indexes triangle lights");
         };
@@ -251,7 +307,11 @@ impl LightSet {
             return (Vec3::ZERO, 0.0);
         }
         let selection = self.distribution.as_ref().map_or(0.0, |d| d.pmf(light as usize));
-        (radiance, selection * distance_squared / (cos_light * area))
+        let pdf = match self.solid_angle(corners, origin) {
+            Some(omega) => 1.0 / omega,
+            None => distance_squared / (cos_light * area),
+        };
+        (radiance, selection * pdf)
     }
 
     /// The environment's radiance along a ray that leaves the scene, and the density with which

@@ -5,7 +5,7 @@
 use glam::Vec3;
 use raylab::{
     Accumulator, BruteForce, Camera, Geometry, Material, Path, PathSettings, SampleSettings,
-    SamplerKind, Scene,
+    SamplerKind, Scene, TriangleSampling,
 };
 
 /// A closed UV sphere of radius 1 about the origin whose triangles face inward (their
@@ -81,6 +81,16 @@ fn a_closed_emitting_sphere_shines_le_over_one_minus_a() {
         let scene = furnace(albedo, emission);
         let expected = emission / (1.0 - albedo);
         let (mean, error) = mean_radiance(&scene, PathSettings::default(), 16, SamplerKind::Sobol);
+        // The same by solid-angle sampling of the emitting triangles.
+        let solid = PathSettings {
+            light_sampling: TriangleSampling::SolidAngle,
+            ..PathSettings::default()
+        };
+        let (mean_solid, error_solid) = mean_radiance(&scene, solid, 16, SamplerKind::Sobol);
+        assert!(
+            (mean_solid.x - expected).abs() <= (4.0 * error_solid).max(0.01 * expected),
+            "solid angle: a = {albedo}: {mean_solid} vs {expected}"
+        );
         // Every channel is the same; within four standard errors and 1 %.
         assert!(mean.max_element() - mean.min_element() < 1e-6, "{mean}");
         assert!(

@@ -12,7 +12,7 @@ use raylab::film::Display;
 use raylab::image_compare::save_failure_images;
 use raylab::{
     Accumulator, Bvh, Film, Path as PathTracer, PathSettings, SampleSettings, SamplerKind, Scene,
-    image_io,
+    TriangleSampling, image_io,
 };
 
 fn repository() -> PathBuf {
@@ -32,10 +32,20 @@ fn reference() -> Film {
 
 /// Renders the scene at 64×64 with its own camera and max depth.
 fn render(scene: &Scene, spp: u32, settings: SampleSettings) -> Film {
+    render_with(scene, spp, settings, TriangleSampling::Area)
+}
+
+fn render_with(
+    scene: &Scene,
+    spp: u32,
+    settings: SampleSettings,
+    light_sampling: TriangleSampling,
+) -> Film {
     let camera = scene.camera.unwrap().camera(64, 64);
     let bvh = Bvh::new(&scene.vertices());
     let max_depth = scene.settings.max_depth.unwrap();
-    let path = PathTracer::new(scene, &bvh, PathSettings { max_depth, ..PathSettings::default() });
+    let path_settings = PathSettings { max_depth, light_sampling, ..PathSettings::default() };
+    let path = PathTracer::new(scene, &bvh, path_settings);
     let mut accumulator = Accumulator::new(64, 64).unwrap();
     accumulator.settings = settings;
     for _ in 0..spp {
@@ -82,6 +92,24 @@ fn the_cornell_box_matches_mitsuba() {
             format!("mean {ours} vs {theirs} (relative {relative}), RMSE {error}"),
         );
     }
+}
+
+#[test]
+fn solid_angle_light_sampling_converges_to_the_same_image() {
+    let scene = scene();
+    let reference = reference();
+    let settings = SampleSettings { seed: 6, ..SampleSettings::default() };
+    let area = render_with(&scene, 128, settings, TriangleSampling::Area);
+    let solid = render_with(&scene, 128, settings, TriangleSampling::SolidAngle);
+    let relative = (mean(&solid) - mean(&reference)) / mean(&reference);
+    let relative_area = (mean(&area) - mean(&reference)) / mean(&reference);
+    let (e_area, e_solid) = (rmse(&area, &reference), rmse(&solid, &reference));
+    eprintln!(
+        "128 spp: area sampling RMSE {e_area:.5}, solid angle {e_solid:.5}, mean {relative:?} (area {relative_area:?})"
+    );
+    assert!(relative.abs().max_element() < 0.005, "{relative}");
+    // Not noisier than area sampling (the light is small here, so not much better either).
+    assert!(e_solid < 1.1 * e_area, "solid angle {e_solid} vs area {e_area}");
 }
 
 #[test]

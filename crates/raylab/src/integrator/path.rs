@@ -8,6 +8,8 @@
 //!   surfaces are both rendered with low noise. Delta lights and delta BSDF lobes get weight 1.
 //! - `max_depth` counts path segments including the camera's: 1 shows only emitters seen directly,
 //!   2 adds direct lighting, and so on; `None` is unlimited.
+//! - Points on area lights are sampled uniformly by area, as Mitsuba does, or by solid angle
+//!   (`light_sampling`), which is less noisy for large lights close to what they light.
 //! - Russian roulette from `rr_depth` (5) vertices on: a path continues with probability
 //!   `q = min(max(throughput)·η², 0.95)` and its throughput is divided by `q`.
 //!
@@ -21,7 +23,7 @@ use glam::{Vec2, Vec3};
 use super::Integrator;
 use crate::accel::Accelerator;
 use crate::geometry::SurfaceInteraction;
-use crate::light::LightSet;
+use crate::light::{LightSet, TriangleSampling};
 use crate::ray::Ray;
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
 use crate::scene::Scene;
@@ -33,12 +35,14 @@ pub struct PathSettings {
     pub max_depth: Option<u32>,
     /// The depth from which Russian roulette may end paths.
     pub rr_depth: u32,
+    /// How points on triangle lights are sampled.
+    pub light_sampling: TriangleSampling,
 }
 
 impl Default for PathSettings {
     /// Unlimited depth (Mitsuba's default, `max_depth = -1`), roulette from depth 5.
     fn default() -> Self {
-        PathSettings { max_depth: None, rr_depth: 5 }
+        PathSettings { max_depth: None, rr_depth: 5, light_sampling: TriangleSampling::Area }
     }
 }
 
@@ -53,7 +57,8 @@ pub struct Path<'a, A: ?Sized> {
 impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// A path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
     pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
-        Path { scene, accel, lights: Cow::Owned(LightSet::new(scene)), settings }
+        let lights = LightSet::new(scene).with_triangle_sampling(settings.light_sampling);
+        Path { scene, accel, lights: Cow::Owned(lights), settings }
     }
 
     /// A path tracer with lights made before (`raylab view` keeps them from frame to frame).

@@ -154,6 +154,81 @@ pub fn uniform_triangle_pdf(area: f32) -> f32 {
     if area > 0.0 { 1.0 / area } else { 0.0 }
 }
 
+/// A direction from `p` toward the triangle `v`, uniform in the solid angle the triangle
+/// subtends (Arvo, "Stratified Sampling of Spherical Triangles", SIGGRAPH 1995; in the form of
+/// PBR 4th ed. §6.5.4), with the barycentric coordinates of the point it points at and the
+/// density `1/Ω`. `None` when the triangle subtends no solid angle from `p` (degenerate, or `p`
+/// in its plane). Computed in double precision.
+pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, u: Vec2) -> Option<([f32; 3], f32)> {
+    let [v0, v1, v2] = v.map(|v| v.as_dvec3());
+    let p = p.as_dvec3();
+    let (a, b, c) = ((v0 - p).normalize(), (v1 - p).normalize(), (v2 - p).normalize());
+    let (n_ab, n_bc, n_ca) = (a.cross(b), b.cross(c), c.cross(a));
+    if n_ab.length_squared() == 0.0 || n_bc.length_squared() == 0.0 || n_ca.length_squared() == 0.0
+    {
+        return None;
+    }
+    let (n_ab, n_bc, n_ca) = (n_ab.normalize(), n_bc.normalize(), n_ca.normalize());
+    let alpha = angle_between(n_ab, -n_ca);
+    let beta = angle_between(n_bc, -n_ab);
+    let gamma = angle_between(n_ca, -n_bc);
+    let area_plus_pi = alpha + beta + gamma;
+    let area = area_plus_pi - std::f64::consts::PI;
+    if !(area > 0.0) || !area.is_finite() {
+        return None;
+    }
+    // The sub-triangle's area, uniform in [0, area], fixes the point c' on the arc from a to c.
+    let sampled = std::f64::consts::PI + u.x as f64 * area;
+    let (sin_alpha, cos_alpha) = alpha.sin_cos();
+    let (sin_s, cos_s) = sampled.sin_cos();
+    let sin_phi = sin_s * cos_alpha - cos_s * sin_alpha;
+    let cos_phi = cos_s * cos_alpha + sin_s * sin_alpha;
+    let k1 = cos_phi + cos_alpha;
+    let k2 = sin_phi - sin_alpha * a.dot(b);
+    let cos_bp = ((k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha))
+        .clamp(-1.0, 1.0);
+    let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
+    let cp = cos_bp * a + sin_bp * (c - c.dot(a) * a).normalize();
+    // Then a point on the arc from b to c', uniform in the remaining area.
+    let cos_theta = 1.0 - u.y as f64 * (1.0 - cp.dot(b));
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let w = cos_theta * b + sin_theta * (cp - cp.dot(b) * b).normalize();
+    // The barycentric coordinates where the direction meets the triangle.
+    let (e1, e2) = (v1 - v0, v2 - v0);
+    let s1 = w.cross(e2);
+    let divisor = s1.dot(e1);
+    if divisor == 0.0 || !w.is_finite() {
+        return None;
+    }
+    let s = p - v0;
+    let mut b1 = (s.dot(s1) / divisor).clamp(0.0, 1.0);
+    let mut b2 = (w.dot(s.cross(e1)) / divisor).clamp(0.0, 1.0);
+    if b1 + b2 > 1.0 {
+        let sum = b1 + b2;
+        b1 /= sum;
+        b2 /= sum;
+    }
+    Some(([(1.0 - b1 - b2) as f32, b1 as f32, b2 as f32], (1.0 / area) as f32))
+}
+
+/// The solid angle a triangle subtends from `p` (Van Oosterom and Strackee 1983).
+pub fn spherical_triangle_area(v: [Vec3; 3], p: Vec3) -> f32 {
+    let [a, b, c] = v.map(|v| (v.as_dvec3() - p.as_dvec3()).normalize());
+    let numerator = a.dot(b.cross(c)).abs();
+    let denominator = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+    (2.0 * numerator.atan2(denominator)) as f32
+}
+
+/// The angle between two unit vectors, accurate near 0 and π.
+fn angle_between(v1: DVec3, v2: DVec3) -> f64 {
+    if v1.dot(v2) < 0.0 {
+        std::f64::consts::PI - 2.0 * ((v1 + v2).length() / 2.0).min(1.0).asin()
+    } else {
+        2.0 * ((v2 - v1).length() / 2.0).min(1.0).asin()
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Filters.
 

@@ -7,7 +7,7 @@ use super::*;
 
 const ATTEMPTS: usize = 400_000;
 /// Warp tests in this file (for the Šidák correction).
-const TESTS: usize = 6;
+const TESTS: usize = 8;
 
 fn uniform(rng: &mut Pcg32) -> Vec2 {
     Vec2::new(rng.next_f32(), rng.next_f32())
@@ -224,4 +224,45 @@ fn discrete_distributions_pick_by_weight_and_skip_zeros() {
     assert!(DiscreteDistribution::new(&[0.0, 0.0]).is_none());
     assert!(DiscreteDistribution::new(&[]).is_none());
     assert!(DiscreteDistribution::new(&[f32::INFINITY]).is_none());
+}
+
+#[test]
+fn spherical_triangles_are_sampled_uniformly_in_solid_angle() {
+    // Seen from the origin: a large nearby triangle and a small oblique one.
+    let triangles = [
+        [Vec3::new(-1.0, -1.0, 1.0), Vec3::new(2.0, -0.5, 0.6), Vec3::new(0.0, 1.5, 1.2)],
+        [Vec3::new(3.0, 0.2, 0.5), Vec3::new(3.5, 0.9, 0.4), Vec3::new(2.8, 0.6, 1.4)],
+    ];
+    for v in triangles {
+        let omega = spherical_triangle_area(v, Vec3::ZERO);
+        let hits = |w: Vec3| {
+            // Whether the ray from the origin along w meets the triangle (Möller–Trumbore in f64).
+            let [a, b, c] = v.map(|x| x.as_dvec3());
+            let w = w.as_dvec3();
+            let (e1, e2) = (b - a, c - a);
+            let h = w.cross(e2);
+            let det = e1.dot(h);
+            let s = -a;
+            let u = s.dot(h) / det;
+            let q = s.cross(e1);
+            let t_v = w.dot(q) / det;
+            det != 0.0 && u >= 0.0 && t_v >= 0.0 && u + t_v <= 1.0 && e2.dot(q) / det > 0.0
+        };
+        chi2::run(
+            &Sphere,
+            (24, 48),
+            ATTEMPTS,
+            8,
+            |r| {
+                let (b, pdf) = sample_spherical_triangle(v, Vec3::ZERO, uniform(r))?;
+                assert!((pdf - 1.0 / omega).abs() < 1e-3 * pdf, "{pdf} vs {}", 1.0 / omega);
+                Some((b[0] * v[0] + b[1] * v[1] + b[2] * v[2]).normalize())
+            },
+            |w| if hits(w) { 1.0 / omega } else { 0.0 },
+        )
+        .assert_fits("spherical triangle", TESTS, 5e-3);
+    }
+    // In the triangle's plane nothing is subtended.
+    let flat = [Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)];
+    assert!(sample_spherical_triangle(flat, Vec3::ZERO, Vec2::splat(0.5)).is_none());
 }
