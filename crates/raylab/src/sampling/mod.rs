@@ -174,7 +174,7 @@ pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, u: Vec2) -> Option<([f32
     let gamma = angle_between(n_ca, -n_bc);
     let area_plus_pi = alpha + beta + gamma;
     let area = area_plus_pi - std::f64::consts::PI;
-    if !(area > 0.0) || !area.is_finite() {
+    if area.is_nan() || area <= 0.0 || !area.is_finite() {
         return None;
     }
     // The sub-triangle's area, uniform in [0, area], fixes the point c' on the arc from a to c.
