@@ -17,9 +17,7 @@ use toml::Spanned;
 use super::{CameraSettings, FovAxis, RenderSettings, Scene};
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};
-use crate::material::{
-    Bsdf, Conductor, Dielectric, Ggx, METALS, Material, Plastic, RoughConductor, RoughDielectric,
-};
+use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::render::Filter;
 use crate::sampling::SamplerKind;
@@ -110,97 +108,6 @@ struct CameraDoc {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
-enum MaterialDoc {
-    Diffuse {
-        reflectance: [f32; 3],
-    },
-    Conductor {
-        #[serde(flatten)]
-        metal: MetalDoc,
-    },
-    Roughconductor {
-        #[serde(flatten)]
-        metal: MetalDoc,
-        #[serde(flatten)]
-        roughness: RoughnessDoc,
-    },
-    Dielectric {
-        int_ior: Option<IorDoc>,
-        ext_ior: Option<IorDoc>,
-    },
-    Roughdielectric {
-        int_ior: Option<IorDoc>,
-        ext_ior: Option<IorDoc>,
-        #[serde(flatten)]
-        roughness: RoughnessDoc,
-    },
-    Plastic {
-        diffuse_reflectance: Option<[f32; 3]>,
-        specular_reflectance: Option<[f32; 3]>,
-        int_ior: Option<IorDoc>,
-        ext_ior: Option<IorDoc>,
-        #[serde(default)]
-        nonlinear: bool,
-    },
-    Twosided {
-        bsdf: Box<MaterialDoc>,
-    },
-}
-
-#[derive(Deserialize)]
-struct MetalDoc {
-    /// A metal by name (Au, Ag, Cu, Al, none), or `eta` and `k`.
-    material: Option<String>,
-    eta: Option<[f32; 3]>,
-    k: Option<[f32; 3]>,
-    specular_reflectance: Option<[f32; 3]>,
-}
-
-#[derive(Deserialize)]
-struct RoughnessDoc {
-    distribution: Option<String>,
-    alpha: Option<f32>,
-    alpha_u: Option<f32>,
-    alpha_v: Option<f32>,
-}
-
-/// An index of refraction: a number or a name from Mitsuba's table.
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum IorDoc {
-    Number(f32),
-    Name(String),
-}
-
-/// Mitsuba's table of named indices of refraction.
-const NAMED_IORS: [(&str, f32); 23] = [
-    ("vacuum", 1.0),
-    ("helium", 1.000_036),
-    ("hydrogen", 1.000_132),
-    ("air", 1.000_277),
-    ("carbon dioxide", 1.000_45),
-    ("water", 1.333),
-    ("acetone", 1.36),
-    ("ethanol", 1.361),
-    ("carbon tetrachloride", 1.461),
-    ("glycerol", 1.4729),
-    ("benzene", 1.501),
-    ("silicone oil", 1.520_45),
-    ("bromine", 1.661),
-    ("water ice", 1.31),
-    ("fused quartz", 1.458),
-    ("pyrex", 1.47),
-    ("acrylic glass", 1.49),
-    ("polypropylene", 1.49),
-    ("bk7", 1.5046),
-    ("sodium chloride", 1.544),
-    ("amber", 1.55),
-    ("pet", 1.575),
-    ("diamond", 2.419),
-];
-
-#[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ShapeDoc {
     #[serde(rename = "type")]
@@ -275,131 +182,6 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         }
         scene.validate().map_err(|e| (self.at)(None, e.to_string()))?;
         Ok(scene)
-    }
-
-    fn ior(&self, ior: &Option<IorDoc>, default: f32, span: &Range<usize>) -> Result<f32> {
-        match ior {
-            None => Ok(default),
-            Some(IorDoc::Number(n)) => Ok(*n),
-            Some(IorDoc::Name(name)) => {
-                match NAMED_IORS.iter().find(|(n, _)| n == name) {
-                    Some(&(_, value)) => Ok(value),
-                    None => {
-                        let names: Vec<&str> = NAMED_IORS.iter().map(|(n, _)| *n).collect();
-                        self.error(span.clone(), format!("unknown index of refraction '{name}': expected a number or one of {}", names.join(", ")))
-                    }
-                }
-            }
-        }
-    }
-
-    fn conductor(&self, doc: &MetalDoc, span: &Range<usize>) -> Result<Conductor> {
-        let (eta, k) = match (&doc.material, doc.eta, doc.k) {
-            (Some(name), None, None) => match METALS.iter().find(|(n, _, _)| n == name) {
-                Some(&(_, eta, k)) => (eta, k),
-                None => {
-                    let names: Vec<&str> = METALS.iter().map(|(n, _, _)| *n).collect();
-                    return self.error(
-                        span.clone(),
-                        format!(
-                            "unknown metal '{name}': expected one of {} (or eta and k)",
-                            names.join(", ")
-                        ),
-                    );
-                }
-            },
-            (None, Some(eta), Some(k)) => (eta, k),
-            // Mitsuba's default: a perfect mirror.
-            (None, None, None) => ([0.0; 3], [1.0; 3]),
-            _ => {
-                return self
-                    .error(span.clone(), "a conductor takes `material` or both `eta` and `k`");
-            }
-        };
-        Ok(Conductor {
-            eta: Vec3::from_array(eta),
-            k: Vec3::from_array(k),
-            specular_reflectance: Vec3::from_array(doc.specular_reflectance.unwrap_or([1.0; 3])),
-        })
-    }
-
-    fn roughness(&self, doc: &RoughnessDoc, span: &Range<usize>) -> Result<Ggx> {
-        if let Some(name) = &doc.distribution
-            && name != "ggx"
-        {
-            return self
-                .error(span.clone(), format!("distribution '{name}' is not supported: only ggx"));
-        }
-        let (u, v) = match (doc.alpha, doc.alpha_u, doc.alpha_v) {
-            (Some(a), None, None) => (a, a),
-            (None, Some(u), Some(v)) => (u, v),
-            // Mitsuba's default roughness.
-            (None, None, None) => (0.1, 0.1),
-            _ => return self.error(span.clone(), "give `alpha`, or both `alpha_u` and `alpha_v`"),
-        };
-        if !(u > 0.0 && v > 0.0 && u.is_finite() && v.is_finite()) {
-            return self
-                .error(span.clone(), format!("alpha ({u}, {v}) must be finite and above 0"));
-        }
-        Ok(Ggx::new(u, v))
-    }
-
-    fn material(&self, name: &str, doc: &MaterialDoc, span: Range<usize>) -> Result<Material> {
-        let with = |bsdf| Material {
-            name: name.to_string(),
-            bsdf,
-            two_sided: false,
-            emission: Vec3::ZERO,
-        };
-        let material = match doc {
-            MaterialDoc::Diffuse { reflectance } => {
-                Material::diffuse(name, Vec3::from_array(*reflectance))
-            }
-            MaterialDoc::Conductor { metal } => {
-                with(Bsdf::Conductor(self.conductor(metal, &span)?))
-            }
-            MaterialDoc::Roughconductor { metal, roughness } => {
-                with(Bsdf::RoughConductor(RoughConductor {
-                    conductor: self.conductor(metal, &span)?,
-                    distribution: self.roughness(roughness, &span)?,
-                }))
-            }
-            MaterialDoc::Dielectric { int_ior, ext_ior } => {
-                let eta =
-                    self.ior(int_ior, 1.5046, &span)? / self.ior(ext_ior, 1.000_277, &span)?;
-                with(Bsdf::Dielectric(Dielectric { eta }))
-            }
-            MaterialDoc::Roughdielectric { int_ior, ext_ior, roughness } => {
-                let eta =
-                    self.ior(int_ior, 1.5046, &span)? / self.ior(ext_ior, 1.000_277, &span)?;
-                with(Bsdf::RoughDielectric(RoughDielectric {
-                    eta,
-                    distribution: self.roughness(roughness, &span)?,
-                }))
-            }
-            MaterialDoc::Plastic {
-                diffuse_reflectance,
-                specular_reflectance,
-                int_ior,
-                ext_ior,
-                nonlinear,
-            } => {
-                let eta = self.ior(int_ior, 1.49, &span)? / self.ior(ext_ior, 1.000_277, &span)?;
-                with(Bsdf::Plastic(Plastic::new(
-                    Vec3::from_array(diffuse_reflectance.unwrap_or([0.5; 3])),
-                    Vec3::from_array(specular_reflectance.unwrap_or([1.0; 3])),
-                    eta,
-                    *nonlinear,
-                )))
-            }
-            MaterialDoc::Twosided { bsdf } => {
-                Material { two_sided: true, ..self.material(name, bsdf, span.clone())? }
-            }
-        };
-        match material.validate() {
-            Ok(()) => Ok(material),
-            Err(problem) => self.error(span, format!("material '{name}': {problem}")),
-        }
     }
 
     fn shape(
@@ -775,77 +557,11 @@ fn to_lab() -> Affine3A {
 }
 
 /// Mitsuba's `rectangle`: `[−1, 1]²` in the plane z = 0, facing +z.
-fn rectangle() -> Mesh {
-    Mesh {
-        positions: vec![
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
-        ],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        ..Mesh::default()
-    }
-}
+mod materials;
+mod shapes;
 
-/// Mitsuba's `cube`: `[−1, 1]³`, facing out.
-fn cube() -> Mesh {
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let n = Vec3::from_array(std::array::from_fn(|i| if i == axis { sign } else { 0.0 }));
-            let u =
-                Vec3::from_array(std::array::from_fn(
-                    |i| if i == (axis + 1) % 3 { 1.0 } else { 0.0 },
-                ));
-            let v = n.cross(u);
-            let base = positions.len() as u32;
-            positions.extend([n - u - v, n + u - v, n + u + v, n - u + v]);
-            triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
-        }
-    }
-    Mesh { positions, triangles, ..Mesh::default() }
-}
-
-/// A UV sphere facing out, with per-vertex normals (smooth shading).
-fn sphere(centre: Vec3, radius: f32) -> Mesh {
-    let (rings, segments) = (48u32, 96u32);
-    let mut positions = Vec::new();
-    for ring in 0..=rings {
-        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
-        for segment in 0..segments {
-            let phi = 2.0 * std::f32::consts::PI * segment as f32 / segments as f32;
-            positions.push(Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                -theta.sin() * phi.sin(),
-            ));
-        }
-    }
-    let index = |ring: u32, segment: u32| ring * segments + segment % segments;
-    let mut triangles = Vec::new();
-    for ring in 0..rings {
-        for segment in 0..segments {
-            let (a, b) = (index(ring, segment), index(ring, segment + 1));
-            let (c, d) = (index(ring + 1, segment), index(ring + 1, segment + 1));
-            if ring > 0 {
-                triangles.push([a, c, b]);
-            }
-            if ring + 1 < rings {
-                triangles.push([b, c, d]);
-            }
-        }
-    }
-    let normals =
-        crate::mesh::CornerAttribute { values: positions.clone(), triangles: triangles.clone() };
-    Mesh {
-        positions: positions.iter().map(|&p| centre + radius * p).collect(),
-        triangles,
-        normals: Some(normals),
-        ..Mesh::default()
-    }
-}
+use materials::MaterialDoc;
+use shapes::{cube, rectangle, sphere};
 
 #[cfg(test)]
 mod tests;
