@@ -118,15 +118,7 @@ impl Film {
     /// 8-bit RGB as the lab displays it: each channel clamped to `[0, 1]`, times 255, rounded to
     /// the nearest level, no gamma.
     pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {
-        let mut bytes = Vec::new();
-        bytes.try_reserve_exact(self.pixels.len() * 3).map_err(|_| FilmError::OutOfMemory {
-            width: self.width,
-            height: self.height,
-            bytes: Film::bytes_needed(self.width, self.height),
-        })?;
-        bytes.extend(self.pixels.iter().flat_map(|p| p.to_array().map(to_8bit_clamped)));
-        Ok(RgbImage::from_raw(self.width, self.height, bytes)
-            .expect("buffer has width×height×3 bytes"))
+        self.to_rgb8(&Display::LAB)
     }
 }
 
@@ -147,9 +139,12 @@ impl Display {
     /// Physically based renders: clamped, sRGB-encoded (what Mitsuba and pbrt write to PNG).
     pub const SRGB: Display = Display { exposure: 0.0, tone_map: ToneMap::Clamp, srgb: true };
 
-    /// The 8-bit level of one linear channel.
+    /// The 8-bit level of one linear channel ([`Display::LAB`]: exactly [`to_8bit_clamped`]).
     #[inline]
     pub fn level(&self, value: f32) -> u8 {
+        if *self == Display::LAB {
+            return to_8bit_clamped(value);
+        }
         let value = value * self.exposure.exp2();
         let value = match self.tone_map {
             ToneMap::Clamp => value,

@@ -118,27 +118,27 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
         let mut previous_pdf = 1.0f32;
         let mut previous_delta = true;
         loop {
+            // Light found by the camera or by BSDF sampling: weighted against light sampling,
+            // which could have found it too unless the camera or a delta lobe chose the ray.
+            let found = |depth: u32, previous_delta: bool, previous_pdf: f32, light_pdf: f32| {
+                if depth == 0 || previous_delta {
+                    1.0
+                } else {
+                    power_heuristic(previous_pdf, light_pdf)
+                }
+            };
             let Some(hit) = self.accel.closest_hit(&ray) else {
                 let (environment, light_pdf) = self.lights.environment(ray.direction.normalize());
                 if environment != Vec3::ZERO {
-                    let weight = if depth == 0 || previous_delta {
-                        1.0
-                    } else {
-                        power_heuristic(previous_pdf, light_pdf)
-                    };
+                    let weight = found(depth, previous_delta, previous_pdf, light_pdf);
                     radiance += throughput * environment * weight;
                 }
                 break;
             };
             let interaction = self.scene.interaction(&ray, &hit);
-            // Emitters found by the camera or by BSDF sampling.
             let (emitted, light_pdf) = self.lights.emitted(ray.origin, &interaction);
             if emitted != Vec3::ZERO {
-                let weight = if depth == 0 || previous_delta {
-                    1.0
-                } else {
-                    power_heuristic(previous_pdf, light_pdf)
-                };
+                let weight = found(depth, previous_delta, previous_pdf, light_pdf);
                 radiance += throughput * emitted * weight;
             }
             if depth + 1 >= max_depth {
