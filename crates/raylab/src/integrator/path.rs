@@ -169,7 +169,9 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
                 throughput /= q;
             }
         }
-        radiance
+        // A sample that is not a finite, non-negative colour (a degenerate triangle's NaN, an
+        // overflow) would spoil its pixel for good: it counts as black instead.
+        if radiance.is_finite() && radiance.min_element() >= 0.0 { radiance } else { Vec3::ZERO }
     }
 }
 
