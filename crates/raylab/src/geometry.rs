@@ -52,8 +52,8 @@ pub struct Geometry {
 pub struct SurfaceInteraction {
     /// The point, its error bound and the geometric normal (the triangle's front side).
     pub point: SurfacePoint,
-    /// The shading normal: interpolated from the mesh's normals, on the geometric normal's side;
-    /// the geometric normal where the mesh has none.
+    /// The shading normal: interpolated from the mesh's normals (which decide the front side of
+    /// one-sided materials, as in Mitsuba); the geometric normal where the mesh has none.
     pub shading_normal: Vec3,
     /// Texture coordinates (the barycentric `(b1, b2)` where the mesh has none).
     pub uv: Vec2,
@@ -248,8 +248,9 @@ impl Geometry {
         {
             let n = (b0 * corners[0] + b1 * corners[1] + b2 * corners[2]).normalize_or_zero();
             if n != Vec3::ZERO {
-                // On the geometric normal's side, so that front and back agree.
-                shading_normal = if n.dot(normal) < 0.0 { -n } else { n };
+                // As the mesh gives it (as Mitsuba keeps it), even against the winding: the
+                // side a one-sided material shows is the normals' side.
+                shading_normal = n;
             }
         }
         let uv = match self.uvs.get(i) {
@@ -343,7 +344,7 @@ mod tests {
     }
 
     #[test]
-    fn shading_normals_stay_on_the_geometric_side() {
+    fn shading_normals_are_kept_as_the_mesh_gives_them() {
         let normals = CornerAttribute { values: vec![-Vec3::Z], triangles: vec![[0, 0, 0]; 2] };
         let mut geometry = Geometry::new();
         let flipped = Mesh { normals: Some(normals), ..quad("flipped") };
@@ -352,6 +353,7 @@ mod tests {
             &Ray::new(Vec3::Z, -Vec3::Z),
             &Hit { t: 1.0, triangle: 0, b1: 0.3, b2: 0.3 },
         );
-        assert_eq!(si.shading_normal, Vec3::Z);
+        assert_eq!(si.shading_normal, -Vec3::Z);
+        assert_eq!(si.point.normal, Vec3::Z);
     }
 }

@@ -150,10 +150,18 @@ impl LightSet {
                     position: point.position,
                     intensity: point.intensity(),
                 }),
-                Light::Environment { radiance } => {
-                    environment = Some((*radiance, lights.len() as u32));
-                    lights.push(SampledLight::Environment { radiance: *radiance });
-                }
+                // Several environments shine as one: their radiances add.
+                Light::Environment { radiance } => match environment {
+                    Some((sum, index)) => {
+                        let sum = sum + *radiance;
+                        environment = Some((sum, index));
+                        lights[index as usize] = SampledLight::Environment { radiance: sum };
+                    }
+                    None => {
+                        environment = Some((*radiance, lights.len() as u32));
+                        lights.push(SampledLight::Environment { radiance: *radiance });
+                    }
+                },
             }
         }
         for (i, slot) in triangle_light.iter_mut().enumerate() {
@@ -286,9 +294,10 @@ impl LightSet {
         }
     }
 
-    /// The radiance a ray from `origin` sees at `hit` on an emissive triangle, and the density
-    /// with which [`sample`](Self::sample) would have chosen that direction from `origin`; zero
-    /// and zero for a triangle that does not emit or is seen from behind.
+    /// The radiance a ray from `origin` (the previous path vertex's point) sees at `hit` on an
+    /// emissive triangle, and the density with which [`sample`](Self::sample) would have chosen
+    /// that direction from `origin`; zero and zero for a triangle that does not emit or is seen
+    /// from behind.
     #[inline]
     pub fn emitted(&self, origin: Vec3, hit: &SurfaceInteraction) -> (Vec3, f32) {
         let light = self.triangle_light[hit.triangle as usize];
@@ -337,6 +346,24 @@ fn mean(c: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn several_environments_shine_as_their_sum() {
+        let mut scene = Scene::built_in("cornell").unwrap();
+        scene.lights = vec![
+            Light::Environment { radiance: Vec3::new(1.0, 2.0, 3.0) },
+            Light::Environment { radiance: Vec3::new(0.5, 0.5, 0.5) },
+        ];
+        let lights = LightSet::new(&scene);
+        assert_eq!(lights.len(), 1);
+        let (radiance, pdf) = lights.environment(Vec3::Z);
+        assert_eq!(radiance, Vec3::new(1.5, 2.5, 3.5));
+        assert!((pdf - 1.0 / (4.0 * PI)).abs() < 1e-7);
+        // Light sampling sees the same sum, with the same density.
+        let point = SurfacePoint { p: Vec3::ZERO, error: Vec3::ZERO, normal: Vec3::Z };
+        let sample = lights.sample(&point, 0.3, Vec2::new(0.2, 0.9)).unwrap();
+        assert_eq!((sample.radiance, sample.pdf), (radiance, pdf));
+    }
 
     #[test]
     fn direct_light_falls_off_with_the_square_of_distance_and_the_cosine() {

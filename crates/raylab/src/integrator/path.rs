@@ -117,6 +117,8 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
         // The previous vertex's BSDF sample: for the MIS weight of emitters found by it.
         let mut previous_pdf = 1.0f32;
         let mut previous_delta = true;
+        // The previous vertex: where light sampling would have sampled from.
+        let mut previous_point = camera_ray.origin;
         loop {
             // Light found by the camera or by BSDF sampling: weighted against light sampling,
             // which could have found it too unless the camera or a delta lobe chose the ray.
@@ -136,7 +138,7 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
                 break;
             };
             let interaction = self.scene.interaction(&ray, &hit);
-            let (emitted, light_pdf) = self.lights.emitted(ray.origin, &interaction);
+            let (emitted, light_pdf) = self.lights.emitted(previous_point, &interaction);
             if emitted != Vec3::ZERO {
                 let weight = found(depth, previous_delta, previous_pdf, light_pdf);
                 radiance += throughput * emitted * weight;
@@ -153,6 +155,7 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
             eta *= scattered.eta;
             previous_pdf = scattered.pdf;
             previous_delta = scattered.delta;
+            previous_point = interaction.point.p;
             ray = scattered.ray;
             depth += 1;
             // Russian roulette, as Mitsuba's: q = min(max(throughput)·η², 0.95).

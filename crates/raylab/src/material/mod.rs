@@ -3,8 +3,8 @@
 //! A [`Material`] is a BSDF, whether it is two-sided, and the radiance it emits from its front
 //! side (an emissive material makes its triangles area lights). Names and parameters follow
 //! Mitsuba 3's plugins, so that its scenes translate one to one; like Mitsuba's, materials are
-//! **one-sided** unless wrapped in `twosided`: seen from behind (against the geometric normal)
-//! they are black.
+//! **one-sided** unless wrapped in `twosided`: seen from behind (against the shading normal)
+//! they are black. The dielectrics transmit, so they have two sides by nature.
 //!
 //! Each BSDF lives in its own file with `eval`, `pdf` and `sample` side by side, in the local
 //! shading frame (z is the shading normal). Directions follow Mitsuba's convention: `wi` points
@@ -64,6 +64,13 @@ impl Material {
     pub fn validate(&self) -> Result<(), String> {
         if !self.emission.is_finite() || self.emission.min_element() < 0.0 {
             return Err(format!("emission {} must be finite and not negative", self.emission));
+        }
+        if self.two_sided && matches!(self.bsdf, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_)) {
+            // As Mitsuba's twosided: a material that transmits already has two sides, and
+            // mirroring its back into its front would turn every exit into an entry.
+            return Err(
+                "twosided cannot hold a dielectric: it transmits, and has two sides already".into(),
+            );
         }
         self.bsdf.validate()
     }
@@ -172,14 +179,19 @@ impl Bsdf {
             }
         };
         let conductor = |c: &Conductor| {
+            let magnitude = c.eta * c.eta + c.k * c.k;
             if c.eta.is_finite()
                 && c.k.is_finite()
                 && c.eta.min_element() >= 0.0
                 && c.k.min_element() >= 0.0
+                && magnitude.min_element() > 0.0
             {
                 unit_interval("specular_reflectance", c.specular_reflectance)
             } else {
-                Err(format!("eta {} and k {} must be finite and not negative", c.eta, c.k))
+                Err(format!(
+                    "eta {} and k {} must be finite, not negative and not both 0",
+                    c.eta, c.k
+                ))
             }
         };
         match self {

@@ -360,7 +360,8 @@ impl DiscreteDistribution {
             cdf.push((sum / total) as f32);
         }
         *cdf.last_mut().expect("pushed") = 1.0;
-        let pmf = weights.iter().map(|&w| (w.max(0.0) as f64 / total) as f32).collect();
+        // The probabilities that sampling really has: the steps of the f32 CDF.
+        let pmf = cdf.windows(2).map(|c| c[1] - c[0]).collect();
         Some(DiscreteDistribution { cdf, pmf })
     }
 

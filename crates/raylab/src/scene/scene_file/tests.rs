@@ -232,6 +232,11 @@ fn material_mistakes_are_named() {
             "diffuse_reflectance",
         ),
         ("[materials.a]\ntype = \"dielectric\"\nint_ior = 0\n", "index of refraction"),
+        (
+            "[materials.a]\ntype = \"twosided\"\nbsdf = { type = \"dielectric\" }\n",
+            "cannot hold a dielectric",
+        ),
+        ("[materials.a]\ntype = \"conductor\"\neta = [0, 0, 0]\nk = [0, 0, 0]\n", "not both 0"),
     ];
     for (text, message) in cases {
         let e = error(text);
