@@ -136,6 +136,7 @@ impl SceneArgs {
             position: self.camera.unwrap_or(default_position),
             yaw: self.yaw.map_or(base.yaw, f32::to_radians),
             pitch: self.pitch.map_or(base.pitch, f32::to_radians),
+            roll: base.roll,
             focal_length_px,
             width,
             height,

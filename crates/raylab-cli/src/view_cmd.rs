@@ -136,6 +136,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         height: camera.height,
         focal: (camera.width, camera.focal_length_px),
         lens: (camera.aperture_radius, camera.focus_distance),
+        roll: camera.roll,
     };
     let session = Session {
         scene,

@@ -27,6 +27,9 @@ pub struct Camera {
     /// Rotation about the camera's horizontal axis, in radians; positive looks up (toward −y).
     /// The lab's camera has none.
     pub pitch: f32,
+    /// Rotation about the view direction, in radians; positive turns the picture's up toward
+    /// its right (the camera rolls left). The lab's camera has none.
+    pub roll: f32,
     /// Focal length in pixels: the distance from the pinhole to the image plane.
     pub focal_length_px: f32,
     /// Image width in pixels.
@@ -47,6 +50,7 @@ impl Camera {
             position: Vec3::new(0.0, 0.0, -3.0),
             yaw: 0.0,
             pitch: 0.0,
+            roll: 0.0,
             focal_length_px: width as f32,
             width,
             height,
@@ -77,9 +81,20 @@ impl Camera {
         2.0 * (self.height as f32 / (2.0 * self.focal_length_px)).atan().to_degrees()
     }
 
-    /// `R(yaw)·P(pitch)`, mapping camera space to world space: the lab's `R(yaw)` when the
-    /// pitch is 0.
+    /// `R(yaw)·P(pitch)·Z(roll)`, mapping camera space to world space: the lab's `R(yaw)` when
+    /// the pitch and roll are 0.
     pub fn rotation(&self) -> Mat3 {
+        let turned = self.yaw_pitch();
+        if self.roll == 0.0 {
+            return turned;
+        }
+        let (sin, cos) = self.roll.sin_cos();
+        // Columns of [[cos, −sin, 0], [sin, cos, 0], [0, 0, 1]].
+        turned * Mat3::from_cols(Vec3::new(cos, sin, 0.0), Vec3::new(-sin, cos, 0.0), Vec3::Z)
+    }
+
+    /// `R(yaw)·P(pitch)`.
+    fn yaw_pitch(&self) -> Mat3 {
         let (sin, cos) = self.yaw.sin_cos();
         // Columns of [[cos, 0, sin], [0, 1, 0], [−sin, 0, cos]].
         let yaw = Mat3::from_cols(Vec3::new(cos, 0.0, -sin), Vec3::Y, Vec3::new(sin, 0.0, cos));
@@ -167,6 +182,9 @@ impl fmt::Display for Camera {
         )?;
         if self.pitch != 0.0 {
             write!(f, ", pitch {}°", tidy(self.pitch.to_degrees()))?;
+        }
+        if self.roll != 0.0 {
+            write!(f, ", roll {}°", tidy(self.roll.to_degrees()))?;
         }
         write!(
             f,
@@ -326,6 +344,19 @@ mod tests {
         let centre = rays.lens_ray(film, Vec2::splat(0.5));
         assert!((centre.direction - pinhole.direction).length() < 1e-6);
         assert!(!Camera::lab(8, 8).has_lens() && camera.has_lens());
+    }
+
+    #[test]
+    fn roll_turns_the_picture_about_the_view_direction() {
+        let camera = Camera { roll: 90f32.to_radians(), yaw: 0.3, ..Camera::lab(8, 8) };
+        let level = Camera { roll: 0.0, ..camera };
+        // The view direction stays; the picture's up (−y in camera space) turns to its right.
+        assert!((camera.forward() - level.forward()).length() < 1e-6);
+        let up = camera.rotation() * Vec3::NEG_Y;
+        assert!((up - level.right()).length() < 1e-6, "{up}");
+        assert!(camera.to_string().contains("roll 90°"));
+        let film = camera.project(camera.ray(1.25, 6.5).at(2.0)).unwrap();
+        assert!((film - Vec2::new(1.25, 6.5)).length() < 1e-4);
     }
 
     #[test]

@@ -90,6 +90,9 @@ pub struct View {
     pub focal: (u32, f32),
     /// The thin lens: radius and focus distance (a radius of 0 is a pinhole).
     pub lens: (f32, f32),
+    /// The camera's roll about its view direction (a scene file's camera may have one; the
+    /// controller keeps it).
+    pub roll: f32,
 }
 
 impl View {
@@ -103,6 +106,7 @@ impl View {
             position: self.pose.position,
             yaw: self.pose.yaw,
             pitch: self.pose.pitch,
+            roll: self.roll,
             focal_length_px: self.focal_length_px(width),
             width,
             height,
@@ -352,6 +356,7 @@ mod tests {
             height,
             focal: (width, width as f32),
             lens: (0.0, 1.0),
+            roll: 0.0,
         }
     }
 

@@ -92,6 +92,8 @@ pub struct CameraSettings {
     pub yaw: f32,
     /// Pitch in radians, positive looking up.
     pub pitch: f32,
+    /// Roll in radians about the view direction (see [`Camera::roll`](crate::Camera::roll)).
+    pub roll: f32,
     /// The field of view in degrees, and the axis it spans.
     pub fov_deg: f32,
     /// Which image axis the field of view spans.
@@ -129,6 +131,7 @@ impl CameraSettings {
             position: self.position,
             yaw: self.yaw,
             pitch: self.pitch,
+            roll: self.roll,
             focal_length_px: crate::Camera::focal_length_for_fov(span, self.fov_deg),
             width,
             height,

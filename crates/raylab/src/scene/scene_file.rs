@@ -15,6 +15,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::{CameraSettings, FovAxis, RenderSettings, Scene};
+use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};
 use crate::material::Material;
@@ -101,6 +102,7 @@ struct CameraDoc {
     up: Option<Spanned<[f32; 3]>>,
     yaw: Option<f32>,
     pitch: Option<f32>,
+    roll: Option<f32>,
     fov: Option<f32>,
     fov_axis: Option<Spanned<String>>,
     aperture_radius: Option<f32>,
@@ -423,30 +425,38 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
     fn camera(&self, camera: &Spanned<CameraDoc>) -> Result<CameraSettings> {
         let doc = camera.get_ref();
         let position = Vec3::from_array(doc.position);
-        let (yaw, pitch) = match (doc.target, doc.yaw, doc.pitch) {
-            (Some(target), None, None) => {
+        let (yaw, pitch, roll) = match (doc.target, doc.yaw, doc.pitch, doc.roll) {
+            (Some(target), None, None, None) => {
                 let forward = super::model_to_lab(Vec3::from_array(target) - position);
                 if forward.length_squared() == 0.0 || !forward.is_finite() {
                     return self.error(camera.span(), "the camera's target is its position");
                 }
                 let forward = forward.normalize();
-                if let Some(up) = &doc.up
-                    && (Vec3::from_array(*up.get_ref()).normalize_or_zero() - Vec3::Y).length()
-                        > 1e-4
-                {
-                    return self.error(
-                        up.span(),
-                        "camera: only up = [0, 1, 0] is supported (a camera that rolls is not, yet)",
-                    );
+                let yaw = forward.x.atan2(forward.z);
+                let pitch = (-forward.y).clamp(-1.0, 1.0).asin();
+                // The roll that turns the picture's up toward `up`, about the view direction.
+                let up = doc.up.as_ref().map_or(Vec3::Y, |u| Vec3::from_array(*u.get_ref()));
+                let up = super::model_to_lab(up);
+                let across = up - up.dot(forward) * forward;
+                if !across.is_finite() || across.length() < 1e-4 * up.length() {
+                    let span = doc.up.as_ref().map_or(camera.span(), |u| u.span());
+                    return self
+                        .error(span, "camera: up must not be zero or along the view direction");
                 }
-                (forward.x.atan2(forward.z), (-forward.y).clamp(-1.0, 1.0).asin())
+                let level = Camera { yaw, pitch, ..Camera::lab(1, 1) }.rotation() * Vec3::NEG_Y;
+                let across = across.normalize();
+                (yaw, pitch, forward.dot(level.cross(across)).atan2(level.dot(across)))
             }
-            (None, yaw, pitch) => {
-                (yaw.unwrap_or(0.0).to_radians(), pitch.unwrap_or(0.0).to_radians())
-            }
+            (None, yaw, pitch, roll) => (
+                yaw.unwrap_or(0.0).to_radians(),
+                pitch.unwrap_or(0.0).to_radians(),
+                roll.unwrap_or(0.0).to_radians(),
+            ),
             _ => {
-                return self
-                    .error(camera.span(), "camera: give either target or yaw/pitch, not both");
+                return self.error(
+                    camera.span(),
+                    "camera: give either target (and up) or yaw/pitch/roll, not both",
+                );
             }
         };
         let fov_deg = doc.fov.unwrap_or(53.130_1);
@@ -480,6 +490,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             position: super::model_to_lab(position),
             yaw,
             pitch,
+            roll,
             fov_deg,
             fov_axis,
             aperture_radius,

@@ -123,7 +123,7 @@ fn mistakes_name_the_line_and_column() {
         (
             "[camera]\nposition = [0, 0, 0]\ntarget = [0, 0, -1]\nup = [0, 0, 1]\n",
             "test.toml:4:6:",
-            "roll",
+            "along the view direction",
         ),
         ("[render]\nmax_depth = -2\n", "test.toml:1:1:", "max_depth -2"),
         ("[[shapes]]\ntype = \"mesh\"\nfile = \"missing.obj\"\n", "test.toml:3:8:", "missing.obj"),
@@ -260,4 +260,29 @@ fn the_documented_example_parses() {
     assert_eq!(scene.settings.size, Some((640, 480)));
     assert!(scene.has_area_lights());
     assert_eq!(scene.geometry.len(), 2 + 9024 + 2);
+}
+
+#[test]
+fn an_up_vector_rolls_the_camera() {
+    // Looking along −z from the origin with up = +x: the picture's up is the world's +x.
+    let scene =
+        parse("[camera]\nposition = [0, 0, 0]\ntarget = [0, 0, -1]\nup = [1, 0, 0]\n").unwrap();
+    let camera = scene.camera.unwrap().camera(8, 8);
+    let up = camera.rotation() * Vec3::NEG_Y;
+    assert!((up - crate::scene::model_to_lab(Vec3::X)).length() < 1e-5, "{up}");
+    assert!((camera.roll.to_degrees().abs() - 90.0).abs() < 1e-3, "{}", camera.roll);
+    // A tilted up, seen obliquely: still the picture's up, projected.
+    let scene = parse("[camera]\nposition = [1, 2, 3]\ntarget = [0, 0.5, 0]\nup = [0.3, 1, 0.2]\n")
+        .unwrap();
+    let camera = scene.camera.unwrap().camera(8, 8);
+    let forward = crate::scene::model_to_lab(Vec3::new(-1.0, -1.5, -3.0)).normalize();
+    assert!((camera.forward() - forward).length() < 1e-5);
+    let up = crate::scene::model_to_lab(Vec3::new(0.3, 1.0, 0.2));
+    let expected = (up - up.dot(forward) * forward).normalize();
+    assert!((camera.rotation() * Vec3::NEG_Y - expected).length() < 1e-5);
+    // The default up is level: no roll.
+    let scene = parse("[camera]\nposition = [1, 2, 3]\ntarget = [0, 0.5, 0]\n").unwrap();
+    assert!(scene.camera.unwrap().roll.abs() < 1e-6);
+    let scene = parse("[camera]\nposition = [0, 0, 0]\nyaw = 10\nroll = 30\n").unwrap();
+    assert!((scene.camera.unwrap().roll.to_degrees() - 30.0).abs() < 1e-4);
 }
