@@ -14,21 +14,19 @@ Usage: python3 tools/mitsuba/cbox_compare.py TEST REFERENCE
 
 import sys
 
+import os
+
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pfm import read_pfm  # noqa: E402
 
 
 def load(path):
     if path.endswith(".npy"):
         return np.load(path).astype(np.float64)
     if path.endswith(".pfm"):
-        with open(path, "rb") as f:
-            tag = f.readline().strip()
-            w, h = map(int, f.readline().split())
-            scale = float(f.readline())
-            c = 3 if tag == b"PF" else 1
-            dt = "<f4" if scale < 0 else ">f4"
-            data = np.frombuffer(f.read(w * h * c * 4), dtype=dt)
-        return np.flipud(data.reshape(h, w, c)).astype(np.float64)
+        return read_pfm(path).astype(np.float64)
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
     return np.array(mi.Bitmap(path), dtype=np.float64)[..., :3]

@@ -96,25 +96,8 @@ def rgb(v, what="colour"):
     return {"type": "rgb", "value": [float(x) for x in v]}
 
 
-def write_pfm(path, img):
-    """Standard little-endian colour PFM; img is (H, W, 3), row 0 = top."""
-    img = np.ascontiguousarray(img, dtype=np.float32)
-    h, w, c = img.shape
-    assert c == 3
-    with open(path, "wb") as f:
-        f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
-        f.write(np.flipud(img).astype("<f4").tobytes())
-
-
-def read_pfm(path):
-    with open(path, "rb") as f:
-        tag = f.readline().strip()
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        c = 3 if tag == b"PF" else 1
-        dt = "<f4" if scale < 0 else ">f4"
-        data = np.frombuffer(f.read(w * h * c * 4), dtype=dt)
-    return np.flipud(data.reshape(h, w, c)).astype(np.float32)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pfm import read_pfm, write_pfm  # noqa: E402
 
 
 # ---------------------------------------------------------------------------------------------
