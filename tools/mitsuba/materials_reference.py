@@ -18,10 +18,10 @@ rectangular light, in a constant environment), but it translates the scene forma
              not Mitsuba's spectral data), dielectric, roughdielectric, plastic, twosided. Named
              IORs become raylab's numbers (the same table as Mitsuba's). Rough materials always get
              distribution ggx (Mitsuba's default would be beckmann) and sample_visible true.
-             Anisotropic ones (alpha_u != alpha_v) are wrapped in `raylab_frame`, a Python BSDF
-             that evaluates the nested Mitsuba BSDF in raylab's tangent frame (the Duff basis of
-             the shading normal) instead of Mitsuba's (on a mesh without UVs: the triangle's
-             first edge); --mitsuba-frames leaves them as they are.
+             Anisotropic ones (alpha_u != alpha_v) use Mitsuba's shading frame (dp_du: on a mesh
+             without UVs, the triangle's first edge), which raylab uses too; --duff-frames wraps
+             them in `raylab_frame`, a Python BSDF that evaluates the nested Mitsuba BSDF in the
+             Duff basis of the shading normal instead (raylab's frame before).
   shapes     rectangle, cube (Mitsuba's plugins), sphere (raylab's 48 x 96 UV sphere with vertex
              normals, written to a temporary PLY), mesh (.obj / .ply through Mitsuba's plugins, with
              face_normals false and flip_normals false, and a named material). Transform: scale,
@@ -151,7 +151,7 @@ def shape_matrix(doc):
 # Gram-Schmidts it against the shading normal, so an anisotropic BSDF's alpha_u direction jumps
 # from triangle to triangle (a checkered, faceted brushed metal). Isotropic BSDFs do not care.
 # The wrapper below re-expresses wi/wo in mi.Frame3f(sh_frame.n) -- Mitsuba's coordinate_system,
-# the same Duff basis -- around the unchanged nested Mitsuba BSDF. --mitsuba-frames turns it off.
+# the same Duff basis -- around the unchanged nested Mitsuba BSDF. Only with --duff-frames.
 
 def register_raylab_frame(mi):
     class RaylabFrame(mi.BSDF):
@@ -465,9 +465,10 @@ def main():
     ap.add_argument("--also-pfm", action="store_true")
     ap.add_argument("--png", help="also write a tone-mapped sRGB preview here")
     ap.add_argument("--exposure", type=float, default=1.0, help="for --png")
-    ap.add_argument("--mitsuba-frames", action="store_true",
-                    help="anisotropic materials in Mitsuba's own mesh tangent frame (the "
-                         "triangle's first edge) instead of raylab's (see raylab_frame)")
+    ap.add_argument("--duff-frames", action="store_true",
+                    help="anisotropic materials in the Duff basis of the shading normal (see "
+                         "raylab_frame; raylab's frame before it took Mitsuba's dp_du) instead of "
+                         "Mitsuba's own mesh tangent frame, which raylab now uses too")
     ap.add_argument("--print-scene", action="store_true", help="print the Mitsuba scene dict")
     args = ap.parse_args()
 
@@ -494,7 +495,7 @@ def main():
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="raylab_spheres_") as sphere_dir:
         scene_dict = build_scene_dict(mi, doc, folder, width, height, args.spp, max_depth,
-                                      args.rr_depth, sphere_dir, not args.mitsuba_frames)
+                                      args.rr_depth, sphere_dir, args.duff_frames)
         if args.print_scene:
             print(scene_dict)
         scene = mi.load_dict(scene_dict)
@@ -544,8 +545,8 @@ def main():
     m = img.reshape(-1, 3).astype(np.float64).mean(axis=0)
     print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant}")
     print(f"scene {args.scene}")
-    print("anisotropic frames: " + ("Mitsuba's (mesh: first triangle edge)" if args.mitsuba_frames
-                                     else "raylab's (Duff basis of the shading normal)"))
+    print("anisotropic frames: " + ("the Duff basis of the shading normal" if args.duff_frames
+                                     else "Mitsuba's dp_du (mesh: first triangle edge), as raylab's"))
     print(f"size {width}x{height} spp {total_spp} ({args.passes} pass(es) x {args.spp}) "
           f"seed {args.seed} max_depth {max_depth} rr_depth {args.rr_depth}")
     print(f"scene load: {t_load:.3f} s")

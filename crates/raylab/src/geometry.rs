@@ -57,6 +57,9 @@ pub struct SurfaceInteraction {
     pub shading_normal: Vec3,
     /// Texture coordinates (the barycentric `(b1, b2)` where the mesh has none).
     pub uv: Vec2,
+    /// How the point moves with `u`: the shading frame's tangent direction (before it is made
+    /// perpendicular to the shading normal), as Mitsuba's `dp_du`; without UVs, `v1 − v0`.
+    pub dp_du: Vec3,
     /// Index into the scene's materials.
     pub material: u32,
     /// The triangle hit.
@@ -253,19 +256,31 @@ impl Geometry {
                 shading_normal = n;
             }
         }
-        let uv = match self.uvs.get(i) {
-            Some(t) => b0 * t[0] + b1 * t[1] + b2 * t[2],
-            None => Vec2::new(b1, b2),
-        };
+        let corner_uvs = self.uvs.get(i).copied().unwrap_or(DEFAULT_UVS);
+        let uv = b0 * corner_uvs[0] + b1 * corner_uvs[1] + b2 * corner_uvs[2];
         SurfaceInteraction {
             point,
             shading_normal,
             uv,
+            dp_du: dp_du([v0, v1, v2], corner_uvs),
             material: self.material_ids[i],
             triangle: hit.triangle,
             t: hit.t,
         }
     }
+}
+
+/// The partial derivative of position by `u` on a triangle with these corner UVs (Mitsuba's
+/// `mesh.cpp`): `v1 − v0` for the default UVs; the first edge where the UVs are degenerate.
+#[inline]
+fn dp_du([v0, v1, v2]: [Vec3; 3], [uv0, uv1, uv2]: [Vec2; 3]) -> Vec3 {
+    let (duv0, duv1) = (uv1 - uv0, uv2 - uv0);
+    let (dp0, dp1) = (v1 - v0, v2 - v0);
+    let det = duv0.x * duv1.y - duv0.y * duv1.x;
+    if det == 0.0 || !det.is_finite() {
+        return dp0;
+    }
+    (duv1.y * dp0 - duv0.y * dp1) / det
 }
 
 /// Texture coordinates of a triangle that has none: its barycentric `(b1, b2)`.
@@ -334,12 +349,16 @@ mod tests {
         assert_eq!(si.point.p, Vec3::new(2.0, 0.0, 0.0));
         assert_eq!(si.material, 3);
         assert_eq!(si.uv, Vec2::X);
+        // u runs along x, over 2 units of the scaled quad: dp/du = (2, 0, 0).
+        assert!((si.dp_du - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-6, "{}", si.dp_du);
         // (1, 0, 1) through the inverse transpose of diag(2, 1, 1): (0.5, 0, 1), normalized.
         let expected = Vec3::new(0.5, 0.0, 1.0).normalize();
         assert!((si.shading_normal - expected).length() < 1e-6, "{}", si.shading_normal);
         // The plain mesh: geometric normal and barycentric uvs.
         let si = geometry.interaction(&ray, &Hit { t: 1.0, triangle: 0, b1: 0.25, b2: 0.5 });
         assert_eq!((si.shading_normal, si.uv, si.material), (Vec3::Z, Vec2::new(0.25, 0.5), 7));
+        // Without UVs, Mitsuba's dp/du: the first edge.
+        assert_eq!(si.dp_du, Vec3::X);
         assert!(si.point.error.max_element() < 1e-6);
     }
 

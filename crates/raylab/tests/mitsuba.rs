@@ -188,9 +188,9 @@ fn the_same_pixels_for_any_thread_count_and_tiling() {
 /// glass, frosted glass, plastic, brushed aluminium on a diffuse floor, an area light and a
 /// sky) against Mitsuba 3's render of the same file, same sphere mesh
 /// (`tools/mitsuba/materials_reference.py`, 160×64, 16,384 spp): the mean radiance of a patch on
-/// each sphere within 3 % (measured: 0.1–1.0 %) and of the whole image within 0.5 % (0.02 %).
-/// The brushed sphere is anisotropic: Mitsuba ties `alpha_u` to the mesh's `dp/du`, so the
-/// reference script gives Mitsuba's own `roughconductor` raylab's tangent frame for it.
+/// each sphere within 3 % (measured: 0.5–1.2 %) and of the whole image within 0.5 % (0.02 %).
+/// The brushed sphere is anisotropic: its look depends on the shading frame, which is Mitsuba's
+/// in both (the tangent along `dp/du`: a mesh without UVs, each triangle's first edge).
 #[test]
 fn every_material_matches_mitsuba() {
     let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba-materials");

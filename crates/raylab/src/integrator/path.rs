@@ -86,10 +86,17 @@ pub(crate) struct Frame {
 }
 
 impl Frame {
+    /// Mitsuba's shading frame: the tangent is `dp_du` made perpendicular to the normal (so
+    /// anisotropic materials align with the surface's `u` direction, as in Mitsuba), the
+    /// bitangent `n × s`; Duff et al.'s basis where `dp_du` is along the normal.
     #[inline]
-    pub(crate) fn new(normal: Vec3) -> Frame {
-        let (tangent, bitangent) = orthonormal_basis(normal);
-        Frame { tangent, bitangent, normal }
+    pub(crate) fn new(normal: Vec3, dp_du: Vec3) -> Frame {
+        let s = (dp_du - normal * normal.dot(dp_du)).normalize_or_zero();
+        if s == Vec3::ZERO {
+            let (tangent, bitangent) = orthonormal_basis(normal);
+            return Frame { tangent, bitangent, normal };
+        }
+        Frame { tangent: s, bitangent: normal.cross(s), normal }
     }
 
     #[inline]
@@ -200,7 +207,7 @@ impl<A: Accelerator + ?Sized> Path<'_, A> {
         radiance: &mut Vec3,
     ) -> Option<Scattered> {
         let material = self.scene.material(interaction);
-        let frame = Frame::new(interaction.shading_normal);
+        let frame = Frame::new(interaction.shading_normal, interaction.dp_du);
         let mut wi = frame.to_local(-ray.direction.normalize());
         // Two-sided materials scatter on both sides: mirror the directions into the front.
         let flip = material.two_sided && wi.z < 0.0;
