@@ -256,13 +256,16 @@ impl Geometry {
                 shading_normal = n;
             }
         }
-        let corner_uvs = self.uvs.get(i).copied().unwrap_or(DEFAULT_UVS);
-        let uv = b0 * corner_uvs[0] + b1 * corner_uvs[1] + b2 * corner_uvs[2];
+        // Without UVs, the barycentric parametrization: uv = (b1, b2) and dp/du = v1 − v0.
+        let (uv, dp_du) = match self.uvs.get(i) {
+            Some(&t) => (b0 * t[0] + b1 * t[1] + b2 * t[2], dp_du([v0, v1, v2], t)),
+            None => (Vec2::new(b1, b2), v1 - v0),
+        };
         SurfaceInteraction {
             point,
             shading_normal,
             uv,
-            dp_du: dp_du([v0, v1, v2], corner_uvs),
+            dp_du,
             material: self.material_ids[i],
             triangle: hit.triangle,
             t: hit.t,

@@ -93,10 +93,17 @@ impl Frame {
     pub(crate) fn new(normal: Vec3, dp_du: Vec3) -> Frame {
         let s = (dp_du - normal * normal.dot(dp_du)).normalize_or_zero();
         if s == Vec3::ZERO {
-            let (tangent, bitangent) = orthonormal_basis(normal);
-            return Frame { tangent, bitangent, normal };
+            return Frame::about(normal);
         }
         Frame { tangent: s, bitangent: normal.cross(s), normal }
+    }
+
+    /// A frame about the normal alone (Duff et al.'s basis), for BSDFs that are the same for
+    /// every tangent.
+    #[inline]
+    pub(crate) fn about(normal: Vec3) -> Frame {
+        let (tangent, bitangent) = orthonormal_basis(normal);
+        Frame { tangent, bitangent, normal }
     }
 
     #[inline]
@@ -207,7 +214,13 @@ impl<A: Accelerator + ?Sized> Path<'_, A> {
         radiance: &mut Vec3,
     ) -> Option<Scattered> {
         let material = self.scene.material(interaction);
-        let frame = Frame::new(interaction.shading_normal, interaction.dp_du);
+        // Only anisotropic BSDFs care which way the tangent points: they get Mitsuba's (dp/du);
+        // the rest the cheaper basis of the normal alone (the same distribution of directions).
+        let frame = if material.bsdf.is_anisotropic() {
+            Frame::new(interaction.shading_normal, interaction.dp_du)
+        } else {
+            Frame::about(interaction.shading_normal)
+        };
         let mut wi = frame.to_local(-ray.direction.normalize());
         // Two-sided materials scatter on both sides: mirror the directions into the front.
         let flip = material.two_sided && wi.z < 0.0;

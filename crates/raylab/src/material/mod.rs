@@ -150,6 +150,17 @@ impl Bsdf {
         !matches!(self, Bsdf::Conductor(_) | Bsdf::Dielectric(_))
     }
 
+    /// Whether the BSDF depends on the tangent's direction, not only on the normal (rough
+    /// materials with `alpha_u ≠ alpha_v`).
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        match self {
+            Bsdf::RoughConductor(r) => r.distribution.alpha_u != r.distribution.alpha_v,
+            Bsdf::RoughDielectric(r) => r.distribution.alpha_u != r.distribution.alpha_v,
+            _ => false,
+        }
+    }
+
     /// The colour a surface shows in flat renderings (the lab's ρ, the albedo AOV): the diffuse
     /// reflectance, or the lobe's tint.
     pub fn albedo(&self) -> Vec3 {
