@@ -344,6 +344,7 @@ impl Accelerator for Bvh {
             // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::closest_hit_avx512(&self.wide, ray) },
+            // SAFETY: the ISA was checked when it was set (as above).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2 => unsafe { entry::closest_hit_avx2(&self.wide, ray) },
             #[cfg(target_arch = "x86_64")]
@@ -358,6 +359,7 @@ impl Accelerator for Bvh {
             // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::occluded_avx512(&self.wide, ray) },
+            // SAFETY: the ISA was checked when it was set (as above).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2 => unsafe { entry::occluded_avx2(&self.wide, ray) },
             #[cfg(target_arch = "x86_64")]
@@ -375,6 +377,7 @@ impl Accelerator for Bvh {
             // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::closest_hits_avx512(&self.wide, rays, hits) },
+            // SAFETY: the ISA was checked when it was set (as above).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2 => unsafe { entry::closest_hits_avx2(&self.wide, rays, hits) },
             #[cfg(target_arch = "x86_64")]
@@ -391,6 +394,7 @@ impl Accelerator for Bvh {
             // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::occluded_each_avx512(&self.wide, rays, occluded) },
+            // SAFETY: the ISA was checked when it was set (as above).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2 => unsafe { entry::occluded_each_avx2(&self.wide, rays, occluded) },
             #[cfg(target_arch = "x86_64")]
