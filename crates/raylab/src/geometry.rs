@@ -233,6 +233,21 @@ impl Geometry {
         crate::mesh::bounds_of(self.triangles.iter().flatten().map(|&v| self.positions[v as usize]))
     }
 
+    /// The point of `hit` with its rounding-error bound and the geometric normal: the part of
+    /// [`interaction`](Self::interaction) that the lab's light model needs.
+    #[inline]
+    pub fn surface_point(&self, hit: &Hit) -> SurfacePoint {
+        let i = hit.triangle as usize;
+        let [v0, v1, v2] = self.triangle(i);
+        // PBR 4th ed. §6.8.5: interpolating the vertices errs by at most γ₇ Σ|bᵢ·pᵢ|.
+        let (a, b, c) = (hit.b0() * v0, hit.b1 * v1, hit.b2 * v2);
+        SurfacePoint {
+            p: a + b + c,
+            error: gamma(7) * (a.abs() + b.abs() + c.abs()),
+            normal: self.normals[i],
+        }
+    }
+
     /// Where `ray` meets the surface at `hit` (which an accelerator over [`vertices`](Self::vertices)
     /// found for it).
     #[inline]

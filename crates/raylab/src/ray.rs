@@ -81,7 +81,7 @@ impl SurfacePoint {
 ///
 /// The offset is `(|n|·error)·n`, then each coordinate is rounded one more float away from the
 /// surface, so the origin is guaranteed to be on the correct side whatever the scene's scale.
-#[inline]
+#[inline(always)]
 pub fn offset_ray_origin(point: &SurfacePoint, w: Vec3) -> Vec3 {
     let n = point.normal;
     let d = n.abs().dot(point.error);

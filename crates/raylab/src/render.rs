@@ -274,14 +274,33 @@ impl Accumulator {
     /// # Panics
     /// If `out` does not hold `width×height` words.
     pub fn write_0rgb_shown(&self, out: &mut [u32], width: u32, height: u32, display: &Display) {
+        let factor = self.mean_factor();
+        // One loop per conversion, so that the lab's clamp is inlined on its own.
+        if *display == Display::LAB {
+            self.write_words(out, width, height, |sum| {
+                (*sum * factor).to_array().map(to_8bit_clamped)
+            });
+        } else {
+            self.write_words(out, width, height, |sum| {
+                (*sum * factor).to_array().map(|v| display.level(v))
+            });
+        }
+    }
+
+    /// Writes `0x00RRGGBB` words of the levels `level` gives each pixel's sum, scaled by
+    /// nearest neighbour.
+    #[inline]
+    fn write_words(
+        &self,
+        out: &mut [u32],
+        width: u32,
+        height: u32,
+        level: impl Fn(&Vec3) -> [u8; 3] + Sync,
+    ) {
         assert_eq!(out.len(), width as usize * height as usize, "a word per window pixel");
         let (source_width, source_height) = (self.width() as usize, self.height() as usize);
-        let factor = self.mean_factor();
-        let lab = *display == Display::LAB;
         let word = |sum: &Vec3| {
-            let mean = (*sum * factor).to_array();
-            let [r, g, b] =
-                if lab { mean.map(to_8bit_clamped) } else { mean.map(|v| display.level(v)) };
+            let [r, g, b] = level(sum);
             (r as u32) << 16 | (g as u32) << 8 | b as u32
         };
         if (source_width, source_height) == (width as usize, height as usize) {

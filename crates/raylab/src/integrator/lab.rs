@@ -126,18 +126,21 @@ impl Shading {
 }
 
 impl<A: Accelerator + ?Sized> Lab<'_, A> {
-    /// Shades a hit up to the shadow test.
-    #[inline]
+    /// Shades a hit up to the shadow test (inlined into the tile loop: it returns a large
+    /// value, which a call would copy through memory).
+    #[inline(always)]
     fn shade(&self, ray: &Ray, hit: Option<Hit>) -> Shading {
         let Some(hit) = hit else {
             return Shading::NONE;
         };
-        let interaction = self.scene.interaction(ray, &hit);
-        let albedo = self.scene.material(&interaction).bsdf.albedo();
+        // The lab needs the point, its normal and the colour: not the whole interaction.
+        let geometry = &self.scene.geometry;
+        let material = geometry.material_id(hit.triangle as usize) as usize;
+        let albedo = self.scene.materials[material].bsdf.albedo();
         if self.stage == Stage::Flat {
             return Shading { albedo, direct: Vec3::ZERO, shadow_ray: None };
         }
-        let mut point = interaction.point;
+        let mut point = geometry.surface_point(&hit);
         // Triangles are hit from both sides: light the side the ray sees. (With a one-sided
         // normal, a wall seen from behind would be lit through itself by a light on its front.)
         // A grazing ray (a zero product) gets the lab's own normal `(v2 − v0) × (v1 − v0)`, the

@@ -123,7 +123,9 @@ pub struct Sampler {
     pixel_seed: u64,
     /// The next dimension to hand out.
     dimension: u32,
-    rng: Pcg32,
+    /// The independent numbers' stream, started at its first use (the lab's one sample per
+    /// pixel never draws one).
+    rng: Option<Pcg32>,
 }
 
 impl Sampler {
@@ -131,9 +133,14 @@ impl Sampler {
     #[inline]
     pub fn new(kind: SamplerKind, seed: u64, pixel: (u32, u32), index: u32) -> Sampler {
         let pixel_seed = mix64(pixel_hash(pixel.0, pixel.1) ^ mix64(seed));
-        // The stream of independent numbers is per sample; its state per pixel.
-        let rng = Pcg32::new(pixel_seed, index as u64);
-        Sampler { kind, pixel, index, pixel_seed, dimension: 0, rng }
+        Sampler { kind, pixel, index, pixel_seed, dimension: 0, rng: None }
+    }
+
+    /// The stream of independent numbers: per sample, its state per pixel.
+    #[inline]
+    fn rng(&mut self) -> &mut Pcg32 {
+        let (pixel_seed, index) = (self.pixel_seed, self.index);
+        self.rng.get_or_insert_with(|| Pcg32::new(pixel_seed, index as u64))
     }
 
     /// The sample index.
@@ -181,7 +188,7 @@ impl Sampler {
             }
             _ => {
                 self.dimension += 1;
-                self.rng.next_f32()
+                self.rng().next_f32()
             }
         }
     }
@@ -198,7 +205,8 @@ impl Sampler {
             }
             _ => {
                 self.dimension += 2;
-                Vec2::new(self.rng.next_f32(), self.rng.next_f32())
+                let rng = self.rng();
+                Vec2::new(rng.next_f32(), rng.next_f32())
             }
         }
     }
