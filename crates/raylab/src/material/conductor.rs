@@ -24,18 +24,6 @@ impl Conductor {
         self.specular_reflectance * fresnel_conductor(cos_theta_i, self.eta, self.k)
     }
 
-    /// Zero: a delta lobe has no density to evaluate.
-    #[inline]
-    pub fn eval(&self, _wi: Vec3, _wo: Vec3) -> Vec3 {
-        Vec3::ZERO
-    }
-
-    /// Zero (see [`eval`](Self::eval)).
-    #[inline]
-    pub fn pdf(&self, _wi: Vec3, _wo: Vec3) -> f32 {
-        0.0
-    }
-
     /// The mirror direction, weighted by the Fresnel reflectance.
     #[inline]
     pub fn sample(&self, wi: Vec3, _u1: f32, _u2: Vec2) -> Option<BsdfSample> {

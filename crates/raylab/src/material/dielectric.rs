@@ -18,18 +18,6 @@ pub struct Dielectric {
 }
 
 impl Dielectric {
-    /// Zero: both lobes are deltas.
-    #[inline]
-    pub fn eval(&self, _wi: Vec3, _wo: Vec3) -> Vec3 {
-        Vec3::ZERO
-    }
-
-    /// Zero (see [`eval`](Self::eval)).
-    #[inline]
-    pub fn pdf(&self, _wi: Vec3, _wo: Vec3) -> f32 {
-        0.0
-    }
-
     /// Reflection with the probability `F`, refraction otherwise.
     #[inline]
     pub fn sample(&self, wi: Vec3, u1: f32, _u2: Vec2) -> Option<BsdfSample> {

@@ -124,17 +124,29 @@ macro_rules! each_bsdf {
 
 impl Bsdf {
     /// The BSDF times `|cos θo|` for light arriving from `wo` and leaving toward `wi` (local
-    /// frame). Zero for delta lobes.
+    /// frame). Zero for delta lobes: the smooth conductor and dielectric have nothing else.
     #[inline]
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
-        each_bsdf!(self, b => b.eval(wi, wo))
+        match self {
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) => Vec3::ZERO,
+            Bsdf::Diffuse(b) => b.eval(wi, wo),
+            Bsdf::RoughConductor(b) => b.eval(wi, wo),
+            Bsdf::RoughDielectric(b) => b.eval(wi, wo),
+            Bsdf::Plastic(b) => b.eval(wi, wo),
+        }
     }
 
     /// The density with which [`sample`](Self::sample) picks `wo` given `wi`, per unit solid
     /// angle (zero for delta lobes).
     #[inline]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        each_bsdf!(self, b => b.pdf(wi, wo))
+        match self {
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) => 0.0,
+            Bsdf::Diffuse(b) => b.pdf(wi, wo),
+            Bsdf::RoughConductor(b) => b.pdf(wi, wo),
+            Bsdf::RoughDielectric(b) => b.pdf(wi, wo),
+            Bsdf::Plastic(b) => b.pdf(wi, wo),
+        }
     }
 
     /// Samples `wo` given `wi` from two uniform numbers (`u1` picks a lobe, `u2` a direction), or

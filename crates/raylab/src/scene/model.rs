@@ -23,6 +23,11 @@ pub fn model_to_lab(p: Vec3) -> Vec3 {
     Vec3::new(p.x, -p.y, -p.z)
 }
 
+/// [`model_to_lab`] as a transform, for meshes (their normals turn with it).
+pub(crate) fn model_to_lab_transform() -> Affine3A {
+    Affine3A::from_mat3(glam::Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0)))
+}
+
 impl Scene {
     /// The mesh in the lab's frame with its materials: diffuse with the file's colour (grey where
     /// a triangle names none), emitting its `Ke`. Lit by [`Scene::default_light`] unless some
@@ -36,8 +41,7 @@ impl Scene {
         let default = materials.len() as u32;
         materials.push(Material::diffuse("default", MeshMaterial::DEFAULT_DIFFUSE));
         let mut geometry = Geometry::new();
-        // The half turn about x that `model_to_lab` is.
-        let to_lab = Affine3A::from_mat3(glam::Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0)));
+        let to_lab = model_to_lab_transform();
         geometry.add_mesh(mesh, &to_lab, |i| {
             mesh.material_ids.get(i).copied().flatten().unwrap_or(default)
         });
@@ -118,6 +122,8 @@ mod tests {
             model_to_lab(Vec3::Z),
         );
         assert_eq!(m.determinant(), 1.0);
+        let p = Vec3::new(0.25, -3.0, 7.5);
+        assert_eq!(model_to_lab_transform().transform_point3(p), model_to_lab(p));
         let material = &scene.materials[scene.geometry.material_id(0) as usize];
         assert_eq!(material.bsdf.albedo(), MeshMaterial::DEFAULT_DIFFUSE);
     }

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use glam::{Affine3A, Mat3, Mat4, Vec3};
+use glam::{Affine3A, Mat4, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -206,7 +206,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         if kind == "cornell" {
             return self.lab_cornell_box(shape, index, geometry);
         }
-        let transform = to_lab() * self.transform(doc)?;
+        let transform = super::model::model_to_lab_transform() * self.transform(doc)?;
         // The named material, with the shape's emission if it has one (a copy per shape).
         let mut material = match &doc.material {
             Some(name) => match index.get(name.get_ref()) {
@@ -334,7 +334,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         }
         let mut triangles = Geometry::new();
         triangles.add_triangles("cornell", corners);
-        let transform = to_lab() * self.transform(doc)?;
+        let transform = super::model::model_to_lab_transform() * self.transform(doc)?;
         let mesh = Mesh {
             name: "cornell".into(),
             positions: (0..triangles.len()).flat_map(|i| triangles.triangle(i)).collect(),
@@ -560,11 +560,6 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         }
         Ok(settings)
     }
-}
-
-/// The half turn about x from the file's y-up frame to the lab's y-down frame.
-fn to_lab() -> Affine3A {
-    Affine3A::from_mat3(Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0)))
 }
 
 /// Mitsuba's `rectangle`: `[−1, 1]²` in the plane z = 0, facing +z.
