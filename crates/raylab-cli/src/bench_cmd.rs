@@ -61,6 +61,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "PRESET", default_value = "auto")]
     build: String,
 
+    /// Scenes of at most this many triangles answer single rays by testing every triangle, without
+    /// the tree (0: always the tree) [default: the build preset's, 48].
+    #[arg(long, value_name = "N")]
+    flat_limit: Option<usize>,
+
     /// Node-kernel instruction set: scalar, sse2, avx2 or avx512 [default: the best this CPU has].
     #[arg(long, value_name = "ISA")]
     isa: Option<String>,
@@ -102,10 +107,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let mesh = loaded.mesh;
     let triangles: Vec<_> = mesh.triangle_vertices().collect();
-    let settings = match preset {
+    let mut settings = match preset {
         Some(settings) => settings,
         None => BuildSettings::for_triangles(triangles.len()),
     };
+    if let Some(limit) = args.flat_limit {
+        settings.flat_limit = limit;
+    }
 
     if let Some(dir) = &args.generate {
         return generate(args, &mesh, &triangles, dir, &settings);

@@ -7,18 +7,34 @@ use proptest::prelude::*;
 use raylab::bvh::{BuildSettings, Bvh, Isa};
 use raylab::{Accelerator, BruteForce, Ray};
 
-/// Every BVH variant over `triangles`: each preset, and small-scene leaves (one block).
+/// Every BVH variant over `triangles`: each preset's tree, small-scene leaves (one block), and
+/// (up to 4,096 triangles) the flat list that small scenes answer single rays from.
 fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
     let mut all = Vec::new();
     let small = ("small-scene", BuildSettings::for_triangles(0));
-    for (preset, settings) in BuildSettings::PRESETS.into_iter().chain([small]) {
+    let tree = |settings: BuildSettings| BuildSettings { flat_limit: 0, ..settings };
+    let mut variants: Vec<(&str, BuildSettings)> =
+        BuildSettings::PRESETS.into_iter().chain([small]).map(|(n, s)| (n, tree(s))).collect();
+    if triangles.len() <= 4096 {
+        variants.push(("flat", BuildSettings { flat_limit: usize::MAX, ..BuildSettings::MEDIUM }));
+    }
+    for (preset, settings) in variants {
         for isa in Isa::ALL {
-            if let Some(bvh) = Bvh::build(triangles, &settings).with_isa(isa) {
-                all.push((format!("{preset} {}", isa.name()), bvh));
+            match Bvh::build(triangles, &settings).with_isa(isa) {
+                Some(bvh) => all.push((format!("{preset} {}", isa.name()), bvh)),
+                None => skipped_isa(isa),
             }
         }
     }
     all
+}
+
+/// Says once per test binary that this CPU cannot run an instruction set's kernels.
+fn skipped_isa(isa: Isa) {
+    static SAID: std::sync::Once = std::sync::Once::new();
+    SAID.call_once(|| {
+        eprintln!("note: this CPU lacks {}: its kernels are not tested here", isa.name())
+    });
 }
 
 fn brute_force(triangles: &[[Vec3; 3]]) -> BruteForce {

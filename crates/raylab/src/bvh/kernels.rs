@@ -195,6 +195,8 @@ impl NodeKernel for Scalar {
 pub(crate) use x86::block_hits_sse;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Avx512, Sse};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::{LaneHits, LaneMask, Lanes, WatertightLanes, watertight_lanes_with};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
@@ -273,6 +275,11 @@ mod x86 {
         /// Bit `k` set where lane `k` of `self <= o` (false for NaN).
         unsafe fn le_mask(self, o: Self) -> u32;
         unsafe fn div(self, o: Self) -> Self;
+        /// `if_true` in the lanes of `mask`, `if_false` in the others.
+        unsafe fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
+        /// The smallest lane (`minps` order: NaN lanes may or may not count; callers keep them
+        /// out).
+        unsafe fn reduce_min(self) -> f32;
         /// Comparisons give a mask of the lanes where they hold (ordered: false for NaN, except
         /// `nlt` and `nle`, which are true for NaN).
         unsafe fn eq(self, o: Self) -> Self::Mask;
@@ -365,6 +372,18 @@ mod x86 {
         #[inline(always)]
         unsafe fn le_mask(self, o: Self) -> u32 {
             unsafe { _mm_movemask_ps(_mm_cmple_ps(self, o)) as u32 }
+        }
+        #[inline(always)]
+        unsafe fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self {
+            unsafe { _mm_or_ps(_mm_and_ps(mask, if_true), _mm_andnot_ps(mask, if_false)) }
+        }
+        #[inline(always)]
+        unsafe fn reduce_min(self) -> f32 {
+            unsafe {
+                let pairs = _mm_min_ps(self, _mm_movehl_ps(self, self));
+                let one = _mm_min_ss(pairs, _mm_shuffle_ps::<1>(pairs, pairs));
+                _mm_cvtss_f32(one)
+            }
         }
         #[inline(always)]
         unsafe fn div(self, o: Self) -> Self {
@@ -467,6 +486,18 @@ mod x86 {
             unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self, o)) as u32 }
         }
         #[inline(always)]
+        unsafe fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self {
+            unsafe { _mm256_blendv_ps(if_false, if_true, mask) }
+        }
+        #[inline(always)]
+        unsafe fn reduce_min(self) -> f32 {
+            unsafe {
+                let half =
+                    _mm_min_ps(_mm256_castps256_ps128(self), _mm256_extractf128_ps::<1>(self));
+                half.reduce_min()
+            }
+        }
+        #[inline(always)]
         unsafe fn div(self, o: Self) -> Self {
             unsafe { _mm256_div_ps(self, o) }
         }
@@ -566,6 +597,14 @@ mod x86 {
         #[inline(always)]
         unsafe fn le_mask(self, o: Self) -> u32 {
             unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self, o) as u32 }
+        }
+        #[inline(always)]
+        unsafe fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self {
+            unsafe { _mm512_mask_blend_ps(mask, if_false, if_true) }
+        }
+        #[inline(always)]
+        unsafe fn reduce_min(self) -> f32 {
+            unsafe { _mm512_reduce_min_ps(self) }
         }
         #[inline(always)]
         unsafe fn div(self, o: Self) -> Self {
@@ -983,9 +1022,12 @@ mod x86 {
     }
 
     /// What [`watertight_lanes`] decides per lane.
-    pub(crate) struct LaneHits<V> {
+    pub(crate) struct LaneHits<V: Lanes> {
         /// Lanes hit, with `t` and barycentrics below.
         pub hits: u32,
+        /// `hits` as a comparison mask (lanes outside `lanes` included where their
+        /// triangles are hit: padding lanes hold NaN vertices, which never are).
+        pub hit_mask: V::Mask,
         /// Lanes that only [`WatertightRay::intersect`] can decide (an edge function is zero).
         pub undecided: u32,
         pub t: V,
@@ -1003,6 +1045,21 @@ mod x86 {
     /// The CPU must support `V`'s instruction set.
     #[inline(always)]
     pub(crate) unsafe fn watertight_lanes<V: Lanes>(
+        x: &WatertightLanes<V>,
+        lanes: u32,
+    ) -> LaneHits<V> {
+        // SAFETY: the caller's guarantee.
+        unsafe { watertight_lanes_with::<V, true>(x, lanes) }
+    }
+
+    /// [`watertight_lanes`], with `EARLY_OUT` returning as soon as no lane can be hit (a branch:
+    /// worth it where misses are common and alike, as in a packet's leaves; not where hits and
+    /// misses alternate unpredictably, as for one incoherent ray against a whole small scene).
+    ///
+    /// # Safety
+    /// As for [`watertight_lanes`].
+    #[inline(always)]
+    pub(crate) unsafe fn watertight_lanes_with<V: Lanes, const EARLY_OUT: bool>(
         x: &WatertightLanes<V>,
         lanes: u32,
     ) -> LaneHits<V> {
@@ -1041,8 +1098,16 @@ mod x86 {
             let candidates = candidate.bits() & lanes;
             let undecided = candidates & any_zero.bits();
             let decidable = candidates & !undecided;
-            if decidable == 0 {
-                return LaneHits { hits: 0, undecided, t: zero, b1: zero, b2: zero };
+            if EARLY_OUT && decidable == 0 {
+                let none = zero.lt(zero);
+                return LaneHits {
+                    hits: 0,
+                    hit_mask: none,
+                    undecided,
+                    t: zero,
+                    b1: zero,
+                    b2: zero,
+                };
             }
 
             // The rest of `intersect`, for the lanes without a zero edge function.
@@ -1082,8 +1147,10 @@ mod x86 {
                 let delta_t = V::splat(3.0).mul(sum).mul(inv_det.abs());
                 accept = accept.or(below_max.and(t.nle(delta_t)).andnot_of(explicit));
             }
+            let hit_mask = accept.and(candidate).andnot_of(any_zero);
             let hits = decidable & accept.bits();
-            LaneHits { hits, undecided, t, b1: e1.mul(inv_det), b2: e2.mul(inv_det) }
+            debug_assert_eq!(hits, hit_mask.bits() & lanes, "the mask is the bits");
+            LaneHits { hits, hit_mask, undecided, t, b1: e1.mul(inv_det), b2: e2.mul(inv_det) }
         }
     }
 

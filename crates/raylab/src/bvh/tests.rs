@@ -358,3 +358,77 @@ fn sse2_block_kernel_agrees_with_its_scalar_twin() {
     }
     assert!(decided_hits > 10_000 && undecided_lanes > 1000, "{decided_hits} {undecided_lanes}");
 }
+
+/// Every flat kernel (SSE2, AVX2, AVX-512, as this CPU allows) gives exactly its scalar twin's
+/// answers, which are brute force's: scenes on a coarse grid (edge functions exactly zero, so
+/// the double-precision path decides), with duplicated triangles (ties at equal `t`, which go to
+/// the lower index), rays starting just off a surface (the self-intersection bound), explicit
+/// `t_min`, short segments, and 1 to 40 triangles (full, partial and several blocks).
+#[test]
+fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
+    use crate::accel::BruteForce;
+    let mut rng = Lcg(29);
+    let mut tested = [0usize; 4];
+    let (mut hits, mut ties, mut edge_hits) = (0, 0, 0);
+    for case in 0..1500 {
+        let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
+        let count = 1 + case % 40;
+        let mut triangles: Vec<[Vec3; 3]> = (0..count)
+            .map(|_| {
+                let p = snap(rng.vec() * 4.0 - 2.0);
+                [p, snap(p + rng.vec() * 2.0 - 1.0), snap(p + rng.vec() * 2.0 - 1.0)]
+            })
+            .collect();
+        if case % 3 == 0 {
+            // A later copy of an earlier triangle: hits tie, the lower index wins.
+            let copy = triangles[case % count];
+            triangles.push(copy);
+        }
+        let settings = BuildSettings { flat_limit: usize::MAX, ..BuildSettings::MEDIUM };
+        let bvh = Bvh::build(&triangles, &settings);
+        let flat = bvh.flat.as_ref().expect("a flat list below the limit");
+        let brute = BruteForce::new(&triangles);
+        for r in 0..40 {
+            let [a, b, c] = triangles[(case + r) % triangles.len()];
+            let target = match r % 3 {
+                0 => a,
+                1 => a.lerp(b, rng.next()),
+                _ => a.lerp(b, rng.next()).lerp(c, rng.next()),
+            };
+            let origin = match r % 4 {
+                3 => target + (rng.vec() * 2.0 - 1.0) * [1e-5, 1e-6, 1e-7][r % 3],
+                _ => snap(rng.vec() * 8.0 - 4.0),
+            };
+            if origin == target {
+                continue;
+            }
+            let mut ray = Ray::new(origin, target - origin);
+            ray.t_min = if r % 5 == 0 { 0.5 * rng.next() } else { 0.0 };
+            ray.t_max = [f32::INFINITY, 1.0, 0.5 + rng.next()][r % 3];
+            let closest = flat::closest_hit_scalar(flat, &ray);
+            let occluded = flat::occluded_scalar(flat, &ray);
+            assert_eq!(closest, brute.closest_hit(&ray), "scalar twin, case {case}: {ray:?}");
+            assert_eq!(occluded, brute.occluded(&ray), "scalar twin, case {case}: {ray:?}");
+            if let Some(h) = closest {
+                hits += 1;
+                edge_hits += (h.b0() == 0.0 || h.b1 == 0.0 || h.b2 == 0.0) as usize;
+                ties += (case % 3 == 0 && h.triangle as usize == case % count) as usize;
+            }
+            for (k, isa) in Isa::ALL.into_iter().enumerate() {
+                let Some(simd) = Bvh::build(&triangles, &settings).with_isa(isa) else {
+                    continue;
+                };
+                tested[k] += 1;
+                assert_eq!(simd.closest_hit(&ray), closest, "{}, case {case}: {ray:?}", isa.name());
+                assert_eq!(simd.occluded(&ray), occluded, "{}, case {case}: {ray:?}", isa.name());
+            }
+        }
+    }
+    for (k, isa) in Isa::ALL.into_iter().enumerate() {
+        if tested[k] == 0 {
+            eprintln!("note: this CPU lacks {}: its flat kernel is not tested here", isa.name());
+        }
+    }
+    assert!(tested[0] > 0 && tested[1] > 0, "the scalar and SSE2 kernels always run");
+    assert!(hits > 20_000 && edge_hits > 1000 && ties > 100, "{hits} {edge_hits} {ties}");
+}

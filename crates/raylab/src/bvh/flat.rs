@@ -1,0 +1,401 @@
+//! Small scenes without a tree: every triangle tested, sixteen per instruction.
+//!
+//! A scene of a few dozen triangles (the Cornell boxes) costs a tree more than the tree saves. A
+//! diffuse ray in Mitsuba's 36-triangle box enters the root, sorts and pushes three or four
+//! children, pops them and tests a leaf block of four triangles in each, every step a branch that
+//! incoherent rays mispredict. Three AVX-512 watertight tests of sixteen triangles cover the same
+//! scene with no branch but the loop's. So for scenes of at most
+//! [`BuildSettings::flat_limit`](super::BuildSettings::flat_limit) triangles a [`Bvh`](super::Bvh)
+//! also keeps [`Flat`]: the triangles in index order, sixteen to a block, and answers single rays
+//! from it.
+//!
+//! ## Layout, worked through
+//! A block is the vertices of sixteen triangles coordinate by coordinate,
+//! `vertices[j][axis][lane]` (j = 0, 1, 2 the corners), 9 rows of 16 floats, each row one 64-byte
+//! AVX-512 register and one cache line; then the sixteen triangle indices and a bit mask of the
+//! lanes in use. Mitsuba's box, triangles 0–35, all of non-zero area:
+//!
+//! | block | lanes 0–15 hold triangles | `lanes` |
+//! |---|---|---|
+//! | 0 | 0–15 | `0xffff` |
+//! | 1 | 16–31 | `0xffff` |
+//! | 2 | 32–35, then NaN vertices | `0x000f` |
+//!
+//! 704 bytes a block, 2,112 for the box: it stays in the first-level cache. Triangles of zero
+//! area or with a non-finite vertex can never be hit and are left out (their index is simply
+//! skipped), as in the tree.
+//!
+//! ## The answer is the tree's and brute force's
+//! Each lane runs the watertight test's own arithmetic ([`watertight_lanes`](super::kernels)),
+//! lanes whose edge functions round to zero go to [`WatertightRay::intersect`]'s double-precision
+//! path, and hits are merged in index order, keeping the smallest `t` and, at equal `t`, the lowest
+//! index. So `t`, triangle and barycentrics are bit for bit [`BruteForce`](crate::BruteForce)'s.
+//! AVX2 tests a block in two halves of eight and SSE2 in four quarters; the scalar twin tests it
+//! lane by lane ([`WatertightRay::block_candidates`], then `intersect`).
+
+use glam::Vec3;
+
+use super::traverse::can_hit;
+use crate::accel::Hit;
+use crate::ray::Ray;
+use crate::triangle::{TriangleBlock, WatertightRay};
+
+/// Triangles per block: one AVX-512 register per coordinate row.
+pub(crate) const FLAT_LANES: usize = 16;
+
+/// Sixteen triangles and their indices (see the module documentation).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct FlatBlock {
+    triangles: TriangleBlock<FLAT_LANES>,
+    ids: [u32; FLAT_LANES],
+    /// Bit `k` is set where lane `k` holds a triangle.
+    lanes: u32,
+}
+
+/// Every triangle of a small scene, in index order, in blocks of sixteen.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Flat {
+    blocks: Vec<FlatBlock>,
+}
+
+impl Flat {
+    /// The triangles `indices` (ascending, each of non-zero area with finite vertices).
+    pub(crate) fn new(triangles: &[[Vec3; 3]], indices: &[u32]) -> Flat {
+        debug_assert!(indices.windows(2).all(|w| w[0] < w[1]), "indices ascend");
+        let blocks = indices
+            .chunks(FLAT_LANES)
+            .map(|chunk| {
+                let mut block = FlatBlock {
+                    triangles: TriangleBlock::EMPTY,
+                    ids: [u32::MAX; FLAT_LANES],
+                    lanes: 0,
+                };
+                for (lane, &i) in chunk.iter().enumerate() {
+                    block.triangles.set(lane, triangles[i as usize]);
+                    block.ids[lane] = i;
+                    block.lanes |= 1 << lane;
+                }
+                block
+            })
+            .collect();
+        Flat { blocks }
+    }
+
+    /// Bytes of the blocks.
+    pub(crate) fn bytes(&self) -> usize {
+        self.blocks.len() * size_of::<FlatBlock>()
+    }
+}
+
+/// The closest hit so far. Blocks are visited in index order, so a later triangle wins only
+/// with a strictly smaller `t`: the search limit is the best `t` itself.
+struct Closest {
+    best: Option<Hit>,
+    limit: f32,
+}
+
+impl Closest {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Closest {
+        Closest { best: None, limit: ray.t_max }
+    }
+
+    /// Offers the hits of one group of lanes, all tested against the limit at its start:
+    /// lanes ascend with the index, so the first of equal `t` is kept.
+    #[inline(always)]
+    fn offer(&mut self, t: f32, triangle: u32, b1: f32, b2: f32) {
+        if self.best.is_none_or(|best| t < best.t) {
+            self.best = Some(Hit { t, triangle, b1, b2 });
+            self.limit = t;
+        }
+    }
+
+    /// Offers a hit in any order: the nearer wins, the lower index at equal `t`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn offer_any(&mut self, t: f32, triangle: u32, b1: f32, b2: f32) {
+        let nearer =
+            self.best.is_none_or(|best| t < best.t || (t == best.t && triangle < best.triangle));
+        if nearer {
+            self.best = Some(Hit { t, triangle, b1, b2 });
+        }
+    }
+}
+
+/// The scalar twin: every block lane by lane, the batched pre-test, then the full test.
+pub(crate) fn closest_hit_scalar(flat: &Flat, ray: &Ray) -> Option<Hit> {
+    if !can_hit(ray) {
+        return None;
+    }
+    let watertight = WatertightRay::new(ray);
+    let mut closest = Closest::new(ray);
+    for block in &flat.blocks {
+        let mut candidates = watertight.block_candidates(&block.triangles, closest.limit);
+        candidates &= block.lanes;
+        let limit = closest.limit;
+        while candidates != 0 {
+            let lane = candidates.trailing_zeros() as usize;
+            candidates &= candidates - 1;
+            let [v0, v1, v2] = block.triangles.triangle(lane);
+            if let Some(h) = watertight.intersect(v0, v1, v2, limit) {
+                closest.offer(h.t, block.ids[lane], h.b1, h.b2);
+            }
+        }
+    }
+    closest.best
+}
+
+/// The scalar twin of occlusion.
+pub(crate) fn occluded_scalar(flat: &Flat, ray: &Ray) -> bool {
+    if !can_hit(ray) {
+        return false;
+    }
+    let watertight = WatertightRay::new(ray);
+    flat.blocks.iter().any(|block| {
+        let mut candidates = watertight.block_candidates(&block.triangles, ray.t_max);
+        candidates &= block.lanes;
+        while candidates != 0 {
+            let lane = candidates.trailing_zeros() as usize;
+            candidates &= candidates - 1;
+            let [v0, v1, v2] = block.triangles.triangle(lane);
+            if watertight.intersect(v0, v1, v2, ray.t_max).is_some() {
+                return true;
+            }
+        }
+        false
+    })
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::{closest_hit_avx2, closest_hit_avx512, closest_hit_sse2};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::{occluded_avx2, occluded_avx512, occluded_sse2};
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::{__m128, __m256, __m512};
+
+    use super::*;
+    use crate::bvh::kernels::{LaneHits, LaneMask, Lanes, WatertightLanes, watertight_lanes_with};
+
+    /// The ray's part of the lane test, broadcast once per query.
+    struct RayLanes<V> {
+        origin: [V; 3],
+        shear: [V; 3],
+        abs_shear: [V; 2],
+        t_min: V,
+        axes: [usize; 3],
+    }
+
+    impl<V: Lanes> RayLanes<V> {
+        /// # Safety
+        /// The CPU must support `V`'s instruction set.
+        #[inline(always)]
+        unsafe fn new(ray: &WatertightRay) -> Self {
+            let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                RayLanes {
+                    origin: [
+                        V::splat(ray.origin[kx]),
+                        V::splat(ray.origin[ky]),
+                        V::splat(ray.origin[kz]),
+                    ],
+                    shear: [V::splat(ray.shear_x), V::splat(ray.shear_y), V::splat(ray.shear_z)],
+                    abs_shear: [V::splat(ray.shear_x.abs()), V::splat(ray.shear_y.abs())],
+                    t_min: V::splat(ray.t_min),
+                    axes: [kx, ky, kz],
+                }
+            }
+        }
+
+        /// The lane test of lanes `first..first + W` of `block` for hits below `t_max`.
+        ///
+        /// # Safety
+        /// The CPU must support `V`'s instruction set, `V` must hold `W` floats, and `first` must
+        /// be a multiple of `W` below [`FLAT_LANES`] (rows are 64-byte aligned, so every load is
+        /// aligned to the register's size).
+        #[inline(always)]
+        unsafe fn test<const W: usize>(
+            &self,
+            block: &FlatBlock,
+            first: usize,
+            t_max: f32,
+        ) -> LaneHits<V> {
+            debug_assert!(first.is_multiple_of(W) && first + W <= FLAT_LANES);
+            let [kx, ky, kz] = self.axes;
+            let rows = &block.triangles.vertices;
+            // SAFETY: the caller's guarantee; `first + W <= 16` keeps every load in its row.
+            unsafe {
+                let row = |j: usize, axis: usize| V::load(rows[j][axis][first..].as_ptr());
+                let lanes = WatertightLanes {
+                    origin: self.origin,
+                    shear: self.shear,
+                    abs_shear: self.abs_shear,
+                    t_min: self.t_min,
+                    t_max: V::splat(t_max),
+                    vertices: [
+                        [row(0, kx), row(0, ky), row(0, kz)],
+                        [row(1, kx), row(1, ky), row(1, kz)],
+                        [row(2, kx), row(2, ky), row(2, kz)],
+                    ],
+                };
+                let mask = (block.lanes >> first) & ((1u32 << W) - 1);
+                watertight_lanes_with::<V, false>(&lanes, mask)
+            }
+        }
+    }
+
+    /// The closest hit with `W`-lane registers `V`.
+    ///
+    /// Branch-free across blocks: every block is tested against the ray's own range (not the
+    /// best hit so far, so the blocks' tests do not wait for each other), and each lane keeps
+    /// the nearest of its hits in registers, the earlier block winning at equal `t` (blocks
+    /// ascend in index). One reduction at the end picks the nearest lane, the lowest index among
+    /// equals. Lanes only the double-precision test can decide (rare) are merged alongside.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set, and `V` must hold `W` floats.
+    #[inline(always)]
+    unsafe fn closest_hit<V: Lanes, const W: usize>(flat: &Flat, ray: &Ray) -> Option<Hit> {
+        if !can_hit(ray) {
+            return None;
+        }
+        let watertight = WatertightRay::new(ray);
+        // SAFETY (the whole body): the caller's guarantee; `first` steps by `W` below 16, ids
+        // are as aligned as the rows, and every store writes `W` floats into an array of `W`.
+        unsafe {
+            let lanes = RayLanes::<V>::new(&watertight);
+            let mut best_t = V::splat(f32::INFINITY);
+            let mut best_b1 = V::splat(0.0);
+            let mut best_b2 = V::splat(0.0);
+            // Triangle indices ride along as float bits: only ever selected, never computed.
+            let mut best_id = V::splat(f32::from_bits(u32::MAX));
+            let mut rare = Closest::new(ray);
+            for block in &flat.blocks {
+                for first in (0..FLAT_LANES).step_by(W) {
+                    let decided = lanes.test::<W>(block, first, ray.t_max);
+                    let nearer = decided.hit_mask.and(decided.t.lt(best_t));
+                    best_t = V::select(nearer, decided.t, best_t);
+                    best_b1 = V::select(nearer, decided.b1, best_b1);
+                    best_b2 = V::select(nearer, decided.b2, best_b2);
+                    let ids = V::load(block.ids[first..].as_ptr().cast::<f32>());
+                    best_id = V::select(nearer, ids, best_id);
+                    let mut undecided = decided.undecided;
+                    while undecided != 0 {
+                        let lane = undecided.trailing_zeros() as usize;
+                        undecided &= undecided - 1;
+                        let [v0, v1, v2] = block.triangles.triangle(first + lane);
+                        if let Some(h) = watertight.intersect(v0, v1, v2, ray.t_max) {
+                            rare.offer_any(h.t, block.ids[first + lane], h.b1, h.b2);
+                        }
+                    }
+                }
+            }
+            let t = best_t.reduce_min();
+            let mut best = None;
+            if t < f32::INFINITY {
+                let (mut ids, mut b1, mut b2) = ([0.0f32; W], [0.0f32; W], [0.0f32; W]);
+                best_id.store(ids.as_mut_ptr());
+                best_b1.store(b1.as_mut_ptr());
+                best_b2.store(b2.as_mut_ptr());
+                let mut nearest = best_t.eq(V::splat(t)).bits();
+                let mut lane = nearest.trailing_zeros() as usize;
+                nearest &= nearest - 1;
+                // Equal `t` in several lanes (a shared edge or vertex): the lowest index.
+                while nearest != 0 {
+                    let other = nearest.trailing_zeros() as usize;
+                    nearest &= nearest - 1;
+                    if ids[other].to_bits() < ids[lane].to_bits() {
+                        lane = other;
+                    }
+                }
+                best = Some(Hit { t, triangle: ids[lane].to_bits(), b1: b1[lane], b2: b2[lane] });
+            }
+            if let Some(h) = rare.best {
+                let nearer =
+                    best.is_none_or(|b: Hit| h.t < b.t || (h.t == b.t && h.triangle < b.triangle));
+                if nearer {
+                    best = Some(h);
+                }
+            }
+            best
+        }
+    }
+
+    /// Whether anything is hit, with `W`-lane registers `V`.
+    ///
+    /// # Safety
+    /// As for [`closest_hit`].
+    #[inline(always)]
+    unsafe fn occluded<V: Lanes, const W: usize>(flat: &Flat, ray: &Ray) -> bool {
+        if !can_hit(ray) {
+            return false;
+        }
+        let watertight = WatertightRay::new(ray);
+        // SAFETY: the caller's guarantee.
+        let lanes = unsafe { RayLanes::<V>::new(&watertight) };
+        for block in &flat.blocks {
+            for first in (0..FLAT_LANES).step_by(W) {
+                // SAFETY: the caller's guarantee; `first` steps by `W` below 16.
+                let decided = unsafe { lanes.test::<W>(block, first, ray.t_max) };
+                if decided.hits != 0 {
+                    return true;
+                }
+                let mut undecided = decided.undecided;
+                while undecided != 0 {
+                    let lane = undecided.trailing_zeros() as usize;
+                    undecided &= undecided - 1;
+                    let [v0, v1, v2] = block.triangles.triangle(first + lane);
+                    if watertight.intersect(v0, v1, v2, ray.t_max).is_some() {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    pub(crate) fn closest_hit_sse2(flat: &Flat, ray: &Ray) -> Option<Hit> {
+        // SAFETY: SSE2 is part of x86-64; an `__m128` holds 4 floats.
+        unsafe { closest_hit::<__m128, 4>(flat, ray) }
+    }
+
+    pub(crate) fn occluded_sse2(flat: &Flat, ray: &Ray) -> bool {
+        // SAFETY: SSE2 is part of x86-64; an `__m128` holds 4 floats.
+        unsafe { occluded::<__m128, 4>(flat, ray) }
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(crate) unsafe fn closest_hit_avx2(flat: &Flat, ray: &Ray) -> Option<Hit> {
+        // SAFETY: the caller checked AVX2; an `__m256` holds 8 floats.
+        unsafe { closest_hit::<__m256, 8>(flat, ray) }
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(crate) unsafe fn occluded_avx2(flat: &Flat, ray: &Ray) -> bool {
+        // SAFETY: the caller checked AVX2; an `__m256` holds 8 floats.
+        unsafe { occluded::<__m256, 8>(flat, ray) }
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2 and AVX-512 F and VL.
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    pub(crate) unsafe fn closest_hit_avx512(flat: &Flat, ray: &Ray) -> Option<Hit> {
+        // SAFETY: the caller checked AVX-512; an `__m512` holds 16 floats.
+        unsafe { closest_hit::<__m512, 16>(flat, ray) }
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2 and AVX-512 F and VL.
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    pub(crate) unsafe fn occluded_avx512(flat: &Flat, ray: &Ray) -> bool {
+        // SAFETY: the caller checked AVX-512; an `__m512` holds 16 floats.
+        unsafe { occluded::<__m512, 16>(flat, ray) }
+    }
+}
