@@ -121,6 +121,8 @@ pub struct Sampler {
     index: u32,
     /// A hash of (seed, pixel): the scrambles' and the streams' root.
     pixel_seed: u64,
+    /// `index` with its bits reversed: the Sobol' points' first step, done once per sample.
+    reversed_index: u32,
     /// The next dimension to hand out.
     dimension: u32,
     /// The independent numbers' stream, started at its first use (the lab's one sample per
@@ -133,7 +135,8 @@ impl Sampler {
     #[inline]
     pub fn new(kind: SamplerKind, seed: u64, pixel: (u32, u32), index: u32) -> Sampler {
         let pixel_seed = mix64(pixel_hash(pixel.0, pixel.1) ^ mix64(seed));
-        Sampler { kind, pixel, index, pixel_seed, dimension: 0, rng: None }
+        let reversed_index = index.reverse_bits();
+        Sampler { kind, pixel, index, pixel_seed, reversed_index, dimension: 0, rng: None }
     }
 
     /// The stream of independent numbers: per sample, its state per pixel.
@@ -181,7 +184,8 @@ impl Sampler {
             SamplerKind::Sobol => {
                 let [shuffle, scramble, _] = self.dimension_seeds(self.dimension);
                 self.dimension += 1;
-                let index = nested_uniform_scramble(self.index, shuffle);
+                // nested_uniform_scramble(index, shuffle), its first reversal done in `new`.
+                let index = laine_karras_permutation(self.reversed_index, shuffle).reverse_bits();
                 // The first Sobol' dimension is the bit-reversed index; Owen-scrambling it is
                 // reverse(LK(reverse(reverse(index)))) = reverse(LK(index)).
                 u32_to_unit(laine_karras_permutation(index, scramble).reverse_bits())
@@ -200,7 +204,7 @@ impl Sampler {
             SamplerKind::Sobol => {
                 let seeds = self.dimension_seeds(self.dimension);
                 self.dimension += 2;
-                let p = shuffled_scrambled_sobol_2d(self.index, seeds);
+                let p = shuffled_scrambled_sobol_2d(self.reversed_index, seeds);
                 Vec2::new(u32_to_unit(p[0]), u32_to_unit(p[1]))
             }
             _ => {
@@ -225,7 +229,7 @@ fn hash32(mut x: u32) -> u32 {
 /// The second dimension of the Sobol' sequence (the first is the bit reversal of the index),
 /// as 32-bit fixed point: the XOR of the direction numbers of the index's set bits, a byte of
 /// the index at a time from tables (no branch per bit).
-#[inline]
+#[cfg(test)]
 fn sobol_second_dimension(index: u32) -> u32 {
     let [b0, b1, b2, b3] = index.to_le_bytes();
     SOBOL_SECOND_DIMENSION[0][b0 as usize]
@@ -280,20 +284,71 @@ fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
 }
 
 /// An Owen scramble of a 32-bit fixed-point number (Burley 2020, listing 3).
-#[inline]
+#[cfg(test)]
 fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
     laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
 }
 
 /// Point `index` of a 2D Sobol' set whose order is shuffled and whose coordinates are
-/// Owen-scrambled, each by its own seed (Burley 2020, listing 5).
+/// Owen-scrambled, each by its own seed (Burley 2020, listing 5), given `index` bit-reversed.
+///
+/// The same bits as [`shuffled_scrambled_sobol_2d_reference`] (tested), with three bit reversals
+/// where the listing has five, two of them done as one 64-bit reversal: the shuffled index's
+/// reversal is the permutation's input as it stands, and the second dimension's reversal is read
+/// from a table of reversed direction numbers indexed by the permuted bits directly.
 #[inline]
-fn shuffled_scrambled_sobol_2d(index: u32, [shuffle, seed_x, seed_y]: [u32; 3]) -> [u32; 2] {
+fn shuffled_scrambled_sobol_2d(
+    reversed_index: u32,
+    [shuffle, seed_x, seed_y]: [u32; 3],
+) -> [u32; 2] {
+    // nested_uniform_scramble(index, shuffle) = reverse(permuted).
+    let permuted = laine_karras_permutation(reversed_index, shuffle);
+    let index = permuted.reverse_bits();
+    let [b0, b1, b2, b3] = permuted.to_le_bytes();
+    // reverse(sobol_second_dimension(index)).
+    let y_reversed = SOBOL_SECOND_DIMENSION_REVERSED[0][b0 as usize]
+        ^ SOBOL_SECOND_DIMENSION_REVERSED[1][b1 as usize]
+        ^ SOBOL_SECOND_DIMENSION_REVERSED[2][b2 as usize]
+        ^ SOBOL_SECOND_DIMENSION_REVERSED[3][b3 as usize];
+    let x = laine_karras_permutation(index, seed_x);
+    let y = laine_karras_permutation(y_reversed, seed_y);
+    // reverse(x) in the low half, reverse(y) in the high half.
+    let both = ((x as u64) << 32 | y as u64).reverse_bits();
+    [both as u32, (both >> 32) as u32]
+}
+
+/// Burley's listing 5 as written, the twin of [`shuffled_scrambled_sobol_2d`].
+#[cfg(test)]
+fn shuffled_scrambled_sobol_2d_reference(
+    index: u32,
+    [shuffle, seed_x, seed_y]: [u32; 3],
+) -> [u32; 2] {
     let index = nested_uniform_scramble(index, shuffle);
     // x = reverse(index) scrambled: reverse(LK(reverse(reverse(index)))) = reverse(LK(index)).
     let x = laine_karras_permutation(index, seed_x).reverse_bits();
     let y = nested_uniform_scramble(sobol_second_dimension(index), seed_y);
     [x, y]
+}
+
+/// `SOBOL_SECOND_DIMENSION_REVERSED[k][b]`: `reverse(sobol_second_dimension(reverse(w)))` for the
+/// word `w` whose byte `k` is `b` and whose other bytes are zero, so that for any `w` it is the
+/// XOR of the entries of `w`'s four bytes.
+static SOBOL_SECOND_DIMENSION_REVERSED: [[u32; 256]; 4] = sobol_second_dimension_reversed_tables();
+
+const fn sobol_second_dimension_reversed_tables() -> [[u32; 256]; 4] {
+    let mut tables = [[0u32; 256]; 4];
+    let mut byte = 0;
+    while byte < 4 {
+        let mut value = 0;
+        while value < 256 {
+            // Byte `byte` of w reversed is byte `3 - byte` of reverse(w), its bits reversed.
+            let reversed = (value as u8).reverse_bits() as usize;
+            tables[byte][value] = SOBOL_SECOND_DIMENSION[3 - byte][reversed].reverse_bits();
+            value += 1;
+        }
+        byte += 1;
+    }
+    tables
 }
 
 #[cfg(test)]
@@ -324,6 +379,21 @@ mod tests {
         let mut rng = Pcg32::new(5, 6);
         for index in (0..4096).chain((0..10_000).map(|_| rng.next_u32())).chain([u32::MAX]) {
             assert_eq!(sobol_second_dimension(index), bit_by_bit(index), "{index}");
+        }
+    }
+
+    #[test]
+    fn the_fast_sobol_points_equal_burleys_listing() {
+        let mut rng = Pcg32::new(8, 9);
+        let mut indices: Vec<u32> = (0..2048).chain([u32::MAX]).collect();
+        indices.extend((0..20_000).map(|_| rng.next_u32()));
+        for i in indices {
+            let seeds = [rng.next_u32(), rng.next_u32(), rng.next_u32()];
+            assert_eq!(
+                shuffled_scrambled_sobol_2d(i.reverse_bits(), seeds),
+                shuffled_scrambled_sobol_2d_reference(i, seeds),
+                "index {i}, seeds {seeds:?}"
+            );
         }
     }
 
