@@ -139,7 +139,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let build = start.elapsed();
     let stage = args.scene.stage;
     let lab;
-    let path;
+    let mut path = None;
     let aov;
     let integrator: &dyn Integrator = match integrator_name.as_str() {
         "lab" => {
@@ -152,8 +152,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 light_sampling: args.light_sampling,
                 ..PathSettings::default()
             };
-            path = Path::new(scene, &accel, settings);
-            &path
+            &*path.insert(Path::new(scene, &accel, settings))
         }
         other => {
             let kind = match other {
@@ -179,6 +178,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         Ok((accumulator.mean()?, accumulator.samples()))
     })?;
+    if let Some(discarded) = path.as_ref().map(Path::discarded_samples).filter(|&n| n > 0) {
+        let total = width as u64 * height as u64 * spp as u64;
+        eprintln!(
+            "raylab: warning: {discarded} of {total} samples were not finite (NaN or infinite \
+             radiance, e.g. from a degenerate triangle or normal) and count as black"
+        );
+    }
     // The extra layers, over the same samples.
     let mut layers = Vec::new();
     for name in &args.aov {

@@ -361,6 +361,24 @@ fn scene_files_render_path_traced_radiance_to_exr_and_pfm() {
         // Linear radiance: the light's pixels are far above 1.
         assert!(film.pixels().iter().any(|p| p.x > 10.0), "{name}");
     }
+    // A sound scene discards no sample.
+    let out =
+        raylab(dir.path(), &["render", &cbox, "--size", "16x16", "--spp", "2", "-o", "s.pfm"]);
+    assert!(!text(&out.stderr).contains("not finite"), "{}", text(&out.stderr));
+    // A point light 0.001 above a sphere: I/d² overflows, and the render says how often.
+    let hot = "[render]\nsize = [16, 16]\nspp = 2\nintegrator = \"path\"\n\
+        [camera]\nposition = [0, 0, 3]\ntarget = [0, 0, 0]\nfov = 40\n\
+        [materials.white]\ntype = \"diffuse\"\nreflectance = [0.8, 0.8, 0.8]\n\
+        [[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\n\
+        [[lights]]\ntype = \"point\"\nposition = [0, 0, 1.001]\nintensity = [1e37, 1e37, 1e37]\n";
+    std::fs::write(dir.path().join("hot.toml"), hot).unwrap();
+    let out = raylab(dir.path(), &["render", "hot.toml", "-o", "hot.pfm"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("of 512 samples were not finite") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
     // Seeds change the noise, and the same seed gives the same file.
     let render = |seed: &str, name: &str| {
         let args = ["render", &cbox, "--size", "16x16", "--spp", "2", "--seed", seed, "-o", name];

@@ -184,3 +184,22 @@ fn no_material_creates_energy_in_a_white_furnace_and_smooth_glass_disappears() {
         }
     }
 }
+
+/// A sample whose radiance overflows counts as black and is counted, so that `raylab render` can
+/// say so; a sound scene discards none.
+#[test]
+fn samples_that_overflow_are_counted_as_discarded() {
+    let count = |emission: f32| {
+        let scene = furnace(0.5, emission);
+        let accel = BruteForce::new(&scene.vertices());
+        let path = Path::new(&scene, &accel, PathSettings::default());
+        let camera = Camera { position: Vec3::new(0.1, -0.2, 0.05), ..Camera::lab(8, 8) };
+        let mut accumulator = Accumulator::new(8, 8).unwrap();
+        accumulator.add_sample(&camera, &path);
+        let film = accumulator.mean().unwrap();
+        (path.discarded_samples(), film.pixels().iter().all(|p| p.is_finite()))
+    };
+    // Le = f32::MAX seen directly, plus anything more, is infinite.
+    assert_eq!(count(f32::MAX), (64, true));
+    assert_eq!(count(1.0), (0, true));
+}

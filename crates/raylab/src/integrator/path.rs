@@ -17,6 +17,7 @@
 //! area lights emit from their front side only.
 
 use std::borrow::Cow;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::{Vec2, Vec3};
 
@@ -52,13 +53,15 @@ pub struct Path<'a, A: ?Sized> {
     accel: &'a A,
     lights: Cow<'a, LightSet>,
     settings: PathSettings,
+    /// Samples that were not a finite, non-negative colour and counted as black.
+    discarded: AtomicU64,
 }
 
 impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// A path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
     pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
         let lights = LightSet::new(scene).with_triangle_sampling(settings.light_sampling);
-        Path { scene, accel, lights: Cow::Owned(lights), settings }
+        Path { scene, accel, lights: Cow::Owned(lights), settings, discarded: AtomicU64::new(0) }
     }
 
     /// A path tracer with lights made before (`raylab view` keeps them from frame to frame).
@@ -68,12 +71,18 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         lights: &'a LightSet,
         settings: PathSettings,
     ) -> Self {
-        Path { scene, accel, lights: Cow::Borrowed(lights), settings }
+        Path { scene, accel, lights: Cow::Borrowed(lights), settings, discarded: AtomicU64::new(0) }
     }
 
     /// The lights it samples.
     pub fn lights(&self) -> &LightSet {
         &self.lights
+    }
+
+    /// How many samples so far were not a finite, non-negative colour (a NaN from a degenerate
+    /// triangle, an overflow) and counted as black: `raylab render` warns when there are any.
+    pub fn discarded_samples(&self) -> u64 {
+        self.discarded.load(Ordering::Relaxed)
     }
 }
 
@@ -187,8 +196,13 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
             }
         }
         // A sample that is not a finite, non-negative colour (a degenerate triangle's NaN, an
-        // overflow) would spoil its pixel for good: it counts as black instead.
-        if radiance.is_finite() && radiance.min_element() >= 0.0 { radiance } else { Vec3::ZERO }
+        // overflow) would spoil its pixel for good: it counts as black instead, and is counted.
+        if radiance.is_finite() && radiance.min_element() >= 0.0 {
+            radiance
+        } else {
+            self.discarded.fetch_add(1, Ordering::Relaxed);
+            Vec3::ZERO
+        }
     }
 }
 
