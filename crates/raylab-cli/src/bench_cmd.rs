@@ -70,6 +70,12 @@ pub struct BenchArgs {
     #[arg(long, value_name = "ISA")]
     isa: Option<String>,
 
+    /// Print Embree's figures beside raylab's, from the `summary.json` of an Embree reference run
+    /// (`embree_bench MESH --rays DIR`, on the same rays); give it twice for the default and the
+    /// `--robust` run.
+    #[arg(long, value_name = "SUMMARY")]
+    embree: Vec<PathBuf>,
+
     /// Also write the figures as JSON to FILE.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -107,6 +113,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let mesh = loaded.mesh;
     let triangles: Vec<_> = mesh.triangle_vertices().collect();
+    let embree: Vec<_> = args
+        .embree
+        .iter()
+        .map(|path| crate::embree_columns::load(path, triangles.len()))
+        .collect::<Result<_>>()?;
     let mut settings = match preset {
         Some(settings) => settings,
         None => BuildSettings::for_triangles(triangles.len()),
@@ -221,6 +232,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         query: "packet",
         mrays_per_s: per_threads,
     });
+
+    if !embree.is_empty() {
+        let rays = [sets[0].2.len(), sets[1].2.len(), sets[2].2.len(), tiled.len()];
+        let measured: Vec<_> = results
+            .iter()
+            .zip(rays)
+            .map(|(r, rays)| crate::embree_columns::Measured {
+                set: &r.set,
+                query: r.query,
+                rays,
+                mrays_per_s: &r.mrays_per_s,
+            })
+            .collect();
+        print!("{}", crate::embree_columns::table(&embree, &measured));
+    }
 
     // Answers: compare with reference files in DIR where present, and write them if asked.
     let primary_hits: Vec<HitRecord> = trace_closest(&bvh, &sets[0].2, threads);

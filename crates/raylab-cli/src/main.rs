@@ -3,6 +3,7 @@
 
 mod args;
 mod bench_cmd;
+mod embree_columns;
 mod render_cmd;
 mod scene_args;
 mod stats;

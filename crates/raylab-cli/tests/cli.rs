@@ -330,6 +330,31 @@ fn bench_generates_traces_and_reports() {
     let out =
         raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"]);
     assert!(text(&out.stdout).contains("primary.hits: 768 of 768 agree"), "{}", text(&out.stdout));
+    // Embree's figures beside raylab's, from its summary.json; another mesh's is refused.
+    let summary = |triangles: usize| {
+        format!(
+            r#"{{"embree": {{"version": "3.13.5", "robust": false}},
+            "mesh_stats": {{"triangles": {triangles}}}, "results": [{{"set": "diffuse",
+            "query": "closest", "mode": "single", "threads": 1, "rays": 768,
+            "mrays_per_s": 1234.5}}]}}"#
+        )
+    };
+    std::fs::write(dir.path().join("embree.json"), summary(32)).unwrap();
+    std::fs::write(dir.path().join("other.json"), summary(31)).unwrap();
+    let bench = |summary: &str| {
+        let args = ["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"];
+        raylab(dir.path(), &[&args[..], &["--embree", summary]].concat())
+    };
+    let out = bench("embree.json");
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("beside Embree") && stdout.contains("1234.50"), "{stdout}");
+    let out = bench("other.json");
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("31 triangles, not this mesh's 32"),
+        "{}",
+        text(&out.stderr)
+    );
     // Bad input: one line, non-zero.
     let out = raylab(dir.path(), &["bench", mesh, "--rays", "nowhere"]);
     assert_eq!(out.status.code(), Some(1));
