@@ -4,6 +4,61 @@
 //! (KTH DH2323 Lab 2, Bristol COMS30115) and does it right: watertight ray/triangle intersection,
 //! the closest hit, shadow rays without acne at any scale, and the true field of view.
 //!
+//! ## Ray queries
+//!
+//! Build a [`Bvh`] over a mesh's triangles and ask it the two questions of every ray tracer
+//! ([`Accelerator`]): what does this ray hit first ([`closest_hit`](Accelerator::closest_hit)),
+//! and is anything in the way ([`occluded`](Accelerator::occluded)), for one ray or a batch. The
+//! test is watertight (no ray slips between two triangles that share an edge), and the answers
+//! are exactly those of testing every triangle ([`BruteForce`]), ties at equal `t` going to the
+//! lowest triangle index.
+//!
+//! ```
+//! use glam::Vec3;
+//! use raylab::{Accelerator, Bvh, Ray};
+//!
+//! let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/meshes/bunny_lowres.obj");
+//! let mesh = raylab::scene::load_mesh(std::path::Path::new(file))?.mesh;
+//! let triangles: Vec<[Vec3; 3]> = mesh.triangle_vertices().collect();
+//! let bvh = Bvh::new(&triangles);
+//!
+//! // One ray, from far in front of the bunny toward the middle of its bounding box.
+//! let (lo, hi) = triangles.iter().flatten().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
+//!     (lo.min(v), hi.max(v))
+//! });
+//! let centre = (lo + hi) / 2.0;
+//! let origin = centre - Vec3::Z * 10.0 * (hi - lo).length();
+//! let ray = Ray::new(origin, centre - origin);
+//! let hit = bvh.closest_hit(&ray).expect("the bunny");
+//! let [v0, v1, v2] = triangles[hit.triangle as usize];
+//! let point = hit.b0() * v0 + hit.b1 * v1 + hit.b2 * v2; // the barycentric weights of the hit
+//! assert!((point - ray.at(hit.t)).length() < 1e-3 * (hi - lo).length());
+//!
+//! // A shadow ray is a segment: is anything between the hit and the origin?
+//! let back = Ray::segment(origin, point - origin, 0.999);
+//! assert!(!bvh.occluded(&back));
+//!
+//! // A batch: a tile of rays answered together (coherent rays go as packets), with exactly
+//! // the single-ray answers.
+//! let rays: Vec<Ray> = (0..64)
+//!     .map(|i| {
+//!         let offset = Vec3::new((i % 8) as f32 - 3.5, (i / 8) as f32 - 3.5, 0.0) * 0.01;
+//!         Ray::new(origin, centre + offset * (hi - lo).length() - origin)
+//!     })
+//!     .collect();
+//! let mut hits = vec![None; rays.len()];
+//! bvh.closest_hits(&rays, &mut hits);
+//! let mut blocked = vec![false; rays.len()];
+//! bvh.occluded_each(&rays, &mut blocked);
+//! for (ray, (hit, blocked)) in rays.iter().zip(hits.iter().zip(&blocked)) {
+//!     assert_eq!(*hit, bvh.closest_hit(ray));
+//!     assert_eq!(*blocked, hit.is_some());
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! ## Rendering
+//!
 //! The renderer is one flow: **scene → accelerator → integrator → film → image**. Its
 //! integrators are the lab's light model ([`Lab`]) and a physically based path tracer
 //! ([`Path`]) that converges to Mitsuba 3's images.
