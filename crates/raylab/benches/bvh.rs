@@ -34,6 +34,10 @@ fn bvh(c: &mut Criterion) {
                 b.iter(|| pool.install(|| Bvh::build(&triangles, s)))
             });
         }
+        // Refit to the same triangles moved a little: the cost of an animated frame.
+        let mut bvh = Bvh::build(&triangles, &BuildSettings::default());
+        let moved: Vec<_> = triangles.iter().map(|t| t.map(|v| v * 1.001)).collect();
+        build.bench_function("refit", |b| b.iter(|| bvh.refit(&moved)));
         build.finish();
 
         let bvh = Bvh::build(&triangles, &BuildSettings::default());

@@ -419,3 +419,74 @@ fn rays_with_nan_or_empty_ranges_agree_on_every_kernel() {
     let hits = assert_agreement(&triangles, &rays).unwrap();
     assert_eq!(hits, 2, "only the two rays with a valid range hit");
 }
+
+/// Every variant, refitted to moved triangles, gives brute force's answers for the new
+/// positions (single rays and packets): vertices jittered, a cluster moved far away, one triangle
+/// flattened onto a line and one given a NaN vertex (both then never hit). Refitting to the
+/// build's own positions changes nothing; a wrong count, or a triangle the build left out that
+/// now has area, is refused and leaves the tree as it was.
+#[test]
+fn refitted_trees_agree_with_brute_force_on_moved_triangles() {
+    let mut state = 99u64;
+    let mut next = move || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((state >> 40) as f32) / (1u64 << 24) as f32
+    };
+    let mut vec = move || Vec3::new(next(), next(), next());
+    for count in [20usize, 400] {
+        let mut triangles: Vec<[Vec3; 3]> = (0..count)
+            .map(|_| {
+                let p = vec() * 10.0;
+                [p, p + vec(), p + vec()]
+            })
+            .collect();
+        triangles[3] = [Vec3::ONE; 3]; // zero area at build: left out
+        let mut moved: Vec<[Vec3; 3]> = triangles
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let shift = if i % 5 == 0 { Vec3::new(30.0, -5.0, 2.0) } else { Vec3::ZERO };
+                t.map(|v| v + shift + (vec() - 0.5) * 0.3)
+            })
+            .collect();
+        moved[3] = [Vec3::ONE; 3];
+        // Flattened onto a line (exactly: zero area), in the middle of the others, where the
+        // lane test's rounded edge functions could see area.
+        let a = moved[7][0].round();
+        moved[7] = [a, a + Vec3::new(1.0, 0.5, 0.25), a + Vec3::new(2.0, 1.0, 0.5)];
+        moved[8][1] = Vec3::NAN;
+        let rays = [mesh_rays(&triangles, 300), mesh_rays(&moved, 300)].concat();
+        let brute = BruteForce::new(&moved);
+        let expected: Vec<_> =
+            rays.iter().map(|r| (brute.closest_hit(r), brute.occluded(r))).collect();
+        assert!(expected.iter().filter(|e| e.0.is_some()).count() > 100);
+        for (name, mut bvh) in bvhs(&triangles) {
+            // The build's own positions: the same answers as the unrefitted tree.
+            let before: Vec<_> = rays.iter().map(|r| bvh.closest_hit(r)).collect();
+            bvh.refit(&triangles).unwrap();
+            assert!(rays.iter().zip(&before).all(|(r, b)| bvh.closest_hit(r) == *b), "{name}");
+            // Refused: the tree is left as it was.
+            let mut revived = triangles.clone();
+            revived[3] = [Vec3::ZERO, Vec3::X, Vec3::Y];
+            assert_eq!(bvh.refit(&revived), Err(raylab::bvh::RefitError::NewTriangle(3)));
+            assert!(matches!(
+                bvh.refit(&triangles[1..]),
+                Err(raylab::bvh::RefitError::TriangleCount { .. })
+            ));
+            assert!(rays.iter().zip(&before).all(|(r, b)| bvh.closest_hit(r) == *b), "{name}");
+            bvh.refit(&moved).unwrap();
+            assert_eq!(bvh.stats().indexed_triangles, count - 3, "{name}");
+            for (ray, (closest, occluded)) in rays.iter().zip(&expected) {
+                assert_eq!(bvh.closest_hit(ray), *closest, "{name}: {ray:?}");
+                assert_eq!(bvh.occluded(ray), *occluded, "{name}: {ray:?}");
+            }
+            let mut closest = vec![None; rays.len()];
+            let mut occluded = vec![false; rays.len()];
+            bvh.closest_hits(&rays, &mut closest);
+            bvh.occluded_each(&rays, &mut occluded);
+            for (i, (c, o)) in expected.iter().enumerate() {
+                assert_eq!((closest[i], occluded[i]), (*c, *o), "{name} packet: {:?}", rays[i]);
+            }
+        }
+    }
+}

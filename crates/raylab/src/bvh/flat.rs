@@ -86,6 +86,13 @@ impl Flat {
     pub(crate) fn bytes(&self) -> usize {
         self.blocks.len() * size_of::<FlatBlock>()
     }
+
+    /// Each block's triangles, to move them, with their indices.
+    pub(crate) fn blocks_and_ids_mut(
+        &mut self,
+    ) -> impl Iterator<Item = (&mut TriangleBlock<FLAT_LANES>, &[u32; FLAT_LANES])> {
+        self.blocks.iter_mut().map(|b| (&mut b.triangles, &b.ids))
+    }
 }
 
 /// The closest hit so far. Blocks are visited in index order, so a later triangle wins only

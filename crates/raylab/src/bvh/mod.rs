@@ -6,7 +6,8 @@
 //! triangles four at a time. Traversal (`traverse`) visits the nearest child first for the closest
 //! hit and stops at the first hit for occlusion. Scenes of a few dozen triangles (the Cornell
 //! boxes) answer single rays without the tree: every triangle is tested, sixteen per instruction
-//! (`flat`, up to [`BuildSettings::flat_limit`] triangles).
+//! (`flat`, up to [`BuildSettings::flat_limit`] triangles). Moving geometry keeps its tree:
+//! [`Bvh::refit`] takes the triangles' new vertices and recomputes the boxes bottom-up (`refit`).
 //!
 //! The instruction set is picked once, at build time, from what the CPU supports: AVX-512 or AVX2
 //! where present, SSE2 on every other x86-64, portable scalar code elsewhere
@@ -35,12 +36,14 @@ mod build;
 mod flat;
 mod kernels;
 mod packet;
+mod refit;
 mod traverse;
 mod wide;
 
 use glam::Vec3;
 
 pub use bounds::{Bounds, Frustum, RayBoxTest};
+pub use refit::RefitError;
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;

@@ -93,7 +93,7 @@ impl WideNode {
         }
     }
 
-    fn set_bounds(&mut self, slot: usize, b: Bounds) {
+    pub(crate) fn set_bounds(&mut self, slot: usize, b: Bounds) {
         for axis in 0..3 {
             self.planes[axis][slot] = b.min[axis];
             self.planes[3 + axis][slot] = b.max[axis];

@@ -1,0 +1,145 @@
+//! Moving geometry without a rebuild: the same tree, its boxes recomputed bottom-up.
+//!
+//! An animated or skinned mesh keeps its triangles and only moves its vertices. [`Bvh::refit`]
+//! writes the new vertices into the leaves' copies (and the flat list of a small scene), then
+//! recomputes every child box from the leaves up. Nodes are stored depth first, every child after
+//! its parent, so one pass over the nodes from last to first sees each child before its parent.
+//! The answers stay exactly brute force's for the new positions (the box test only needs boxes
+//! that contain their triangles); only the tree's quality can suffer if the triangles move far
+//! from where they were built, which a rebuild restores.
+//!
+//! A triangle that loses its area or gets a non-finite vertex is parked: its lane gets NaN
+//! vertices, which no ray hits (as brute force never hits it). A triangle that was left out of
+//! the build for those reasons and now has area has no place in the tree: refit refuses, and the
+//! caller rebuilds.
+
+use glam::Vec3;
+
+use super::bounds::Bounds;
+use super::wide::{Child, WIDTH, decode};
+use super::{Bvh, flat};
+use crate::triangle::is_degenerate;
+
+/// Why [`Bvh::refit`] could not move the triangles.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RefitError {
+    /// The tree was built over another number of triangles.
+    TriangleCount {
+        /// Triangles at build.
+        built: usize,
+        /// Triangles given to refit.
+        given: usize,
+    },
+    /// A triangle the build left out (zero area or a non-finite vertex) now has area: rebuild.
+    NewTriangle(u32),
+}
+
+impl std::fmt::Display for RefitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RefitError::TriangleCount { built, given } => {
+                write!(f, "the BVH holds {built} triangles, not {given}: rebuild it")
+            }
+            RefitError::NewTriangle(i) => write!(
+                f,
+                "triangle {i} had no area when the BVH was built and has now: rebuild the BVH"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RefitError {}
+
+/// Whether a triangle can be hit at all: finite vertices and non-zero area.
+fn hittable(triangle: [Vec3; 3]) -> bool {
+    triangle.iter().all(|v| v.is_finite()) && !is_degenerate(triangle)
+}
+
+impl Bvh {
+    /// Moves the triangles to `triangles` (the same ones, in the same order, with new vertices)
+    /// and recomputes the boxes, keeping the tree (see the module documentation). Runs in time
+    /// linear in the tree's size, a fraction of a build.
+    ///
+    /// # Errors
+    /// If `triangles` has another length than at build, or a triangle the build left out now has
+    /// area ([`RefitError`]); the BVH is then unchanged.
+    pub fn refit(&mut self, triangles: &[[Vec3; 3]]) -> Result<(), RefitError> {
+        if triangles.len() != self.stats.triangles {
+            return Err(RefitError::TriangleCount {
+                built: self.stats.triangles,
+                given: triangles.len(),
+            });
+        }
+        let mut in_tree = vec![false; triangles.len()];
+        for &id in self.wide.ids.iter().flatten().filter(|&&id| id != u32::MAX) {
+            in_tree[id as usize] = true;
+        }
+        if let Some(i) = (0..triangles.len()).find(|&i| !in_tree[i] && hittable(triangles[i])) {
+            return Err(RefitError::NewTriangle(i as u32));
+        }
+        // The leaves' copies: hittable triangles as given, the rest parked on NaN.
+        let parked = [Vec3::NAN; 3];
+        let mut indexed = 0;
+        for (block, ids) in self.wide.blocks.iter_mut().zip(&self.wide.ids) {
+            for (lane, &id) in ids.iter().enumerate().filter(|(_, id)| **id != u32::MAX) {
+                let triangle = triangles[id as usize];
+                let keep = hittable(triangle);
+                indexed += keep as usize;
+                block.set(lane, if keep { triangle } else { parked });
+            }
+        }
+        if let Some(flat) = &mut self.flat {
+            flat.refit(triangles);
+        }
+        // Boxes, children before parents.
+        let leaf_bounds = |first_block: u32, blocks: u32| {
+            let mut bounds = Bounds::EMPTY;
+            for b in first_block as usize..(first_block + blocks) as usize {
+                for (lane, &id) in self.wide.ids[b].iter().enumerate() {
+                    let triangle = self.wide.blocks[b].triangle(lane);
+                    if id != u32::MAX && hittable(triangle) {
+                        bounds = bounds.union(Bounds::of_triangle(triangle));
+                    }
+                }
+            }
+            bounds
+        };
+        let mut node_bounds = vec![Bounds::EMPTY; self.wide.nodes.len()];
+        let mut child_bounds = vec![[Bounds::EMPTY; WIDTH]; self.wide.nodes.len()];
+        for index in (0..self.wide.nodes.len()).rev() {
+            let node = &self.wide.nodes[index];
+            let mut union = Bounds::EMPTY;
+            for (k, &child) in node.children.iter().enumerate() {
+                let bounds = match decode(child) {
+                    Child::Empty => continue,
+                    Child::Node(child) => node_bounds[child as usize],
+                    Child::Leaf { first_block, blocks } => leaf_bounds(first_block, blocks),
+                };
+                child_bounds[index][k] = bounds;
+                union = union.union(bounds);
+            }
+            node_bounds[index] = union;
+        }
+        for (node, bounds) in self.wide.nodes.iter_mut().zip(&child_bounds) {
+            for (k, &b) in bounds.iter().enumerate() {
+                if node.children[k] != super::wide::EMPTY {
+                    node.set_bounds(k, b);
+                }
+            }
+        }
+        self.stats.indexed_triangles = indexed;
+        Ok(())
+    }
+}
+
+impl flat::Flat {
+    /// The flat list's part of [`Bvh::refit`]: every lane's triangle as given, or parked on NaN.
+    pub(super) fn refit(&mut self, triangles: &[[Vec3; 3]]) {
+        for (block, ids) in self.blocks_and_ids_mut() {
+            for (lane, &id) in ids.iter().enumerate().filter(|(_, id)| **id != u32::MAX) {
+                let triangle = triangles[id as usize];
+                block.set(lane, if hittable(triangle) { triangle } else { [Vec3::NAN; 3] });
+            }
+        }
+    }
+}
