@@ -144,7 +144,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let mut bvh = None;
         for _ in 0..args.reps.max(3) {
             let start = Instant::now();
-            let built = pool.install(|| Bvh::build(&triangles, &settings));
+            let built = pool
+                .install(|| Bvh::try_build(&triangles, &settings))
+                .with_context(|| args.mesh.display().to_string())?;
             times.push(start.elapsed().as_secs_f64() * 1e3);
             bvh = Some(built);
         }
@@ -340,7 +342,8 @@ fn generate(
         );
     }
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
-    let bvh = Bvh::build(triangles, settings);
+    let bvh =
+        Bvh::try_build(triangles, settings).with_context(|| args.mesh.display().to_string())?;
     let focal = args.focal as f64 * args.size.width as f64;
     let primary = ray_sets::primary_rays(&frame, args.size.width, args.size.height, focal);
     let hits = trace_closest(&bvh, &primary, system::cores());

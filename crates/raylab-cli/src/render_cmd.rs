@@ -11,8 +11,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::film::{Display, ToneMap};
 use raylab::{
-    Accumulator, Aov, AovKind, Bvh, Film, Filter, Integrator, Lab, Path, PathSettings,
-    SampleSettings, SamplerKind, TriangleSampling, image_io,
+    Accumulator, Aov, AovKind, Film, Filter, Integrator, Lab, Path, PathSettings, SampleSettings,
+    SamplerKind, TriangleSampling, image_io,
 };
 
 use raylab::camera::tidy;
@@ -135,7 +135,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let pool = setup.thread_pool()?;
 
     let start = Instant::now();
-    let accel = pool.install(|| Bvh::new(&scene.vertices()));
+    let accel = pool.install(|| system::build_bvh(&scene.name, &scene.vertices()))?;
     let build = start.elapsed();
     let stage = args.scene.stage;
     let lab;

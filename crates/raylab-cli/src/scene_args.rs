@@ -146,7 +146,7 @@ impl SceneArgs {
         if camera.has_lens() && self.focus_distance.is_none() && scene_camera.is_none() {
             // Focus on what the image's centre sees.
             let centre = camera.ray(width as f32 / 2.0, height as f32 / 2.0);
-            let bvh = raylab::Bvh::new(&scene.vertices());
+            let bvh = system::build_bvh(&scene.name, &scene.vertices())?;
             if let Some(hit) = raylab::Accelerator::closest_hit(&bvh, &centre) {
                 camera.focus_distance = (hit.t * centre.direction.dot(camera.forward())).max(1e-6);
             }

@@ -28,6 +28,29 @@ pub fn check_memory(bytes: u64, width: u32, height: u32) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The BVH over a scene's triangles, or one line saying why not: more triangles than a BVH
+/// holds, or more memory for the build than the machine has available. `name` names the scene.
+pub fn build_bvh(name: &str, vertices: &[[glam::Vec3; 3]]) -> anyhow::Result<raylab::Bvh> {
+    check_bvh_memory(name, vertices.len(), available_memory_bytes())?;
+    raylab::Bvh::try_new(vertices).map_err(|e| anyhow::anyhow!("{name}: {e}"))
+}
+
+/// Whether a BVH over `triangles` fits in `available` bytes (unknown: assumed to fit).
+fn check_bvh_memory(name: &str, triangles: usize, available: Option<u64>) -> anyhow::Result<()> {
+    let bytes = raylab::Bvh::build_bytes_estimate(triangles);
+    if let Some(available) = available
+        && bytes > available
+    {
+        anyhow::bail!(
+            "{name}: {triangles} triangles need about {} of memory for the BVH, but only {} is \
+             available",
+            raylab::film::format_bytes(bytes),
+            raylab::film::format_bytes(available)
+        );
+    }
+    Ok(())
+}
+
 /// The number of threads the machine runs at once.
 pub fn cores() -> usize {
     std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
@@ -36,6 +59,16 @@ pub fn cores() -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_bvh_larger_than_the_memory_is_one_line_error() {
+        let error = check_bvh_memory("big.ply", 200_000_000, Some(8 << 30)).unwrap_err();
+        let message = error.to_string();
+        assert!(message.starts_with("big.ply: 200000000 triangles need about"), "{message}");
+        assert!(!message.contains('\n'), "{message}");
+        assert!(check_bvh_memory("small.obj", 1000, Some(8 << 30)).is_ok());
+        assert!(check_bvh_memory("unknown.obj", 200_000_000, None).is_ok());
+    }
 
     #[test]
     fn reads_mem_available() {

@@ -115,7 +115,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     }
     let Setup { scene, camera, .. } = &setup;
     let pool = setup.thread_pool()?;
-    let accel = pool.install(|| Bvh::new(&scene.vertices()));
+    let accel = pool.install(|| system::build_bvh(&scene.name, &scene.vertices()))?;
     let home = Pose {
         position: camera.position,
         yaw: camera.yaw,

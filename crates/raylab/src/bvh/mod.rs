@@ -231,6 +231,32 @@ impl BvhStats {
 /// references address 2²⁷ − 1 blocks.
 pub const MAX_TRIANGLES: usize = (1 << 27) - 2;
 
+/// Why a BVH could not be built.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum BuildError {
+    /// More triangles than [`MAX_TRIANGLES`].
+    TooManyTriangles(usize),
+}
+
+impl std::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BuildError::TooManyTriangles(n) => {
+                write!(f, "{n} triangles: a BVH holds at most {MAX_TRIANGLES}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for BuildError {}
+
+fn check_triangle_count(triangles: usize) -> Result<(), BuildError> {
+    if triangles > MAX_TRIANGLES {
+        return Err(BuildError::TooManyTriangles(triangles));
+    }
+    Ok(())
+}
+
 /// An 8-wide BVH over triangles; an [`Accelerator`].
 pub struct Bvh {
     wide: WideBvh,
@@ -257,9 +283,34 @@ impl Bvh {
     /// Runs on the current rayon pool.
     ///
     /// # Panics
-    /// With more than [`MAX_TRIANGLES`] (about 134 million) triangles.
+    /// With more than [`MAX_TRIANGLES`] (about 134 million) triangles; [`try_build`](Self::try_build)
+    /// says so instead.
     pub fn build(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {
-        assert!(triangles.len() <= MAX_TRIANGLES, "a BVH holds at most {MAX_TRIANGLES} triangles");
+        Bvh::try_build(triangles, settings).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`new`](Self::new), or an error for more triangles than a BVH holds.
+    pub fn try_new(triangles: &[[Vec3; 3]]) -> Result<Bvh, BuildError> {
+        Bvh::try_build(triangles, &BuildSettings::for_triangles(triangles.len()))
+    }
+
+    /// [`build`](Self::build), or an error for more triangles than a BVH holds.
+    pub fn try_build(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Result<Bvh, BuildError> {
+        check_triangle_count(triangles.len())?;
+        Ok(Bvh::build_checked(triangles, settings))
+    }
+
+    /// About how many bytes building over `triangles` triangles takes at its peak (the
+    /// primitives' boxes and build records, the binary tree and the wide tree with its copies of
+    /// the triangles): for a caller to check against the memory it has before it builds.
+    pub fn build_bytes_estimate(triangles: usize) -> u64 {
+        // At its peak the build holds about 110 bytes per triangle: the boxes (24) and build
+        // records (48) with the binary tree (about 25), then the wide tree (about 56, see
+        // `BvhStats::bytes`) while the binary tree is collapsed. 160 leaves a margin.
+        triangles as u64 * 160
+    }
+
+    fn build_checked(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {
         let settings = settings.clamped();
         let prims: Vec<Bounds> = triangles.iter().map(|&t| Bounds::of_triangle(t)).collect();
         let indices: Vec<u32> = (0..triangles.len() as u32)

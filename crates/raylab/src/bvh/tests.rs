@@ -432,3 +432,21 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
     assert!(tested[0] > 0 && tested[1] > 0, "the scalar and SSE2 kernels always run");
     assert!(hits > 20_000 && edge_hits > 1000 && ties > 100, "{hits} {edge_hits} {ties}");
 }
+
+#[test]
+fn more_triangles_than_a_bvh_holds_are_an_error_not_a_panic() {
+    assert_eq!(check_triangle_count(MAX_TRIANGLES), Ok(()));
+    let error = check_triangle_count(MAX_TRIANGLES + 1).unwrap_err();
+    assert_eq!(error, BuildError::TooManyTriangles(MAX_TRIANGLES + 1));
+    assert_eq!(error.to_string(), "134217727 triangles: a BVH holds at most 134217726");
+    assert!(Bvh::try_new(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]).is_ok());
+    // The memory estimate covers what the build keeps: at least the finished tree.
+    let triangles: Vec<[Vec3; 3]> = (0..5000)
+        .map(|i| {
+            let p = Vec3::new(i as f32, (i % 7) as f32, (i % 13) as f32);
+            [p, p + Vec3::X, p + Vec3::Y]
+        })
+        .collect();
+    let bvh = Bvh::new(&triangles);
+    assert!(Bvh::build_bytes_estimate(5000) >= 2 * bvh.stats().bytes() as u64);
+}
