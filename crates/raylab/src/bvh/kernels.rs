@@ -272,6 +272,14 @@ mod x86 {
         /// `maxps`: the second operand where either is NaN.
         unsafe fn max(self, o: Self) -> Self;
         unsafe fn abs(self) -> Self;
+        /// Bitwise `self ^ o`.
+        unsafe fn xor(self, o: Self) -> Self;
+        /// Bitwise `self | o`.
+        unsafe fn or_bits(self, o: Self) -> Self;
+        /// The sign bit alone (`self & -0.0`).
+        unsafe fn sign(self) -> Self;
+        /// The lanes whose sign bit is clear (NaNs included, by their sign bit).
+        unsafe fn sign_clear(self) -> Self::Mask;
         /// Bit `k` set where lane `k` of `self <= o` (false for NaN).
         unsafe fn le_mask(self, o: Self) -> u32;
         unsafe fn div(self, o: Self) -> Self;
@@ -283,8 +291,6 @@ mod x86 {
         /// Comparisons give a mask of the lanes where they hold (ordered: false for NaN, except
         /// `nlt` and `nle`, which are true for NaN).
         unsafe fn eq(self, o: Self) -> Self::Mask;
-        unsafe fn ge(self, o: Self) -> Self::Mask;
-        unsafe fn le(self, o: Self) -> Self::Mask;
         unsafe fn gt(self, o: Self) -> Self::Mask;
         unsafe fn lt(self, o: Self) -> Self::Mask;
         unsafe fn nlt(self, o: Self) -> Self::Mask;
@@ -370,6 +376,23 @@ mod x86 {
             unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), self) }
         }
         #[inline(always)]
+        unsafe fn xor(self, o: Self) -> Self {
+            unsafe { _mm_xor_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn or_bits(self, o: Self) -> Self {
+            unsafe { _mm_or_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn sign(self) -> Self {
+            unsafe { _mm_and_ps(self, _mm_set1_ps(-0.0)) }
+        }
+        #[inline(always)]
+        unsafe fn sign_clear(self) -> Self::Mask {
+            // As integers, `x > −1` exactly where the sign bit is clear.
+            unsafe { _mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(self), _mm_set1_epi32(-1))) }
+        }
+        #[inline(always)]
         unsafe fn le_mask(self, o: Self) -> u32 {
             unsafe { _mm_movemask_ps(_mm_cmple_ps(self, o)) as u32 }
         }
@@ -392,14 +415,6 @@ mod x86 {
         #[inline(always)]
         unsafe fn eq(self, o: Self) -> Self::Mask {
             unsafe { _mm_cmpeq_ps(self, o) }
-        }
-        #[inline(always)]
-        unsafe fn ge(self, o: Self) -> Self::Mask {
-            unsafe { _mm_cmpge_ps(self, o) }
-        }
-        #[inline(always)]
-        unsafe fn le(self, o: Self) -> Self::Mask {
-            unsafe { _mm_cmple_ps(self, o) }
         }
         #[inline(always)]
         unsafe fn gt(self, o: Self) -> Self::Mask {
@@ -482,6 +497,28 @@ mod x86 {
             unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self) }
         }
         #[inline(always)]
+        unsafe fn xor(self, o: Self) -> Self {
+            unsafe { _mm256_xor_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn or_bits(self, o: Self) -> Self {
+            unsafe { _mm256_or_ps(self, o) }
+        }
+        #[inline(always)]
+        unsafe fn sign(self) -> Self {
+            unsafe { _mm256_and_ps(self, _mm256_set1_ps(-0.0)) }
+        }
+        #[inline(always)]
+        unsafe fn sign_clear(self) -> Self::Mask {
+            // As integers, `x > −1` exactly where the sign bit is clear (AVX2).
+            unsafe {
+                _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                    _mm256_castps_si256(self),
+                    _mm256_set1_epi32(-1),
+                ))
+            }
+        }
+        #[inline(always)]
         unsafe fn le_mask(self, o: Self) -> u32 {
             unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self, o)) as u32 }
         }
@@ -504,14 +541,6 @@ mod x86 {
         #[inline(always)]
         unsafe fn eq(self, o: Self) -> Self::Mask {
             unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self, o) }
-        }
-        #[inline(always)]
-        unsafe fn ge(self, o: Self) -> Self::Mask {
-            unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self, o) }
-        }
-        #[inline(always)]
-        unsafe fn le(self, o: Self) -> Self::Mask {
-            unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self, o) }
         }
         #[inline(always)]
         unsafe fn gt(self, o: Self) -> Self::Mask {
@@ -595,6 +624,38 @@ mod x86 {
             unsafe { _mm512_abs_ps(self) }
         }
         #[inline(always)]
+        unsafe fn xor(self, o: Self) -> Self {
+            // Integer forms: the float ones need AVX-512 DQ.
+            unsafe {
+                _mm512_castsi512_ps(_mm512_xor_si512(
+                    _mm512_castps_si512(self),
+                    _mm512_castps_si512(o),
+                ))
+            }
+        }
+        #[inline(always)]
+        unsafe fn or_bits(self, o: Self) -> Self {
+            unsafe {
+                _mm512_castsi512_ps(_mm512_or_si512(
+                    _mm512_castps_si512(self),
+                    _mm512_castps_si512(o),
+                ))
+            }
+        }
+        #[inline(always)]
+        unsafe fn sign(self) -> Self {
+            unsafe {
+                _mm512_castsi512_ps(_mm512_and_si512(
+                    _mm512_castps_si512(self),
+                    _mm512_set1_epi32(i32::MIN),
+                ))
+            }
+        }
+        #[inline(always)]
+        unsafe fn sign_clear(self) -> Self::Mask {
+            unsafe { _mm512_cmpge_epi32_mask(_mm512_castps_si512(self), _mm512_setzero_si512()) }
+        }
+        #[inline(always)]
         unsafe fn le_mask(self, o: Self) -> u32 {
             unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self, o) as u32 }
         }
@@ -613,14 +674,6 @@ mod x86 {
         #[inline(always)]
         unsafe fn eq(self, o: Self) -> Self::Mask {
             unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self, o) }
-        }
-        #[inline(always)]
-        unsafe fn ge(self, o: Self) -> Self::Mask {
-            unsafe { _mm512_cmp_ps_mask::<_CMP_GE_OQ>(self, o) }
-        }
-        #[inline(always)]
-        unsafe fn le(self, o: Self) -> Self::Mask {
-            unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self, o) }
         }
         #[inline(always)]
         unsafe fn gt(self, o: Self) -> Self::Mask {
@@ -1083,18 +1136,25 @@ mod x86 {
             let e2 = ax.mul(by).sub(ay.mul(bx));
             let zero = V::splat(0.0);
             let any_zero = e0.eq(zero).or(e1.eq(zero)).or(e2.eq(zero));
-            let all_ge = e0.ge(zero).and(e1.ge(zero)).and(e2.ge(zero));
-            let all_le = e0.le(zero).and(e1.le(zero)).and(e2.le(zero));
-            let inside = all_ge.or(all_le);
+            // The scalar test's `all >= 0 or all <= 0`, by sign bits: for edge functions none of
+            // which is zero (the lanes that have one are decided apart) it holds exactly where
+            // the three signs agree; NaN lanes are rejected below by the range test.
+            let inside = e0.xor(e1).or_bits(e0.xor(e2)).sign_clear();
             let det = e0.add(e1).add(e2);
             let az = sz.mul(a_kz);
             let bz = sz.mul(b_kz);
             let cz = sz.mul(c_kz);
             let t_scaled = e0.mul(az).add(e1.mul(bz)).add(e2.mul(cz));
             let t_limit = x.t_max.mul(det).mul(V::splat(crate::triangle::T_LIMIT_SLACK));
-            let front = det.gt(zero).and(t_scaled.gt(zero)).and(t_scaled.lt(t_limit));
-            let back = det.lt(zero).and(t_scaled.lt(zero)).and(t_scaled.gt(t_limit));
-            let candidate = any_zero.or(inside.and(front.or(back)));
+            // `det > 0 and 0 < t_scaled < t_limit`, or the same mirrored for `det < 0`: both as
+            // one test on `t_scaled` and `t_limit` with `det`'s sign taken off (`det` = ±0
+            // gives `t_limit` = ±0 or NaN, which admit nothing, as the scalar test's `det == 0`
+            // rejection; a NaN `det` gives a NaN `t_limit`).
+            let det_sign = det.sign();
+            let t_scaled_unsigned = t_scaled.xor(det_sign);
+            let t_limit_unsigned = t_limit.xor(det_sign);
+            let in_range = t_scaled_unsigned.gt(zero).and(t_scaled_unsigned.lt(t_limit_unsigned));
+            let candidate = any_zero.or(inside.and(in_range));
             let candidates = candidate.bits() & lanes;
             let undecided = candidates & any_zero.bits();
             let decidable = candidates & !undecided;
