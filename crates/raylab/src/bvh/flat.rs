@@ -249,18 +249,20 @@ mod x86 {
                     ],
                 };
                 let mask = (block.lanes >> first) & ((1u32 << W) - 1);
-                watertight_lanes_with::<V, false>(&lanes, mask)
+                watertight_lanes_with::<V, true>(&lanes, mask)
             }
         }
     }
 
     /// The closest hit with `W`-lane registers `V`.
     ///
-    /// Branch-free across blocks: every block is tested against the ray's own range (not the
-    /// best hit so far, so the blocks' tests do not wait for each other), and each lane keeps
-    /// the nearest of its hits in registers, the earlier block winning at equal `t` (blocks
-    /// ascend in index). One reduction at the end picks the nearest lane, the lowest index among
-    /// equals. Lanes only the double-precision test can decide (rare) are merged alongside.
+    /// Every block is tested against the ray's own range (not the best hit so far, so the
+    /// blocks' tests do not wait for each other); a block without a candidate skips the rest of
+    /// its test (measured: 5 % off the path tracer's time on Mitsuba's box, whose rays miss most
+    /// blocks). Each lane keeps the nearest of its hits in registers, the earlier block winning
+    /// at equal `t` (blocks ascend in index), with no branch on which lanes hit; one reduction
+    /// at the end picks the nearest lane, the lowest index among equals. Lanes only the
+    /// double-precision test can decide (rare) are merged alongside.
     ///
     /// # Safety
     /// The CPU must support `V`'s instruction set, and `V` must hold `W` floats.
