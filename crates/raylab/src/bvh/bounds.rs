@@ -121,7 +121,7 @@ impl RayBoxTest {
     }
 
     /// The entry distance of the ray into `bounds` if it meets the box within `[t_min, t_max]`,
-    /// both moved out by [`SLAB_PAD`] (see there).
+    /// both moved out by `SLAB_PAD` (see there).
     ///
     /// This is the scalar twin of the SIMD node kernels: they compute the same values in the same
     /// order of operations. The ray must have a finite origin and a non-zero direction.
@@ -162,7 +162,7 @@ impl RayBoxTest {
 /// change sign within the packet. Each ray's slab distance `(plane − o)·(1/d)` then lies between
 /// the least and the greatest of the four corner products, *also after rounding*, because
 /// rounding is monotonic: so the packet's entry is at most each ray's entry, its exit at least
-/// each ray's exit, and its margin at least each ray's [`SLAB_PAD`] margin. The packet test is
+/// each ray's exit, and its margin at least each ray's `SLAB_PAD` margin. The packet test is
 /// thus a superset of every member's test, in floating point, and can never prune a box that
 /// one of its rays would enter.
 #[derive(Clone, Copy, Debug, PartialEq)]

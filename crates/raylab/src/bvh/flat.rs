@@ -184,7 +184,7 @@ mod x86 {
     use std::arch::x86_64::{__m128, __m256, __m512};
 
     use super::*;
-    use crate::bvh::kernels::{LaneHits, LaneMask, Lanes, WatertightLanes, watertight_lanes_with};
+    use crate::bvh::lanes::{LaneHits, LaneMask, Lanes, WatertightLanes, watertight_lanes_with};
 
     /// The ray's part of the lane test, broadcast once per query.
     struct RayLanes<V> {

@@ -35,6 +35,8 @@ mod bounds;
 mod build;
 mod flat;
 mod kernels;
+#[cfg(target_arch = "x86_64")]
+mod lanes;
 mod packet;
 mod refit;
 mod traverse;

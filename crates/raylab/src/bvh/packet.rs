@@ -61,7 +61,7 @@ pub(crate) struct PacketRays {
 }
 
 impl PacketRays {
-    /// An empty packet, to be [`fill`](Self::fill)ed.
+    /// An empty packet, to be filled.
     fn new() -> PacketRays {
         PacketRays {
             origin: [[0.0; PACKET]; 3],

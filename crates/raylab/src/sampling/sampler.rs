@@ -6,7 +6,7 @@
 //! is the same whatever the thread count, the tiling or the order of the work.
 //!
 //! Three kinds ([`SamplerKind`]):
-//! - `lab`: the lab's pixel sampling ([`sample_offset`](super::sample_offset): the centre, then
+//! - `lab`: the lab's pixel sampling (`sample_offset`: the centre, then
 //!   R₂), independent numbers after it. One sample per pixel is the lab's frame.
 //! - `independent`: every number from a PCG32 stream seeded by a hash of the triple.
 //! - `sobol` (the default for path tracing): each pair of dimensions is a 2D Sobol' point set,
@@ -292,7 +292,7 @@ fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
 /// Point `index` of a 2D Sobol' set whose order is shuffled and whose coordinates are
 /// Owen-scrambled, each by its own seed (Burley 2020, listing 5), given `index` bit-reversed.
 ///
-/// The same bits as [`shuffled_scrambled_sobol_2d_reference`] (tested), with three bit reversals
+/// The same bits as `shuffled_scrambled_sobol_2d_reference` (tested), with three bit reversals
 /// where the listing has five, two of them done as one 64-bit reversal: the shuffled index's
 /// reversal is the permutation's input as it stands, and the second dimension's reversal is read
 /// from a table of reversed direction numbers indexed by the permuted bits directly.
