@@ -367,7 +367,7 @@ impl Chunk {
         rays: &[Ray],
         out: &mut [Q::Answer],
     ) {
-        // SAFETY (all calls below): the caller guarantees `K`'s instruction set.
+        // SAFETY: the caller guarantees `K`'s instruction set.
         for i in bits(self.alone) {
             out[i] = unsafe { Q::alone::<K>(bvh, &rays[i]) };
         }
@@ -376,6 +376,7 @@ impl Chunk {
             let members = self.groups[group];
             if members.count_ones() == 1 {
                 let i = members.trailing_zeros() as usize;
+                // SAFETY: the caller guarantees `K`'s instruction set.
                 out[i] = unsafe { Q::alone::<K>(bvh, &rays[i]) };
                 continue;
             }
@@ -384,6 +385,7 @@ impl Chunk {
                 // The common case for camera and shadow rays: the whole chunk is one packet.
                 self.lanes.negative = negative;
                 self.lanes.k = k;
+                // SAFETY: the caller guarantees `K`'s instruction set.
                 let traced = unsafe { Q::packet::<K>(bvh, &mut self.lanes) };
                 for (i, out) in out.iter_mut().enumerate() {
                     *out = Q::answer(&self.lanes, traced, i);
@@ -397,6 +399,7 @@ impl Chunk {
             gathered.len = members.count_ones() as usize;
             gathered.negative = negative;
             gathered.k = k;
+            // SAFETY: the caller guarantees `K`'s instruction set.
             let traced = unsafe { Q::packet::<K>(bvh, gathered) };
             for (j, i) in bits(members).enumerate() {
                 out[i] = Q::answer(gathered, traced, j);
