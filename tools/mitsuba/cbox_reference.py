@@ -47,7 +47,8 @@ import numpy as np
 
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pfm import read_pfm, write_pfm  # noqa: E402
+from mitsuba_run import Render, load_mitsuba  # noqa: E402
+from pfm import write_pfm  # noqa: E402
 
 
 def build_scene_dict(mi, size, spp, max_depth, rr_depth):
@@ -83,42 +84,15 @@ def main():
     ap.add_argument("--pfm", action="store_true", help="also write OUT.pfm")
     args = ap.parse_args()
 
-    if args.variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
-        cand = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
-        if os.path.exists(cand):
-            os.environ["DRJIT_LIBLLVM_PATH"] = cand
-
-    import drjit as dr
-    import mitsuba as mi
-
-    mi.set_variant(args.variant)
-    if args.threads > 0:
-        dr.set_thread_count(args.threads)
+    dr, mi = load_mitsuba(args.variant, args.threads)
 
     t0 = time.perf_counter()
     scene = mi.load_dict(build_scene_dict(mi, args.size, args.spp,
                                           args.max_depth, args.rr_depth))
     t_load = time.perf_counter() - t0
 
-    acc = None
-    acc2 = None
-    t_render = 0.0
-    pass_times = []
-    for i in range(args.passes):
-        t0 = time.perf_counter()
-        img = mi.render(scene, spp=args.spp, seed=args.seed + i)
-        dr.eval(img)
-        dr.sync_thread()
-        dt = time.perf_counter() - t0
-        t_render += dt
-        pass_times.append(dt)
-        a = np.array(img, dtype=np.float64)
-        acc = a if acc is None else acc + a
-        acc2 = a * a if acc2 is None else acc2 + a * a
-        if args.passes > 1:
-            print(f"pass {i + 1}/{args.passes} seed {args.seed + i}: {dt:.3f} s",
-                  flush=True)
-    img = (acc / args.passes).astype(np.float32)
+    render = Render(dr, mi, scene, args.spp, args.seed, args.passes)
+    img = render.image
     assert img.shape == (args.size, args.size, 3), img.shape
 
     os.makedirs(os.path.dirname(os.path.abspath(args.out)) or ".", exist_ok=True)
@@ -130,28 +104,11 @@ def main():
         write_pfm(stem + ".pfm", img)
 
     total_spp = args.spp * args.passes
-    n = args.size * args.size * total_spp
-    m = img.reshape(-1, 3).astype(np.float64).mean(axis=0)
     print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant}")
     print(f"size {args.size}x{args.size} spp {total_spp} ({args.passes} pass(es) x "
           f"{args.spp}) seed {args.seed} max_depth {args.max_depth} "
           f"rr_depth {args.rr_depth}")
-    print(f"scene load: {t_load:.3f} s")
-    print(f"render wall time (mi.render + eval + sync): {t_render:.3f} s "
-          f"({n / t_render / 1e6:.2f} M samples/s)")
-    print(f"process time since interpreter start: "
-          f"{time.perf_counter() - T_PROCESS0:.3f} s")
-    print(f"mean R G B: {m[0]:.6f} {m[1]:.6f} {m[2]:.6f}  overall {img.astype(np.float64).mean():.6f}")
-    if args.passes > 1:
-        # standard error of the averaged image, from the pass-to-pass spread
-        mean = acc / args.passes
-        var = np.maximum(acc2 / args.passes - mean * mean, 0.0) * (
-            args.passes / (args.passes - 1))
-        se = np.sqrt(np.mean(var / args.passes))
-        print(f"estimated RMS standard error of the result (from {args.passes} "
-              f"passes): {se:.6f}")
-    print(f"nonfinite: {int((~np.isfinite(img)).sum())}  min {img.min():.6g} "
-          f"max {img.max():.6g}")
+    render.report(t_load, T_PROCESS0)
     print(f"wrote {args.out}")
 
 

@@ -97,7 +97,8 @@ def rgb(v, what="colour"):
 
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pfm import read_pfm, write_pfm  # noqa: E402
+from mitsuba_run import Render, load_mitsuba  # noqa: E402
+from pfm import write_pfm  # noqa: E402
 
 
 # ---------------------------------------------------------------------------------------------
@@ -472,18 +473,8 @@ def main():
     ap.add_argument("--print-scene", action="store_true", help="print the Mitsuba scene dict")
     args = ap.parse_args()
 
-    if args.variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
-        cand = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
-        if os.path.exists(cand):
-            os.environ["DRJIT_LIBLLVM_PATH"] = cand
-
-    import drjit as dr
-    import mitsuba as mi
-
-    mi.set_variant(args.variant)
+    dr, mi = load_mitsuba(args.variant, args.threads)
     register_raylab_frame(mi)
-    if args.threads > 0:
-        dr.set_thread_count(args.threads)
 
     with open(args.scene, "rb") as f:
         doc = tomllib.load(f)
@@ -501,21 +492,8 @@ def main():
         scene = mi.load_dict(scene_dict)
     t_load = time.perf_counter() - t0
 
-    acc = acc2 = None
-    t_render = 0.0
-    for i in range(args.passes):
-        t0 = time.perf_counter()
-        img = mi.render(scene, spp=args.spp, seed=args.seed + i)
-        dr.eval(img)
-        dr.sync_thread()
-        dt = time.perf_counter() - t0
-        t_render += dt
-        a = np.array(img, dtype=np.float64)
-        acc = a if acc is None else acc + a
-        acc2 = a * a if acc2 is None else acc2 + a * a
-        if args.passes > 1:
-            print(f"pass {i + 1}/{args.passes} seed {args.seed + i}: {dt:.3f} s", flush=True)
-    img = (acc / args.passes).astype(np.float32)
+    render = Render(dr, mi, scene, args.spp, args.seed, args.passes)
+    img = render.image
     assert img.shape == (height, width, 3), img.shape
 
     os.makedirs(os.path.dirname(os.path.abspath(args.out)) or ".", exist_ok=True)
@@ -541,29 +519,13 @@ def main():
         written.append(args.png)
 
     total_spp = args.spp * args.passes
-    n = width * height * total_spp
-    m = img.reshape(-1, 3).astype(np.float64).mean(axis=0)
     print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant}")
     print(f"scene {args.scene}")
     print("anisotropic frames: " + ("the Duff basis of the shading normal" if args.duff_frames
                                      else "Mitsuba's dp_du (mesh: first triangle edge), as raylab's"))
     print(f"size {width}x{height} spp {total_spp} ({args.passes} pass(es) x {args.spp}) "
           f"seed {args.seed} max_depth {max_depth} rr_depth {args.rr_depth}")
-    print(f"scene load: {t_load:.3f} s")
-    print(f"render wall time (mi.render + eval + sync): {t_render:.3f} s "
-          f"({n / t_render / 1e6:.2f} M samples/s)")
-    print(f"process time since interpreter start: {time.perf_counter() - T_PROCESS0:.3f} s")
-    print(f"mean R G B: {m[0]:.6f} {m[1]:.6f} {m[2]:.6f}  overall "
-          f"{img.astype(np.float64).mean():.6f}")
-    if args.passes > 1:
-        mean = acc / args.passes
-        var = np.maximum(acc2 / args.passes - mean * mean, 0.0) * (
-            args.passes / (args.passes - 1))
-        se = np.sqrt(np.mean(var / args.passes))
-        print(f"estimated RMS standard error of the result (from {args.passes} passes): "
-              f"{se:.6f}")
-    print(f"nonfinite: {int((~np.isfinite(img)).sum())}  min {img.min():.6g} "
-          f"max {img.max():.6g}")
+    render.report(t_load, T_PROCESS0)
     for p in written:
         print(f"wrote {p}")
 
