@@ -25,6 +25,21 @@ pub struct Hit {
 }
 
 impl Hit {
+    /// Whether this hit comes before `other` in the order every accelerator answers by: nearer,
+    /// or at exactly equal `t` the lower triangle index.
+    #[inline]
+    pub fn precedes(&self, other: &Hit) -> bool {
+        self.t < other.t || (self.t == other.t && self.triangle < other.triangle)
+    }
+
+    /// Keeps in `best` whichever of it and `self` comes first ([`precedes`](Self::precedes)).
+    #[inline]
+    pub fn keep_first(self, best: &mut Option<Hit>) {
+        if best.is_none_or(|b| self.precedes(&b)) {
+            *best = Some(self);
+        }
+    }
+
     /// Barycentric weight of the triangle's `v0`.
     #[inline]
     pub fn b0(&self) -> f32 {
@@ -64,5 +79,23 @@ pub trait Accelerator: Sync {
         for (ray, o) in rays.iter().zip(occluded) {
             *o = self.occluded(ray);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Hit;
+
+    #[test]
+    fn hits_order_by_t_then_by_lower_index() {
+        let hit = |t, triangle| Hit { t, triangle, b1: 0.0, b2: 0.0 };
+        assert!(hit(1.0, 9).precedes(&hit(2.0, 0)));
+        assert!(hit(1.0, 3).precedes(&hit(1.0, 4)));
+        assert!(!hit(1.0, 4).precedes(&hit(1.0, 4)) && !hit(1.0, 4).precedes(&hit(1.0, 3)));
+        let mut best = None;
+        for h in [hit(3.0, 1), hit(2.0, 7), hit(2.0, 5), hit(2.0, 6), hit(2.5, 0)] {
+            h.keep_first(&mut best);
+        }
+        assert_eq!(best, Some(hit(2.0, 5)));
     }
 }

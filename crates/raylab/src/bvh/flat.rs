@@ -95,62 +95,29 @@ impl Flat {
     }
 }
 
-/// The closest hit so far. Blocks are visited in index order, so a later triangle wins only
-/// with a strictly smaller `t`: the search limit is the best `t` itself.
-struct Closest {
-    best: Option<Hit>,
-    limit: f32,
-}
-
-impl Closest {
-    #[inline(always)]
-    fn new(ray: &Ray) -> Closest {
-        Closest { best: None, limit: ray.t_max }
-    }
-
-    /// Offers the hits of one group of lanes, all tested against the limit at its start:
-    /// lanes ascend with the index, so the first of equal `t` is kept.
-    #[inline(always)]
-    fn offer(&mut self, t: f32, triangle: u32, b1: f32, b2: f32) {
-        if self.best.is_none_or(|best| t < best.t) {
-            self.best = Some(Hit { t, triangle, b1, b2 });
-            self.limit = t;
-        }
-    }
-
-    /// Offers a hit in any order: the nearer wins, the lower index at equal `t`.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn offer_any(&mut self, t: f32, triangle: u32, b1: f32, b2: f32) {
-        let nearer =
-            self.best.is_none_or(|best| t < best.t || (t == best.t && triangle < best.triangle));
-        if nearer {
-            self.best = Some(Hit { t, triangle, b1, b2 });
-        }
-    }
-}
-
 /// The scalar twin: every block lane by lane, the batched pre-test, then the full test.
 pub(crate) fn closest_hit_scalar(flat: &Flat, ray: &Ray) -> Option<Hit> {
     if !can_hit(ray) {
         return None;
     }
     let watertight = WatertightRay::new(ray);
-    let mut closest = Closest::new(ray);
+    let mut best = None;
     for block in &flat.blocks {
-        let mut candidates = watertight.block_candidates(&block.triangles, closest.limit);
+        // Blocks ascend in index, so a later block's hit must be strictly nearer: the limit is
+        // the best `t` itself.
+        let limit = best.map_or(ray.t_max, |b: Hit| b.t);
+        let mut candidates = watertight.block_candidates(&block.triangles, limit);
         candidates &= block.lanes;
-        let limit = closest.limit;
         while candidates != 0 {
             let lane = candidates.trailing_zeros() as usize;
             candidates &= candidates - 1;
             let [v0, v1, v2] = block.triangles.triangle(lane);
             if let Some(h) = watertight.intersect(v0, v1, v2, limit) {
-                closest.offer(h.t, block.ids[lane], h.b1, h.b2);
+                Hit { t: h.t, triangle: block.ids[lane], b1: h.b1, b2: h.b2 }.keep_first(&mut best);
             }
         }
     }
-    closest.best
+    best
 }
 
 /// The scalar twin of occlusion.
@@ -281,7 +248,8 @@ mod x86 {
             let mut best_b2 = V::splat(0.0);
             // Triangle indices ride along as float bits: only ever selected, never computed.
             let mut best_id = V::splat(f32::from_bits(u32::MAX));
-            let mut rare = Closest::new(ray);
+            // Hits only the double-precision test could decide.
+            let mut rare = None;
             for block in &flat.blocks {
                 for first in (0..FLAT_LANES).step_by(W) {
                     let decided = lanes.test::<W>(block, first, ray.t_max);
@@ -297,7 +265,8 @@ mod x86 {
                         undecided &= undecided - 1;
                         let [v0, v1, v2] = block.triangles.triangle(first + lane);
                         if let Some(h) = watertight.intersect(v0, v1, v2, ray.t_max) {
-                            rare.offer_any(h.t, block.ids[first + lane], h.b1, h.b2);
+                            let id = block.ids[first + lane];
+                            Hit { t: h.t, triangle: id, b1: h.b1, b2: h.b2 }.keep_first(&mut rare);
                         }
                     }
                 }
@@ -322,12 +291,8 @@ mod x86 {
                 }
                 best = Some(Hit { t, triangle: ids[lane].to_bits(), b1: b1[lane], b2: b2[lane] });
             }
-            if let Some(h) = rare.best {
-                let nearer =
-                    best.is_none_or(|b: Hit| h.t < b.t || (h.t == b.t && h.triangle < b.triangle));
-                if nearer {
-                    best = Some(h);
-                }
+            if let Some(h) = rare {
+                h.keep_first(&mut best);
             }
             best
         }

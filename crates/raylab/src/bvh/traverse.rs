@@ -144,12 +144,10 @@ impl Closest {
                         None => continue,
                     }
                 };
-                let id = bvh.ids[b][lane];
+                let hit = Hit { t, triangle: bvh.ids[b][lane], b1, b2 };
                 // Lanes of one block are all tested against the limit at its start.
-                let better =
-                    self.best.is_none_or(|best| t < best.t || (t == best.t && id < best.triangle));
-                if better {
-                    self.best = Some(Hit { t, triangle: id, b1, b2 });
+                if self.best.is_none_or(|best| hit.precedes(&best)) {
+                    self.best = Some(hit);
                     self.triangle_limit = next_float_up(t);
                     self.box_limit = t * FAR_SCALE;
                 }
