@@ -385,6 +385,28 @@ impl WatertightRay {
         }
         pass.iter().enumerate().fold(0, |mask, (lane, &p)| mask | (p as u32) << lane)
     }
+
+    /// Whether [`intersect`](Self::intersect) hits any of the triangles in lanes `first + k` of
+    /// `block` for the bits `k` set in `lanes` (the lanes a vector test left to the
+    /// double-precision path).
+    #[inline]
+    pub(crate) fn any_lane_hits<const N: usize>(
+        &self,
+        block: &TriangleBlock<N>,
+        first: usize,
+        mut lanes: u32,
+        t_max: f32,
+    ) -> bool {
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let [v0, v1, v2] = block.triangle(first + lane);
+            if self.intersect(v0, v1, v2, t_max).is_some() {
+                return true;
+            }
+        }
+        false
+    }
 }
 
 #[cfg(test)]

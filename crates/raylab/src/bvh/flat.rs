@@ -314,17 +314,15 @@ mod x86 {
             for first in (0..FLAT_LANES).step_by(W) {
                 // SAFETY: the caller's guarantee; `first` steps by `W` below 16.
                 let decided = unsafe { lanes.test::<W>(block, first, ray.t_max) };
-                if decided.hits != 0 {
+                if decided.hits != 0
+                    || watertight.any_lane_hits(
+                        &block.triangles,
+                        first,
+                        decided.undecided,
+                        ray.t_max,
+                    )
+                {
                     return true;
-                }
-                let mut undecided = decided.undecided;
-                while undecided != 0 {
-                    let lane = undecided.trailing_zeros() as usize;
-                    undecided &= undecided - 1;
-                    let [v0, v1, v2] = block.triangles.triangle(first + lane);
-                    if watertight.intersect(v0, v1, v2, ray.t_max).is_some() {
-                        return true;
-                    }
                 }
             }
         }

@@ -171,17 +171,8 @@ pub(super) unsafe fn leaf_occluded<K: NodeKernel>(
     for block in &bvh.blocks[first_block as usize..(first_block + blocks) as usize] {
         // SAFETY: the caller guarantees `K`'s instruction set.
         let decided = unsafe { K::block_hits(triangle_ray, block, t_max) };
-        if decided.hits != 0 {
+        if decided.hits != 0 || triangle_ray.any_lane_hits(block, 0, decided.undecided, t_max) {
             return true;
-        }
-        let mut undecided = decided.undecided;
-        while undecided != 0 {
-            let lane = undecided.trailing_zeros() as usize;
-            undecided &= undecided - 1;
-            let [v0, v1, v2] = block.triangle(lane);
-            if triangle_ray.intersect(v0, v1, v2, t_max).is_some() {
-                return true;
-            }
         }
     }
     false
