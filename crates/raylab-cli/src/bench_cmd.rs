@@ -76,6 +76,12 @@ pub struct BenchArgs {
     #[arg(long, value_name = "SUMMARY")]
     embree: Vec<PathBuf>,
 
+    /// Also count, per ray, the tree's nodes, leaves and 4-triangle blocks visited (the cost of a
+    /// ray in the tree's own units; the tree is walked even where a small scene's flat list
+    /// answers single rays).
+    #[arg(long)]
+    counts: bool,
+
     /// Also write the figures as JSON to FILE.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -235,6 +241,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         mrays_per_s: per_threads,
     });
 
+    if args.counts {
+        print_counts(&bvh, &sets, threads);
+    }
+
     if !embree.is_empty() {
         let rays = [sets[0].2.len(), sets[1].2.len(), sets[2].2.len(), tiled.len()];
         let measured: Vec<_> = results
@@ -372,6 +382,46 @@ struct SetResult {
 
 /// Runs `f` over `rays` on `threads` threads that take chunks of [`CHUNK`] rays from a shared
 /// counter; `f` writes each chunk's answers into its slots.
+/// Prints the mean nodes, leaves and blocks each set's rays visit (`--counts`), counted on
+/// `threads` threads.
+fn print_counts(bvh: &Bvh, sets: &[(&str, bool, Vec<Ray>)], threads: usize) {
+    use raylab::bvh::TraversalStats;
+    use rayon::prelude::*;
+    println!("per ray, in the tree: wide nodes tested, leaves entered, 4-triangle blocks in them");
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build();
+    for (name, occlusion, rays) in sets {
+        let count = || {
+            rays.par_chunks(4096)
+                .map(|chunk| {
+                    let mut stats = TraversalStats::default();
+                    for ray in chunk {
+                        if *occlusion {
+                            bvh.occluded_counted(ray, &mut stats);
+                        } else {
+                            bvh.closest_hit_counted(ray, &mut stats);
+                        }
+                    }
+                    stats
+                })
+                .reduce(TraversalStats::default, |a, b| TraversalStats {
+                    rays: a.rays + b.rays,
+                    nodes: a.nodes + b.nodes,
+                    leaves: a.leaves + b.leaves,
+                    blocks: a.blocks + b.blocks,
+                })
+        };
+        let stats = match &pool {
+            Ok(pool) => pool.install(count),
+            Err(_) => count(),
+        };
+        let [nodes, leaves, blocks] = stats.per_ray();
+        let query = if *occlusion { "occluded" } else { "closest" };
+        println!(
+            "{name:<9} {query:<9} {nodes:>7.2} nodes {leaves:>6.2} leaves {blocks:>6.2} blocks"
+        );
+    }
+}
+
 fn trace<T: Copy + Default + Send>(
     rays: &[Ray],
     threads: usize,

@@ -48,9 +48,13 @@ fn assert_agreement(triangles: &[[Vec3; 3]], rays: &[Ray]) -> Result<usize, Test
     let expected: Vec<_> =
         rays.iter().map(|r| (reference.closest_hit(r), reference.occluded(r))).collect();
     for (name, bvh) in bvhs(triangles) {
+        let mut stats = raylab::bvh::TraversalStats::default();
         for (ray, (closest, occluded)) in rays.iter().zip(&expected) {
             prop_assert_eq!(bvh.closest_hit(ray), *closest, "{}: {:?}", name, ray);
             prop_assert_eq!(bvh.occluded(ray), *occluded, "{}: {:?}", name, ray);
+            // Counting changes nothing.
+            prop_assert_eq!(bvh.closest_hit_counted(ray, &mut stats), *closest, "{}", name);
+            prop_assert_eq!(bvh.occluded_counted(ray, &mut stats), *occluded, "{}", name);
         }
         let mut closest = vec![None; rays.len()];
         let mut occluded = vec![false; rays.len()];

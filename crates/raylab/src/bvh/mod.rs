@@ -46,6 +46,7 @@ use glam::Vec3;
 
 pub use bounds::{Bounds, Frustum, RayBoxTest};
 pub use refit::RefitError;
+pub use traverse::TraversalStats;
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;
@@ -352,6 +353,26 @@ impl Bvh {
     /// Sizes of the tree.
     pub fn stats(&self) -> BvhStats {
         self.stats
+    }
+
+    /// The closest hit, exactly as [`closest_hit`](Accelerator::closest_hit) answers it, adding
+    /// the nodes, leaves and blocks the tree's traversal visits to `stats` (and one ray).
+    ///
+    /// It runs the portable node kernel, whose box tests decide as every vector kernel's do (the
+    /// twin tests), so the counts are those of any instruction set; slower, for measurements. It
+    /// always walks the tree, also for a small scene that answers single rays from its flat list.
+    pub fn closest_hit_counted(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<Hit> {
+        stats.rays += 1;
+        // SAFETY: the scalar kernel needs no special instructions.
+        unsafe { traverse::closest_hit_counted::<kernels::Scalar, _>(&self.wide, ray, stats) }
+    }
+
+    /// Whether the ray is occluded, exactly as [`occluded`](Accelerator::occluded) answers it,
+    /// counting as [`closest_hit_counted`](Self::closest_hit_counted) does.
+    pub fn occluded_counted(&self, ray: &Ray, stats: &mut TraversalStats) -> bool {
+        stats.rays += 1;
+        // SAFETY: the scalar kernel needs no special instructions.
+        unsafe { traverse::occluded_counted::<kernels::Scalar, _>(&self.wide, ray, stats) }
     }
 }
 

@@ -288,6 +288,53 @@ fn empty_and_single_triangle_trees_answer() {
     assert!(bvh.occluded(&Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z)));
 }
 
+/// Two clusters of four triangles 100 apart: the root has a leaf of one block per cluster, so
+/// what a ray visits is known exactly.
+#[test]
+fn traversal_counts_are_the_nodes_leaves_and_blocks_visited() {
+    let quad = |x: f32| {
+        let p = |u: f32, v: f32| Vec3::new(x + u, v, 0.0);
+        [
+            [p(0.0, 0.0), p(1.0, 0.0), p(0.0, 1.0)],
+            [p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)],
+            [p(0.0, 1.0), p(1.0, 1.0), p(0.0, 2.0)],
+            [p(1.0, 1.0), p(1.0, 2.0), p(0.0, 2.0)],
+        ]
+    };
+    let triangles: Vec<[Vec3; 3]> = quad(0.0).into_iter().chain(quad(100.0)).collect();
+    let bvh = Bvh::build(&triangles, &BuildSettings { flat_limit: 0, ..BuildSettings::MEDIUM });
+    let stats = |rays: u64, nodes: u64, leaves: u64, blocks: u64| TraversalStats {
+        rays,
+        nodes,
+        leaves,
+        blocks,
+    };
+    let cases = [
+        // Into the first cluster: the root, then its leaf.
+        (Ray::new(Vec3::new(0.2, 0.2, -5.0), Vec3::Z), true, stats(1, 1, 1, 1)),
+        (Ray::new(Vec3::new(100.7, 1.5, 5.0), -Vec3::Z), true, stats(1, 1, 1, 1)),
+        // Between the clusters: the root's boxes only.
+        (Ray::new(Vec3::new(50.0, 0.5, -5.0), Vec3::Z), false, stats(1, 1, 0, 0)),
+        // A ray that can hit nothing is not traversed.
+        (Ray::new(Vec3::new(0.2, 0.2, -5.0), Vec3::NAN), false, stats(1, 0, 0, 0)),
+    ];
+    for (ray, hits, expected) in cases {
+        let (mut closest, mut occluded) = (TraversalStats::default(), TraversalStats::default());
+        let hit = bvh.closest_hit_counted(&ray, &mut closest);
+        assert_eq!(hit, bvh.closest_hit(&ray), "{ray:?}");
+        assert_eq!(hit.is_some(), hits, "{ray:?}");
+        assert_eq!(bvh.occluded_counted(&ray, &mut occluded), hits, "{ray:?}");
+        assert_eq!((closest, occluded), (expected, expected), "{ray:?}");
+    }
+    // Counts add up over rays.
+    let mut total = TraversalStats::default();
+    for (ray, _, _) in cases {
+        bvh.closest_hit_counted(&ray, &mut total);
+    }
+    assert_eq!(total, stats(4, 3, 2, 2));
+    assert_eq!(total.per_ray(), [0.75, 0.5, 0.5]);
+}
+
 /// The SSE block kernel decides every lane as the scalar test does, with the same `t` and
 /// barycentrics bit for bit; lanes it leaves undecided are exactly those the scalar test must
 /// recompute in double precision.

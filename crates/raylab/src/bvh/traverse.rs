@@ -93,6 +93,54 @@ pub(super) fn can_hit(ray: &Ray) -> bool {
         && ray.direction != glam::Vec3::ZERO
 }
 
+/// What one traversal visits, summed over the queries it is passed to
+/// ([`Bvh::closest_hit_counted`](super::Bvh::closest_hit_counted)): the cost of a ray in the
+/// tree's own units, independent of the machine and of the instruction set.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    /// Queries counted.
+    pub rays: u64,
+    /// Wide nodes whose eight boxes were tested.
+    pub nodes: u64,
+    /// Leaves entered.
+    pub leaves: u64,
+    /// Four-triangle blocks in the leaves entered (occlusion may stop inside a leaf: then its
+    /// remaining blocks are counted without being tested).
+    pub blocks: u64,
+}
+
+impl TraversalStats {
+    /// Per query: nodes, leaves and blocks.
+    pub fn per_ray(&self) -> [f64; 3] {
+        let rays = self.rays.max(1) as f64;
+        [self.nodes as f64 / rays, self.leaves as f64 / rays, self.blocks as f64 / rays]
+    }
+}
+
+/// What a traversal counts as it goes; `()` counts nothing and compiles away.
+pub(crate) trait Counter {
+    /// A node's boxes are tested.
+    #[inline(always)]
+    fn node(&mut self) {}
+    /// A leaf of `blocks` blocks is entered.
+    #[inline(always)]
+    fn leaf(&mut self, _blocks: u32) {}
+}
+
+impl Counter for () {}
+
+impl Counter for TraversalStats {
+    #[inline(always)]
+    fn node(&mut self) {
+        self.nodes += 1;
+    }
+    #[inline(always)]
+    fn leaf(&mut self, blocks: u32) {
+        self.leaves += 1;
+        self.blocks += blocks as u64;
+    }
+}
+
 /// The search state of one ray's closest hit.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Closest {
@@ -185,6 +233,20 @@ pub(super) unsafe fn leaf_occluded<K: NodeKernel>(
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
 pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+    // SAFETY: the caller's guarantee.
+    unsafe { closest_hit_counted::<K, ()>(bvh, ray, &mut ()) }
+}
+
+/// [`closest_hit`], counting what it visits into `counter`.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn closest_hit_counted<K: NodeKernel, C: Counter>(
+    bvh: &WideBvh,
+    ray: &Ray,
+    counter: &mut C,
+) -> Option<Hit> {
     if !can_hit(ray) {
         return None;
     }
@@ -197,6 +259,7 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
     let mut stack = Stack::<(u32, f32)>::new();
     let mut node = 0u32;
     loop {
+        counter.node();
         // SAFETY: the caller guarantees `K`'s instruction set.
         let (mut mask, near) =
             unsafe { K::enter(&bvh.nodes[node as usize], &box_ray, closest.box_limit) };
@@ -229,6 +292,7 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
                     break;
                 }
                 Child::Leaf { first_block, blocks } => {
+                    counter.leaf(blocks);
                     // SAFETY: the caller guarantees `K`'s instruction set.
                     unsafe { closest.leaf::<K>(bvh, first_block, blocks, &triangle_ray) };
                 }
@@ -244,6 +308,20 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
 pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
+    // SAFETY: the caller's guarantee.
+    unsafe { occluded_counted::<K, ()>(bvh, ray, &mut ()) }
+}
+
+/// [`occluded`], counting what it visits into `counter`.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn occluded_counted<K: NodeKernel, C: Counter>(
+    bvh: &WideBvh,
+    ray: &Ray,
+    counter: &mut C,
+) -> bool {
     if !can_hit(ray) {
         return false;
     }
@@ -255,6 +333,7 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
     let mut stack = Stack::<u32>::new();
     stack.push(0);
     while let Some(index) = stack.pop() {
+        counter.node();
         let node = &bvh.nodes[index as usize];
         // SAFETY: the caller guarantees `K`'s instruction set.
         let (mut mask, _) = unsafe { K::enter(node, &box_ray, box_limit) };
@@ -264,6 +343,7 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
             match decode(node.children[k]) {
                 Child::Node(index) => stack.push(index),
                 Child::Leaf { first_block, blocks } => {
+                    counter.leaf(blocks);
                     // SAFETY: the caller guarantees `K`'s instruction set.
                     if unsafe {
                         leaf_occluded::<K>(bvh, first_block, blocks, &triangle_ray, ray.t_max)
