@@ -227,6 +227,44 @@ fn avx2_frustum_kernel_agrees_with_its_scalar_twin() {
 
 /// Walks the tree: every child box contains its subtree's triangles, every triangle with area
 /// appears exactly once.
+/// The build bins large nodes and builds their children in parallel: the tree must not depend
+/// on how many threads there are. 40,000 triangles (clustered, so that the SAH has real choices)
+/// take the parallel paths at the top levels (`PARALLEL_MIN` is 16,384).
+#[test]
+fn the_tree_is_the_same_for_every_thread_count() {
+    let mut rng = Lcg(5);
+    let triangles: Vec<[Vec3; 3]> = (0..40_000)
+        .map(|i| {
+            let cluster = Vec3::new((i % 7) as f32 * 9.0, (i % 5) as f32 * 4.0, (i % 3) as f32);
+            let p = cluster + rng.vec() * 3.0;
+            [p, p + rng.vec() * 0.2, p + rng.vec() * 0.2]
+        })
+        .collect();
+    let bits = |bvh: &Bvh| {
+        let mut words = Vec::new();
+        for node in &bvh.wide.nodes {
+            words.extend(node.planes.iter().flatten().map(|x| x.to_bits()));
+            words.extend(node.children);
+        }
+        for (block, ids) in bvh.wide.blocks.iter().zip(&bvh.wide.ids) {
+            words.extend(block.vertices.iter().flatten().flatten().map(|x| x.to_bits()));
+            words.extend(ids);
+        }
+        words
+    };
+    for (name, settings) in BuildSettings::PRESETS {
+        let build = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| Bvh::build(&triangles, &settings))
+        };
+        let one = bits(&build(1));
+        assert!(one.len() > 100_000, "{name}");
+        for threads in [2, 3] {
+            assert!(bits(&build(threads)) == one, "{name}: another tree on {threads} threads");
+        }
+    }
+}
+
 #[test]
 fn wide_trees_cover_every_triangle_once() {
     let mut rng = Lcg(3);
