@@ -10,7 +10,7 @@
 //! Large nodes are binned in parallel and their two children built in parallel (rayon), so the
 //! build uses every thread of the pool it runs in; on a pool of one thread it is sequential.
 
-use glam::{Vec3A, Vec4};
+use glam::{Vec3, Vec3A, Vec4};
 
 use super::BuildSettings;
 use super::bounds::Bounds;
@@ -55,18 +55,38 @@ const MAX_SAH_DEPTH: usize = 48;
 
 /// Builds over `prims` (the bounds of each primitive; primitives whose index is not in `indices`
 /// are left out).
+#[cfg(test)]
 pub(crate) fn build(prims: &[Bounds], indices: Vec<u32>, settings: &BuildSettings) -> BinaryBvh {
-    // The build moves the primitives' boxes themselves, not indices into them: binning and
-    // partitioning then read memory in order (on the 871k-triangle dragon, indirection through
-    // shuffled indices made most reads cache misses).
-    let mut refs: Vec<PrimRef> = indices
+    let refs = indices
         .iter()
         .map(|&id| {
             let b = prims[id as usize];
             PrimRef::new(Aabb { min: b.min.into(), max: b.max.into() }, id)
         })
         .collect();
-    drop(indices);
+    build_refs(refs, settings)
+}
+
+/// Builds over the triangles that can be hit (finite vertices, non-zero area); the others are
+/// left out of the tree, and of [`BinaryBvh::order`].
+pub(crate) fn build_triangles(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> BinaryBvh {
+    // One pass from the triangles to the build records (no array of boxes in between).
+    let refs = (0u32..)
+        .zip(triangles)
+        .filter(|&(_, &t)| super::refit::hittable(t))
+        .map(|(id, &[a, b, c])| {
+            let (a, b, c) = (Vec3A::from(a), Vec3A::from(b), Vec3A::from(c));
+            PrimRef::new(Aabb { min: a.min(b).min(c), max: a.max(b).max(c) }, id)
+        })
+        .collect();
+    build_refs(refs, settings)
+}
+
+/// Builds over `refs`, which it reorders into the leaves' order.
+fn build_refs(mut refs: Vec<PrimRef>, settings: &BuildSettings) -> BinaryBvh {
+    // The build moves the primitives' boxes themselves, not indices into them: binning and
+    // partitioning then read memory in order (on the 871k-triangle dragon, indirection through
+    // shuffled indices made most reads cache misses).
     let builder = Builder { settings };
     let mut nodes = Vec::with_capacity(2 * refs.len() / settings.max_leaf_size.max(1) + 1);
     if !refs.is_empty() {

@@ -307,25 +307,21 @@ impl Bvh {
     /// primitives' boxes and build records, the binary tree and the wide tree with its copies of
     /// the triangles): for a caller to check against the memory it has before it builds.
     pub fn build_bytes_estimate(triangles: usize) -> u64 {
-        // At its peak the build holds about 110 bytes per triangle: the boxes (24) and build
-        // records (48) with the binary tree (about 25), then the wide tree (about 56, see
-        // `BvhStats::bytes`) while the binary tree is collapsed. 160 leaves a margin.
+        // At its peak the build holds about 90 bytes per triangle: the build records (32) with
+        // the binary tree (about 25), then the wide tree (about 56, see `BvhStats::bytes`) while
+        // the binary tree is collapsed. 160 leaves a margin.
         triangles as u64 * 160
     }
 
     fn build_checked(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {
         let settings = settings.clamped();
-        let prims: Vec<Bounds> = triangles.iter().map(|&t| Bounds::of_triangle(t)).collect();
-        let indices: Vec<u32> = (0..triangles.len() as u32)
-            .filter(|&i| {
-                let t = triangles[i as usize];
-                t.iter().all(|v| v.is_finite()) && !crate::triangle::is_degenerate(t)
-            })
-            .collect();
-        let indexed_triangles = indices.len();
-        let flat = (indexed_triangles <= settings.flat_limit)
-            .then(|| flat::Flat::new(triangles, &indices));
-        let binary = build::build(&prims, indices, &settings);
+        let binary = build::build_triangles(triangles, &settings);
+        let indexed_triangles = binary.order.len();
+        let flat = (indexed_triangles <= settings.flat_limit).then(|| {
+            let mut indices = binary.order.clone();
+            indices.sort_unstable();
+            flat::Flat::new(triangles, &indices)
+        });
         let wide = wide::collapse(&binary, |i| triangles[i as usize], |i| i);
         let stats = BvhStats {
             triangles: triangles.len(),

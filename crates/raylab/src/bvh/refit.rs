@@ -51,7 +51,7 @@ impl std::fmt::Display for RefitError {
 impl std::error::Error for RefitError {}
 
 /// Whether a triangle can be hit at all: finite vertices and non-zero area.
-fn hittable(triangle: [Vec3; 3]) -> bool {
+pub(super) fn hittable(triangle: [Vec3; 3]) -> bool {
     triangle.iter().all(|v| v.is_finite()) && !is_degenerate(triangle)
 }
 
