@@ -14,6 +14,7 @@ use glam::{Vec3, Vec3A, Vec4};
 
 use super::BuildSettings;
 use super::bounds::Bounds;
+use super::sweep::sweep;
 
 /// Triangles per leaf block: leaves are tested four at a time.
 pub(crate) const BLOCK: usize = 4;
@@ -133,9 +134,9 @@ impl PrimRef {
 
 /// A box in SIMD-friendly form, for the build only.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Aabb {
-    min: Vec3A,
-    max: Vec3A,
+pub(super) struct Aabb {
+    pub(super) min: Vec3A,
+    pub(super) max: Vec3A,
 }
 
 impl Default for Aabb {
@@ -145,10 +146,10 @@ impl Default for Aabb {
 }
 
 impl Aabb {
-    const EMPTY: Aabb = Aabb { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
+    pub(super) const EMPTY: Aabb = Aabb { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
 
     #[inline]
-    fn union(self, other: Aabb) -> Aabb {
+    pub(super) fn union(self, other: Aabb) -> Aabb {
         Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
     }
 
@@ -164,8 +165,9 @@ impl Aabb {
 
     /// [`half_area`](Self::half_area) of a box known not to be empty (it holds a primitive):
     /// no emptiness test.
+    #[cfg(any(test, not(target_arch = "x86_64")))]
     #[inline]
-    fn half_area_nonempty(&self) -> f32 {
+    pub(super) fn half_area_nonempty(&self) -> f32 {
         let d = self.max - self.min;
         d.x * d.y + d.y * d.z + d.z * d.x
     }
@@ -181,10 +183,10 @@ struct Builder<'a> {
 }
 
 /// Per-bin bounds of primitives, and counts.
-#[derive(Clone, Copy, Default)]
-struct Bin {
-    bounds: Aabb,
-    count: u32,
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Bin {
+    pub(super) bounds: Aabb,
+    pub(super) count: u32,
 }
 
 /// The best split found by binning.
@@ -199,7 +201,7 @@ struct Split {
 
 /// How many leaf blocks `n` primitives fill.
 #[inline]
-fn blocks(n: u32) -> f32 {
+pub(super) fn blocks(n: u32) -> f32 {
     n.div_ceil(BLOCK as u32) as f32
 }
 
@@ -385,48 +387,17 @@ impl Builder<'_> {
 
         // A flat node has zero area; its splits are then compared among themselves only.
         let parent_area = bounds.half_area().max(f32::MIN_POSITIVE);
-        let mut best: Option<Split> = None;
-        // The right side's cost term `area · blocks` for each split position; zero where the
-        // right side is empty (such splits are skipped).
-        let mut right_cost = [0.0f32; MAX_BINS];
-        let mut right_count = [0u32; MAX_BINS];
-        for axis in 0..3 {
-            if extent[axis] <= 0.0 {
-                continue;
-            }
-            // Sweep from the right: position k covers bins k..bins.
-            let (mut bounds, mut count) = (Aabb::EMPTY, 0u32);
-            for k in (1..bins).rev() {
-                let bin = &binned[k][axis];
-                bounds = bounds.union(bin.bounds);
-                count += bin.count;
-                right_count[k] = count;
-                right_cost[k] =
-                    if count > 0 { bounds.half_area_nonempty() * blocks(count) } else { 0.0 };
-            }
-            let (mut left, mut left_count) = (Aabb::EMPTY, 0u32);
-            for k in 1..bins {
-                let bin = &binned[k - 1][axis];
-                left = left.union(bin.bounds);
-                left_count += bin.count;
-                if left_count == 0 || right_count[k] == 0 {
-                    continue;
-                }
-                // The candidates are compared by their area terms alone; the cost proper (which
-                // scales and offsets them alike) is computed once, for the winner.
-                let area_term = left.half_area_nonempty() * blocks(left_count) + right_cost[k];
-                if best.as_ref().is_none_or(|b| area_term < b.cost) {
-                    best = Some(Split { axis, bin: k, cost: area_term, left, right: Aabb::EMPTY });
-                }
-            }
-        }
-        // The winner's cost and right box, from its bins (not kept for every candidate).
+        let mut best = sweep(binned, extent.cmpgt(Vec3A::ZERO).into()).map(|(axis, bin, cost)| {
+            // The winner's boxes, from its bins (not kept for every candidate).
+            let side =
+                |bins: &[[Bin; 3]]| bins.iter().fold(Aabb::EMPTY, |b, x| b.union(x[axis].bounds));
+            Split { axis, bin, cost, left: side(&binned[..bin]), right: side(&binned[bin..]) }
+        });
+        // The candidates were compared by their area terms alone; the cost proper (which scales
+        // and offsets them alike) is computed once, for the winner.
         if let Some(split) = best.as_mut() {
             split.cost =
                 self.settings.traversal_cost + split.cost * self.settings.block_cost / parent_area;
-            split.right = binned[split.bin..]
-                .iter()
-                .fold(Aabb::EMPTY, |b, bins| b.union(bins[split.axis].bounds));
         }
         best
     }

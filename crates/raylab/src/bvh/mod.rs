@@ -39,6 +39,7 @@ mod kernels;
 mod lanes;
 mod packet;
 mod refit;
+mod sweep;
 mod traverse;
 mod wide;
 
