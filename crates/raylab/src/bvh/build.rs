@@ -50,6 +50,14 @@ pub(crate) const MAX_BINS: usize = 256;
 const STACK_BINS: usize = 32;
 /// Nodes with more primitives than this bin and build their children in parallel.
 const PARALLEL_MIN: usize = 16 * 1024;
+
+/// Whether a node of `n` primitives is worth splitting into parallel work: large enough, and a
+/// pool with more than one thread to run it (on one thread the parallel paths only add the
+/// merging of partial bins and the copying of subtrees).
+#[inline]
+fn in_parallel(n: usize) -> bool {
+    n >= PARALLEL_MIN && rayon::current_num_threads() > 1
+}
 /// Beyond this depth nodes are split in the middle, which bounds the depth (and so the traversal
 /// stack) whatever the input.
 const MAX_SAH_DEPTH: usize = 48;
@@ -252,7 +260,7 @@ impl Builder<'_> {
     fn bounds_of(&self, refs: &[PrimRef]) -> (Aabb, Aabb) {
         let fold = |(b, c): (Aabb, Aabb), r: &PrimRef| (b.union(r.bounds()), c.grow(r.centroid()));
         let empty = (Aabb::EMPTY, Aabb::EMPTY);
-        if refs.len() >= PARALLEL_MIN {
+        if in_parallel(refs.len()) {
             use rayon::prelude::*;
             refs.par_chunks(4096)
                 .map(|chunk| chunk.iter().fold(empty, fold))
@@ -318,7 +326,7 @@ impl Builder<'_> {
         out.push(BinaryNode { bounds: bounds.bounds(), first_or_right: 0, count: 0 });
         let (left_refs, right_refs) = refs.split_at_mut(mid);
         let right_first = first + mid as u32;
-        if n >= PARALLEL_MIN {
+        if in_parallel(n) {
             let (mut left_nodes, mut right_nodes) = (Vec::new(), Vec::new());
             rayon::join(
                 || self.build_node(left_refs, first, left.0, left.1, depth + 1, &mut left_nodes),
@@ -355,7 +363,7 @@ impl Builder<'_> {
         // more bins than the array holds (on a node below `PARALLEL_MIN` that is one chunk).
         let mut on_stack = [[Bin::default(); 3]; STACK_BINS];
         let heap: Vec<[Bin; 3]>;
-        let binned: &[[Bin; 3]] = if refs.len() >= PARALLEL_MIN || bins > STACK_BINS {
+        let binned: &[[Bin; 3]] = if in_parallel(refs.len()) || bins > STACK_BINS {
             use rayon::prelude::*;
             let empty = || vec![[Bin::default(); 3]; bins];
             let merge = |mut a: Vec<[Bin; 3]>, b: Vec<[Bin; 3]>| {
