@@ -271,6 +271,7 @@ fn bench_generates_traces_and_reports() {
             "b.json",
             "--write-hits",
             "hits",
+            "--counts",
         ],
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
@@ -278,6 +279,11 @@ fn bench_generates_traces_and_reports() {
     for word in ["primary", "shadow", "diffuse", "Mr/s", "BVH build", "per triangle"] {
         assert!(stdout.contains(word), "{word}: {stdout}");
     }
+    // The box's 32 triangles make one wide node over eight leaves of four: every camera ray
+    // tests exactly that node.
+    let counts: Vec<&str> = stdout.lines().filter(|l| l.ends_with(" blocks")).collect();
+    assert_eq!(counts.len(), 3, "{stdout}");
+    assert!(counts[0].starts_with("primary   closest      1.00 nodes"), "{stdout}");
     let json = std::fs::read_to_string(dir.path().join("b.json")).unwrap();
     for key in [
         "\"triangles\": 32",
