@@ -8,6 +8,10 @@
 use super::build::blocks;
 use super::build::{Aabb, Bin, MAX_BINS};
 
+/// Bin counts up to this (the `fast` and `medium` presets' 8 and 16, `high`'s 32) sweep with
+/// short arrays.
+const SMALL_BINS: usize = 32;
+
 /// The SAH sweep over binned primitives: the split position (axis, first bin of the right side)
 /// with the least area term `A_L·blocks(n_L) + A_R·blocks(n_R)`, and that term; the first such
 /// position in axis-major order among equals. Axes whose flag in `axes` is false (no extent) are
@@ -16,8 +20,14 @@ use super::build::{Aabb, Bin, MAX_BINS};
 pub(super) fn sweep(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f32)> {
     #[cfg(target_arch = "x86_64")]
     {
-        // SAFETY: SSE2 is part of x86-64.
-        unsafe { sweep_sse2(binned, axes) }
+        // The per-position arrays on the stack are as long as the bins need: clearing 256
+        // positions for every small node cost more than its sweep.
+        // SAFETY (both): SSE2 is part of x86-64.
+        if binned.len() <= SMALL_BINS {
+            unsafe { sweep_sse2::<SMALL_BINS>(binned, axes) }
+        } else {
+            unsafe { sweep_sse2::<MAX_BINS>(binned, axes) }
+        }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -71,7 +81,10 @@ fn sweep_scalar(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f
 /// The CPU must support SSE2 (every x86-64 does).
 #[cfg(target_arch = "x86_64")]
 #[inline]
-unsafe fn sweep_sse2(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f32)> {
+unsafe fn sweep_sse2<const N: usize>(
+    binned: &[[Bin; 3]],
+    axes: [bool; 3],
+) -> Option<(usize, usize, f32)> {
     use std::arch::x86_64::*;
     let bins = binned.len();
     // SAFETY (the whole body): SSE2, the caller's guarantee; every load and store is of a
@@ -105,8 +118,9 @@ unsafe fn sweep_sse2(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usi
         };
         let zero_i = _mm_setzero_si128();
 
-        let mut right_cost = [_mm_setzero_ps(); MAX_BINS];
-        let mut right_count = [zero_i; MAX_BINS];
+        debug_assert!(bins <= N);
+        let mut right_cost = [_mm_setzero_ps(); N];
+        let mut right_count = [zero_i; N];
         let (mut right, mut count) = ([Aabb::EMPTY; 3], zero_i);
         for k in (1..bins).rev() {
             grow(&mut right, k);
@@ -196,8 +210,12 @@ mod tests {
             let axes = [next() < 0.9, next() < 0.9, next() < 0.9];
             let scalar = sweep_scalar(&binned, axes);
             // SAFETY: SSE2 is part of x86-64.
-            let sse2 = unsafe { sweep_sse2(&binned, axes) };
+            let sse2 = unsafe { sweep_sse2::<MAX_BINS>(&binned, axes) };
+
             let bits = |s: Option<(usize, usize, f32)>| s.map(|(a, k, c)| (a, k, c.to_bits()));
+            // SAFETY: as above.
+            let short = unsafe { sweep_sse2::<SMALL_BINS>(&binned, axes) };
+            assert_eq!(bits(short), bits(sse2), "case {case}: short arrays");
             assert_eq!(bits(sse2), bits(scalar), "case {case}: {binned:?} {axes:?}");
             found += scalar.is_some() as usize;
         }
