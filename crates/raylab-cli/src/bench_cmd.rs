@@ -403,12 +403,7 @@ fn print_counts(bvh: &Bvh, sets: &[(&str, bool, Vec<Ray>)], threads: usize) {
                     }
                     stats
                 })
-                .reduce(TraversalStats::default, |a, b| TraversalStats {
-                    rays: a.rays + b.rays,
-                    nodes: a.nodes + b.nodes,
-                    leaves: a.leaves + b.leaves,
-                    blocks: a.blocks + b.blocks,
-                })
+                .reduce(TraversalStats::default, |a, b| a + b)
         };
         let stats = match &pool {
             Ok(pool) => pool.install(count),

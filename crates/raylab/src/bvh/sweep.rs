@@ -22,10 +22,11 @@ pub(super) fn sweep(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usiz
     {
         // The per-position arrays on the stack are as long as the bins need: clearing 256
         // positions for every small node cost more than its sweep.
-        // SAFETY (both): SSE2 is part of x86-64.
         if binned.len() <= SMALL_BINS {
+            // SAFETY: SSE2 is part of x86-64.
             unsafe { sweep_sse2::<SMALL_BINS>(binned, axes) }
         } else {
+            // SAFETY: SSE2 is part of x86-64.
             unsafe { sweep_sse2::<MAX_BINS>(binned, axes) }
         }
     }
@@ -211,7 +212,6 @@ mod tests {
             let scalar = sweep_scalar(&binned, axes);
             // SAFETY: SSE2 is part of x86-64.
             let sse2 = unsafe { sweep_sse2::<MAX_BINS>(&binned, axes) };
-
             let bits = |s: Option<(usize, usize, f32)>| s.map(|(a, k, c)| (a, k, c.to_bits()));
             // SAFETY: as above.
             let short = unsafe { sweep_sse2::<SMALL_BINS>(&binned, axes) };

@@ -370,6 +370,7 @@ fn traversal_counts_are_the_nodes_leaves_and_blocks_visited() {
         bvh.closest_hit_counted(&ray, &mut total);
     }
     assert_eq!(total, stats(4, 3, 2, 2));
+    assert_eq!(total + stats(1, 2, 3, 4), stats(5, 5, 5, 6));
     assert_eq!(total.per_ray(), [0.75, 0.5, 0.5]);
 }
 

@@ -117,6 +117,20 @@ impl TraversalStats {
     }
 }
 
+impl std::ops::Add for TraversalStats {
+    type Output = TraversalStats;
+
+    /// The counts of two sets of queries together.
+    fn add(self, o: TraversalStats) -> TraversalStats {
+        TraversalStats {
+            rays: self.rays + o.rays,
+            nodes: self.nodes + o.nodes,
+            leaves: self.leaves + o.leaves,
+            blocks: self.blocks + o.blocks,
+        }
+    }
+}
+
 /// What a traversal counts as it goes; `()` counts nothing and compiles away.
 pub(crate) trait Counter {
     /// A node's boxes are tested.
