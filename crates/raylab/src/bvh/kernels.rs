@@ -1,12 +1,12 @@
 //! Ray/box tests of one ray against the eight children of a [`WideNode`].
 //!
-//! Each kernel computes, for every child, the same values as [`RayBoxTest::enter`] (the scalar
-//! twin) in the same order of operations: per axis `tn = (near plane − o)·(1/d)` folded into
-//! `near = max(tn, near)`, and `tf = ((far plane − o)·(1/d))·(1 + 2γ₃)` into `far = min(tf, far)`,
-//! then, both moved out by `SLAB_PAD` times the box's reach on the ray's dominant axis,
-//! `near <= far`. x86's `maxps`/`minps` return their second operand when the first is NaN,
-//! which is how the scalar `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face
-//! plane): the tests in `bvh/tests.rs` check that all kernels agree bit for bit.
+//! Each kernel computes, for every child, the same values as [`RayBoxTest::enter_with_margin`]
+//! (the scalar twin) in the same order of operations: per axis `tn = (near plane − o)·(1/d)`
+//! folded into `near = max(tn, near)` and `tf = (far plane − o)·(1/d)` into `far = min(tf, far)`,
+//! then `near − margin <= far + margin`, with the ray's one margin for every box. x86's
+//! `maxps`/`minps` return their second operand when the first is NaN, which is how the scalar
+//! `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face plane): the tests in
+//! `bvh/tests.rs` check that all kernels agree bit for bit.
 
 use super::bounds::{Bounds, FAR_SCALE, Frustum, RayBoxTest, SLAB_PAD};
 use super::build::BLOCK;
@@ -19,14 +19,15 @@ pub(crate) trait NodeKernel: Sized {
     /// The ray, prepared for this kernel once per ray.
     type Ray: Copy;
 
-    /// Prepares a ray.
+    /// Prepares a ray for the boxes inside a root box whose [`RayBoxTest::margin`] is `margin`.
     ///
     /// # Safety
     /// As for [`enter`](Self::enter).
-    unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray;
+    unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray;
 
     /// The mask of children entered within `[t_min, t_limit]` (bit `k` for child `k`), and each
-    /// child's entry distance (meaningful only where the bit is set).
+    /// child's entry distance (meaningful only where the bit is set), as
+    /// [`RayBoxTest::enter_with_margin`] decides them.
     ///
     /// # Safety
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
@@ -142,23 +143,27 @@ fn plane_rows(negative: [bool; 3]) -> ([usize; 3], [usize; 3]) {
     ([near(0), near(1), near(2)], [far(0), far(1), far(2)])
 }
 
-/// The scalar twin: [`RayBoxTest::enter`] per child.
+/// The scalar twin: [`RayBoxTest::enter_with_margin`] per child.
 pub(crate) struct Scalar;
 
 impl NodeKernel for Scalar {
-    type Ray = RayBoxTest;
+    type Ray = (RayBoxTest, f32);
 
     #[inline(always)]
-    unsafe fn prepare(ray: &RayBoxTest) -> RayBoxTest {
-        *ray
+    unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> (RayBoxTest, f32) {
+        (*ray, margin)
     }
 
     #[inline(always)]
-    unsafe fn enter(node: &WideNode, ray: &RayBoxTest, t_limit: f32) -> (u32, [f32; WIDTH]) {
+    unsafe fn enter(
+        node: &WideNode,
+        (ray, margin): &(RayBoxTest, f32),
+        t_limit: f32,
+    ) -> (u32, [f32; WIDTH]) {
         let mut mask = 0;
         let mut near = [0.0; WIDTH];
         for (k, slot) in near.iter_mut().enumerate() {
-            if let Some(t) = ray.enter(&node.bounds(k), t_limit) {
+            if let Some(t) = ray.enter_with_margin(&node.bounds(k), t_limit, *margin) {
                 mask |= 1 << k;
                 *slot = t;
             }
@@ -205,13 +210,13 @@ mod x86 {
     /// Eight children with two 4-wide SSE halves: every x86-64 CPU has SSE2.
     pub(crate) struct Sse;
 
-    /// A ray broadcast into vector registers, its axes in the order dominant axis first (so that
-    /// the node kernels take the box's reach from axis 0 without a branch), then the other two.
+    /// A ray broadcast into vector registers, with its box margin.
     #[derive(Clone, Copy)]
     pub(crate) struct Broadcast<V> {
         origin: [V; 3],
         inv: [V; 3],
         t_min: V,
+        margin: V,
         near_rows: [usize; 3],
         far_rows: [usize; 3],
     }
@@ -222,26 +227,25 @@ mod x86 {
         /// # Safety
         /// The CPU must support `V`'s instruction set.
         #[inline(always)]
-        unsafe fn new(ray: &RayBoxTest) -> Self {
+        unsafe fn new(ray: &RayBoxTest, margin: f32) -> Self {
             let (near_rows, far_rows) = plane_rows(ray.negative);
-            let kz = ray.dominant_axis;
-            let axes = [kz, (kz + 1) % 3, (kz + 2) % 3];
             // SAFETY: the caller's guarantee.
             unsafe {
                 Broadcast {
                     origin: [
-                        V::splat(ray.origin[axes[0]]),
-                        V::splat(ray.origin[axes[1]]),
-                        V::splat(ray.origin[axes[2]]),
+                        V::splat(ray.origin[0]),
+                        V::splat(ray.origin[1]),
+                        V::splat(ray.origin[2]),
                     ],
                     inv: [
-                        V::splat(ray.inv_direction[axes[0]]),
-                        V::splat(ray.inv_direction[axes[1]]),
-                        V::splat(ray.inv_direction[axes[2]]),
+                        V::splat(ray.inv_direction[0]),
+                        V::splat(ray.inv_direction[1]),
+                        V::splat(ray.inv_direction[2]),
                     ],
                     t_min: V::splat(ray.t_min),
-                    near_rows: [near_rows[axes[0]], near_rows[axes[1]], near_rows[axes[2]]],
-                    far_rows: [far_rows[axes[0]], far_rows[axes[1]], far_rows[axes[2]]],
+                    margin: V::splat(margin),
+                    near_rows,
+                    far_rows,
                 }
             }
         }
@@ -566,9 +570,9 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
+        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
             // SAFETY: SSE2 is part of x86-64.
-            unsafe { Broadcast::new(ray) }
+            unsafe { Broadcast::new(ray, margin) }
         }
 
         #[inline(always)]
@@ -576,31 +580,22 @@ mod x86 {
             // SAFETY: SSE2 is part of x86-64; every load reads 4 floats inside a row of 8 of
             // `node`, which is 32-byte aligned, so offsets 0 and 4 are 16-byte aligned.
             unsafe {
-                let scale = _mm_set1_ps(FAR_SCALE);
                 let limit = _mm_set1_ps(t_limit);
                 let mut out = [0.0f32; WIDTH];
                 let mut mask = 0u32;
-                let pad_scale = _mm_set1_ps(SLAB_PAD);
-                let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
                 for half in 0..2 {
                     let mut near = ray.t_min;
                     let mut far = limit;
-                    let mut reach = _mm_setzero_ps();
                     for axis in 0..3 {
                         let np = _mm_load_ps(node.planes[ray.near_rows[axis]][4 * half..].as_ptr());
                         let fp = _mm_load_ps(node.planes[ray.far_rows[axis]][4 * half..].as_ptr());
                         let tn = _mm_mul_ps(_mm_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
                         let tf = _mm_mul_ps(_mm_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
                         near = _mm_max_ps(tn, near);
-                        far = _mm_min_ps(_mm_mul_ps(tf, scale), far);
-                        // Axis 0 is the dominant axis (see `Broadcast`).
-                        if axis == 0 {
-                            reach = _mm_max_ps(abs(tn), abs(tf));
-                        }
+                        far = _mm_min_ps(tf, far);
                     }
-                    let pad = _mm_mul_ps(reach, pad_scale);
-                    let near = _mm_sub_ps(near, pad);
-                    let far = _mm_add_ps(far, pad);
+                    let near = _mm_sub_ps(near, ray.margin);
+                    let far = _mm_add_ps(far, ray.margin);
                     let hit = _mm_cmple_ps(near, far);
                     mask |= (_mm_movemask_ps(hit) as u32) << (4 * half);
                     _mm_storeu_ps(out[4 * half..].as_mut_ptr(), near);
@@ -728,9 +723,9 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
+        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
             // SAFETY: the caller checked AVX2 support (this function's contract).
-            unsafe { Broadcast::new(ray) }
+            unsafe { Broadcast::new(ray, margin) }
         }
 
         #[inline(always)]
@@ -738,26 +733,18 @@ mod x86 {
             // SAFETY: the caller checked AVX2 support; every load reads one 32-byte aligned row
             // of 8 floats of `node`.
             unsafe {
-                let scale = _mm256_set1_ps(FAR_SCALE);
                 let mut near = ray.t_min;
                 let mut far = _mm256_set1_ps(t_limit);
-                let mut reach = _mm256_setzero_ps();
-                let abs = |v: __m256| _mm256_andnot_ps(_mm256_set1_ps(-0.0), v);
                 for axis in 0..3 {
                     let np = _mm256_load_ps(node.planes[ray.near_rows[axis]].as_ptr());
                     let fp = _mm256_load_ps(node.planes[ray.far_rows[axis]].as_ptr());
                     let tn = _mm256_mul_ps(_mm256_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
                     let tf = _mm256_mul_ps(_mm256_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
                     near = _mm256_max_ps(tn, near);
-                    far = _mm256_min_ps(_mm256_mul_ps(tf, scale), far);
-                    // Axis 0 is the dominant axis (see `Broadcast`).
-                    if axis == 0 {
-                        reach = _mm256_max_ps(abs(tn), abs(tf));
-                    }
+                    far = _mm256_min_ps(tf, far);
                 }
-                let pad = _mm256_mul_ps(reach, _mm256_set1_ps(SLAB_PAD));
-                let near = _mm256_sub_ps(near, pad);
-                let far = _mm256_add_ps(far, pad);
+                let near = _mm256_sub_ps(near, ray.margin);
+                let far = _mm256_add_ps(far, ray.margin);
                 let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
                 let mut out = [0.0f32; WIDTH];
                 _mm256_storeu_ps(out.as_mut_ptr(), near);
@@ -824,9 +811,9 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn prepare(ray: &RayBoxTest) -> Self::Ray {
+        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
             // SAFETY: as above.
-            unsafe { Avx2::prepare(ray) }
+            unsafe { Avx2::prepare(ray, margin) }
         }
 
         #[inline(always)]

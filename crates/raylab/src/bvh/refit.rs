@@ -127,6 +127,7 @@ impl Bvh {
                 }
             }
         }
+        self.wide.root = self.wide.root_bounds();
         self.stats.indexed_triangles = indexed;
         Ok(())
     }

@@ -72,13 +72,19 @@ fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {
     cases
 }
 
+/// The box around a node's children: the root that single rays' margins are taken over.
+fn node_root(node: &WideNode) -> Bounds {
+    (0..8).fold(Bounds::EMPTY, |b, k| b.union(node.bounds(k)))
+}
+
 fn check_kernel<K: NodeKernel>(run: impl Fn(&WideNode, &K::Ray, f32) -> (u32, [f32; 8])) {
     for (node, ray, t_limit) in hostile_cases() {
         let box_ray = RayBoxTest::new(&ray);
+        let margin = box_ray.margin(&node_root(&node));
         // SAFETY: the scalar kernel needs nothing.
-        let (mask, near) = unsafe { Scalar::enter(&node, &box_ray, t_limit) };
+        let (mask, near) = unsafe { Scalar::enter(&node, &(box_ray, margin), t_limit) };
         // SAFETY: `check_kernel` runs only kernels this CPU supports.
-        let (simd_mask, simd_near) = run(&node, &unsafe { K::prepare(&box_ray) }, t_limit);
+        let (simd_mask, simd_near) = run(&node, &unsafe { K::prepare(&box_ray, margin) }, t_limit);
         assert_eq!(mask, simd_mask, "{ray:?} limit {t_limit}\n{node:?}");
         for k in 0..8 {
             if mask & (1 << k) != 0 {
@@ -93,10 +99,11 @@ fn check_kernel<K: NodeKernel>(run: impl Fn(&WideNode, &K::Ray, f32) -> (u32, [f
 fn scalar_kernel_agrees_with_the_box_test() {
     for (node, ray, t_limit) in hostile_cases() {
         let box_ray = RayBoxTest::new(&ray);
+        let margin = box_ray.margin(&node_root(&node));
         // SAFETY: the scalar kernel needs nothing.
-        let (mask, _) = unsafe { Scalar::enter(&node, &box_ray, t_limit) };
+        let (mask, _) = unsafe { Scalar::enter(&node, &(box_ray, margin), t_limit) };
         for k in 0..8 {
-            let expected = box_ray.enter(&node.bounds(k), t_limit).is_some();
+            let expected = box_ray.enter_with_margin(&node.bounds(k), t_limit, margin).is_some();
             assert_eq!(mask & (1 << k) != 0, expected);
             // Unused slots are never entered.
             if node.children[k] == wide::EMPTY {
@@ -104,6 +111,32 @@ fn scalar_kernel_agrees_with_the_box_test() {
             }
         }
     }
+}
+
+/// The single-ray test with the ray's one margin enters every box that the per-box test
+/// (`enter`, each box's own rounding and triangle margins) enters, no later, and few others.
+#[test]
+fn the_margin_test_enters_every_box_the_per_box_test_enters() {
+    let (mut both, mut only_margin) = (0, 0);
+    for (node, ray, t_limit) in hostile_cases() {
+        let box_ray = RayBoxTest::new(&ray);
+        let margin = box_ray.margin(&node_root(&node));
+        for k in 0..8 {
+            let bounds = node.bounds(k);
+            let lean = box_ray.enter_with_margin(&bounds, t_limit, margin);
+            match (box_ray.enter(&bounds, t_limit), lean) {
+                (Some(near), Some(lean_near)) => {
+                    assert!(lean_near <= near, "{ray:?} {bounds:?}: {lean_near} > {near}");
+                    both += 1;
+                }
+                (Some(_), None) => panic!("{ray:?} limit {t_limit} misses {bounds:?}"),
+                (None, Some(_)) => only_margin += 1,
+                (None, None) => {}
+            }
+        }
+    }
+    assert!(both > 1000, "{both} boxes entered");
+    assert!(only_margin * 100 < both, "{only_margin} more boxes than {both}");
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -6,7 +6,7 @@
 
 use super::bounds::{FAR_SCALE, RayBoxTest};
 use super::kernels::NodeKernel;
-use super::wide::{Child, WIDTH, WideBvh, decode};
+use super::wide::{Child, EMPTY, WIDTH, WideBvh, decode};
 use crate::accel::Hit;
 use crate::float::next_float_up;
 use crate::ray::Ray;
@@ -265,54 +265,71 @@ pub(crate) unsafe fn closest_hit_counted<K: NodeKernel, C: Counter>(
         return None;
     }
     let box_ray = RayBoxTest::new(ray);
+    let margin = box_ray.margin(&bvh.root);
     let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
     // SAFETY: the caller guarantees `K`'s instruction set.
-    let box_ray = unsafe { K::prepare(&box_ray) };
+    let box_ray = unsafe { K::prepare(&box_ray, margin) };
     let mut closest = Closest::new(ray);
 
     let mut stack = Stack::<(u32, f32)>::new();
-    let mut node = 0u32;
+    // The child being descended into: an interior node or a leaf (never `EMPTY`).
+    let mut current = 0u32;
     loop {
-        counter.node();
-        // SAFETY: the caller guarantees `K`'s instruction set.
-        let (mut mask, near) =
-            unsafe { K::enter(&bvh.nodes[node as usize], &box_ray, closest.box_limit) };
-        let children = &bvh.nodes[node as usize].children;
-        // One interior child entered (common deep in the tree): descend without the stack.
-        if mask.count_ones() == 1
-            && let Child::Node(index) = decode(children[mask.trailing_zeros() as usize])
-        {
-            node = index;
-            continue;
-        }
-        // Push the entered children farthest first, so that the nearest is on top.
-        let first = stack.len();
-        while mask != 0 {
-            let k = mask.trailing_zeros() as usize;
+        // Descend through interior nodes, into the nearest child entered, pushing the others.
+        while let Child::Node(index) = decode(current) {
+            counter.node();
+            let node = &bvh.nodes[index as usize];
+            // SAFETY: the caller guarantees `K`'s instruction set.
+            let (mut mask, near) = unsafe { K::enter(node, &box_ray, closest.box_limit) };
+            if mask == 0 {
+                current = EMPTY;
+                break;
+            }
+            let children = &node.children;
+            let k0 = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            let child = children[k];
-            prefetch_child(bvh, child);
-            stack.push_sorted(first, (child, near[k]), |e| e.1);
+            if mask == 0 {
+                // One child entered (common deep in the tree): no stack.
+                current = children[k0];
+                continue;
+            }
+            let k1 = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if mask == 0 {
+                // Two: go to the nearer, push the other.
+                let (near_k, far_k) = if near[k1] < near[k0] { (k1, k0) } else { (k0, k1) };
+                prefetch_child(bvh, children[far_k]);
+                stack.push((children[far_k], near[far_k]));
+                current = children[near_k];
+                continue;
+            }
+            // Three or more: push all sorted, farthest deepest, and take the nearest.
+            let first = stack.len();
+            for k in [k0, k1] {
+                prefetch_child(bvh, children[k]);
+                stack.push_sorted(first, (children[k], near[k]), |e| e.1);
+            }
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                prefetch_child(bvh, children[k]);
+                stack.push_sorted(first, (children[k], near[k]), |e| e.1);
+            }
+            current = stack.pop().map_or(EMPTY, |e| e.0);
         }
-        // Pop until an interior node is due; leaves are intersected on the way.
+        if let Child::Leaf { first_block, blocks } = decode(current) {
+            counter.leaf(blocks);
+            // SAFETY: the caller guarantees `K`'s instruction set.
+            unsafe { closest.leaf::<K>(bvh, first_block, blocks, &triangle_ray) };
+        }
+        // Pop the next child still in reach.
         loop {
             let Some((child, near)) = stack.pop() else {
                 return closest.best;
             };
-            if near > closest.box_limit {
-                continue;
-            }
-            match decode(child) {
-                Child::Node(index) => {
-                    node = index;
-                    break;
-                }
-                Child::Leaf { first_block, blocks } => {
-                    counter.leaf(blocks);
-                    // SAFETY: the caller guarantees `K`'s instruction set.
-                    unsafe { closest.leaf::<K>(bvh, first_block, blocks, &triangle_ray) };
-                }
-                Child::Empty => {}
+            if near <= closest.box_limit {
+                current = child;
+                break;
             }
         }
     }
@@ -368,10 +385,11 @@ pub(crate) unsafe fn occluded_counted<K: NodeKernel, C: Counter>(
         return false;
     }
     let box_ray = RayBoxTest::new(ray);
+    let margin = box_ray.margin(&bvh.root);
     let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
     // SAFETY: the caller guarantees `K`'s instruction set.
-    let box_ray = unsafe { K::prepare(&box_ray) };
-    let box_limit = ray.t_max * FAR_SCALE;
+    let box_ray = unsafe { K::prepare(&box_ray, margin) };
+    let box_limit = ray.t_max;
     let mut stack = Stack::<u32>::new();
     stack.push(0);
     while let Some(index) = stack.pop() {

@@ -109,6 +109,16 @@ pub(crate) struct WideBvh {
     pub blocks: Vec<TriangleBlock<BLOCK>>,
     /// The caller's index of each triangle in `blocks` (unused lanes: `u32::MAX`).
     pub ids: Vec<[u32; BLOCK]>,
+    /// The box around everything (the root's children): single rays' box margins are bounded
+    /// inside it ([`RayBoxTest::margin`](super::RayBoxTest::margin)).
+    pub root: Bounds,
+}
+
+impl WideBvh {
+    /// The union of the root's child boxes.
+    pub(crate) fn root_bounds(&self) -> Bounds {
+        (0..WIDTH).fold(Bounds::EMPTY, |b, k| b.union(self.nodes[0].bounds(k)))
+    }
 }
 
 /// Collapses `binary` (built over `prim_ids`' triangles) into a wide BVH.
@@ -123,6 +133,7 @@ pub(crate) fn collapse(
         nodes: Vec::with_capacity(binary.nodes.len() / 4 + 1),
         blocks: Vec::with_capacity(binary.order.len() / 2 + 1),
         ids: Vec::with_capacity(binary.order.len() / 2 + 1),
+        root: Bounds::EMPTY,
     };
     wide.nodes.push(WideNode::UNUSED);
     if binary.nodes.is_empty() {
@@ -137,6 +148,7 @@ pub(crate) fn collapse(
     } else {
         collapser.emit_node(0, 0, &mut wide);
     }
+    wide.root = wide.root_bounds();
     wide
 }
 
