@@ -77,20 +77,46 @@ pub(crate) trait NodeKernel: Sized {
         t_limit: f32,
     ) -> (u32, [f32; WIDTH]);
 
+    /// What a ray's triangle tests need, in this kernel's registers, prepared once per ray.
+    type BlockRay: Copy;
+
+    /// Prepares a ray for [`block_hits`](Self::block_hits).
+    ///
+    /// # Safety
+    /// As for [`enter`](Self::enter).
+    unsafe fn prepare_block_ray(ray: &WatertightRay) -> Self::BlockRay;
+
     /// The hits of a ray on the triangles of `block` below `t_max`, as
     /// [`WatertightRay::intersect`] decides them. The blocks must hold no zero-area triangles
     /// (the BVH leaves them out). The scalar twin is [`block_hits_scalar`].
     ///
     /// # Safety
     /// As for [`enter`](Self::enter).
-    #[inline(always)]
     unsafe fn block_hits(
-        ray: &WatertightRay,
+        ray: &TriangleRay<Self::BlockRay>,
         block: &TriangleBlock<BLOCK>,
         t_max: f32,
-    ) -> BlockHits {
-        block_hits_scalar(ray, block, t_max)
-    }
+    ) -> BlockHits;
+}
+
+/// A ray prepared for the triangle tests of a kernel whose per-ray form is `B`: the scalar test's
+/// setup (for the lanes a kernel leaves undecided) and the kernel's.
+#[derive(Clone, Copy)]
+pub(crate) struct TriangleRay<B> {
+    pub ray: WatertightRay,
+    pub block: B,
+}
+
+/// Prepares `ray` for `K`'s triangle tests.
+///
+/// # Safety
+/// As for [`NodeKernel::enter`].
+#[inline(always)]
+pub(crate) unsafe fn prepare_triangle_ray<K: NodeKernel>(
+    ray: &WatertightRay,
+) -> TriangleRay<K::BlockRay> {
+    // SAFETY: the caller's guarantee.
+    TriangleRay { ray: *ray, block: unsafe { K::prepare_block_ray(ray) } }
 }
 
 /// What a block test decides for each of its four lanes.
@@ -148,6 +174,19 @@ pub(crate) struct Scalar;
 
 impl NodeKernel for Scalar {
     type Ray = (RayBoxTest, f32);
+    type BlockRay = ();
+
+    #[inline(always)]
+    unsafe fn prepare_block_ray(_: &WatertightRay) {}
+
+    #[inline(always)]
+    unsafe fn block_hits(
+        ray: &TriangleRay<()>,
+        block: &TriangleBlock<BLOCK>,
+        t_max: f32,
+    ) -> BlockHits {
+        block_hits_scalar(&ray.ray, block, t_max)
+    }
 
     #[inline(always)]
     unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> (RayBoxTest, f32) {
@@ -196,10 +235,10 @@ impl NodeKernel for Scalar {
     }
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
-pub(crate) use x86::block_hits_sse;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Avx512, Sse};
+#[cfg(all(test, target_arch = "x86_64"))]
+pub(crate) use x86::{SseBlockRay, block_hits_sse};
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
@@ -560,9 +599,16 @@ mod x86 {
             }
         }
 
+        type BlockRay = SseBlockRay;
+
+        #[inline(always)]
+        unsafe fn prepare_block_ray(ray: &WatertightRay) -> SseBlockRay {
+            SseBlockRay::new(ray)
+        }
+
         #[inline(always)]
         unsafe fn block_hits(
-            ray: &WatertightRay,
+            ray: &TriangleRay<SseBlockRay>,
             block: &TriangleBlock<BLOCK>,
             t_max: f32,
         ) -> BlockHits {
@@ -615,31 +661,59 @@ mod x86 {
         unsafe { __m128::load(r.as_ptr()) }
     }
 
+    /// A ray's triangle-test values broadcast into SSE registers, permuted to its `(kx, ky, kz)`.
+    #[derive(Clone, Copy)]
+    pub(crate) struct SseBlockRay {
+        origin: [__m128; 3],
+        shear: [__m128; 3],
+        abs_shear: [__m128; 2],
+        t_min: __m128,
+        k: [usize; 3],
+    }
+
+    impl SseBlockRay {
+        #[inline(always)]
+        pub(crate) fn new(ray: &WatertightRay) -> Self {
+            let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
+            // SAFETY: SSE2 is part of x86-64.
+            unsafe {
+                SseBlockRay {
+                    origin: [
+                        __m128::splat(ray.origin[kx]),
+                        __m128::splat(ray.origin[ky]),
+                        __m128::splat(ray.origin[kz]),
+                    ],
+                    shear: [
+                        __m128::splat(ray.shear_x),
+                        __m128::splat(ray.shear_y),
+                        __m128::splat(ray.shear_z),
+                    ],
+                    abs_shear: [__m128::splat(ray.shear_x.abs()), __m128::splat(ray.shear_y.abs())],
+                    t_min: __m128::splat(ray.t_min),
+                    k: [kx, ky, kz],
+                }
+            }
+        }
+    }
+
     /// [`block_hits_scalar`] for four triangles with SSE2, by [`watertight_lanes`].
     #[inline(always)]
     pub(crate) fn block_hits_sse(
-        ray: &WatertightRay,
+        ray: &TriangleRay<SseBlockRay>,
         block: &TriangleBlock<BLOCK>,
         t_max: f32,
     ) -> BlockHits {
-        let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
+        let r = &ray.block;
+        let [kx, ky, kz] = r.k;
         // SAFETY: SSE2 is part of x86-64; each load reads one row of 4 floats of the block,
         // which is 16-byte aligned (`repr(align(16))`); stores go to arrays of 4 floats.
         unsafe {
             let [p0, p1, p2] = &block.vertices;
             let lanes = WatertightLanes {
-                origin: [
-                    __m128::splat(ray.origin[kx]),
-                    __m128::splat(ray.origin[ky]),
-                    __m128::splat(ray.origin[kz]),
-                ],
-                shear: [
-                    __m128::splat(ray.shear_x),
-                    __m128::splat(ray.shear_y),
-                    __m128::splat(ray.shear_z),
-                ],
-                abs_shear: [__m128::splat(ray.shear_x.abs()), __m128::splat(ray.shear_y.abs())],
-                t_min: __m128::splat(ray.t_min),
+                origin: r.origin,
+                shear: r.shear,
+                abs_shear: r.abs_shear,
+                t_min: r.t_min,
                 t_max: __m128::splat(t_max),
                 vertices: [
                     [row(&p0[kx]), row(&p0[ky]), row(&p0[kz])],
@@ -713,9 +787,16 @@ mod x86 {
             }
         }
 
+        type BlockRay = SseBlockRay;
+
+        #[inline(always)]
+        unsafe fn prepare_block_ray(ray: &WatertightRay) -> SseBlockRay {
+            SseBlockRay::new(ray)
+        }
+
         #[inline(always)]
         unsafe fn block_hits(
-            ray: &WatertightRay,
+            ray: &TriangleRay<SseBlockRay>,
             block: &TriangleBlock<BLOCK>,
             t_max: f32,
         ) -> BlockHits {
@@ -800,14 +881,20 @@ mod x86 {
             unsafe { Avx2::enter_frustum(node, frustum, t_limit) }
         }
 
+        type BlockRay = SseBlockRay;
+
+        #[inline(always)]
+        unsafe fn prepare_block_ray(ray: &WatertightRay) -> SseBlockRay {
+            SseBlockRay::new(ray)
+        }
+
         #[inline(always)]
         unsafe fn block_hits(
-            ray: &WatertightRay,
+            ray: &TriangleRay<SseBlockRay>,
             block: &TriangleBlock<BLOCK>,
             t_max: f32,
         ) -> BlockHits {
-            // SAFETY: as above.
-            unsafe { Avx2::block_hits(ray, block, t_max) }
+            block_hits_sse(ray, block, t_max)
         }
 
         #[inline(always)]

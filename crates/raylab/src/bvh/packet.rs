@@ -16,7 +16,7 @@
 use glam::Vec3;
 
 use super::bounds::{Bounds, FAR_SCALE, Frustum, RayBoxTest};
-use super::kernels::NodeKernel;
+use super::kernels::{NodeKernel, prepare_triangle_ray};
 use super::traverse::{Closest, Stack, can_hit, closest_hit, leaf_occluded, occluded};
 use super::wide::{Child, WideBvh, decode};
 use crate::accel::Hit;
@@ -271,7 +271,8 @@ pub(crate) unsafe fn packet_leaf_scalar<K: NodeKernel>(
         if rays.box_ray(i).enter(bounds, rays.box_limit[i]).is_none() {
             continue;
         }
-        let triangle_ray = &rays.triangle_ray(i);
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        let triangle_ray = &unsafe { prepare_triangle_ray::<K>(&rays.triangle_ray(i)) };
         if occlusion {
             // SAFETY: the caller guarantees `K`'s instruction set.
             let t_max = rays.triangle_limit[i];

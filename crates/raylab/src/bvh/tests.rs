@@ -413,7 +413,7 @@ fn traversal_counts_are_the_nodes_leaves_and_blocks_visited() {
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn sse2_block_kernel_agrees_with_its_scalar_twin() {
-    use super::kernels::{block_hits_scalar, block_hits_sse};
+    use super::kernels::{SseBlockRay, TriangleRay, block_hits_scalar, block_hits_sse};
     use crate::triangle::{TriangleBlock, WatertightRay};
     let mut rng = Lcg(11);
     let mut decided_hits = 0;
@@ -451,7 +451,8 @@ fn sse2_block_kernel_agrees_with_its_scalar_twin() {
         let ray = WatertightRay::new(&ray);
         for t_max in [f32::INFINITY, 1.0, 0.5 + rng.next()] {
             let scalar = block_hits_scalar(&ray, &block, t_max);
-            let simd = block_hits_sse(&ray, &block, t_max);
+            let prepared = TriangleRay { ray, block: SseBlockRay::new(&ray) };
+            let simd = block_hits_sse(&prepared, &block, t_max);
             assert_eq!(simd.hits & simd.undecided, 0);
             let mut resolved = simd.hits;
             for lane in 0..4 {

@@ -5,7 +5,7 @@
 //! triangle pre-test is then vectorized for the same set too.
 
 use super::bounds::{FAR_SCALE, RayBoxTest};
-use super::kernels::NodeKernel;
+use super::kernels::{NodeKernel, TriangleRay, prepare_triangle_ray};
 use super::wide::{Child, EMPTY, WIDTH, WideBvh, decode};
 use crate::accel::Hit;
 use crate::float::next_float_up;
@@ -184,7 +184,7 @@ impl Closest {
         bvh: &WideBvh,
         first_block: u32,
         blocks: u32,
-        triangle_ray: &WatertightRay,
+        triangle_ray: &TriangleRay<K::BlockRay>,
     ) {
         for b in first_block as usize..(first_block + blocks) as usize {
             let block = &bvh.blocks[b];
@@ -201,7 +201,7 @@ impl Closest {
                 } else {
                     undecided &= !bit;
                     let [v0, v1, v2] = block.triangle(lane);
-                    match triangle_ray.intersect(v0, v1, v2, self.triangle_limit) {
+                    match triangle_ray.ray.intersect(v0, v1, v2, self.triangle_limit) {
                         Some(h) => (h.t, h.b1, h.b2),
                         None => continue,
                     }
@@ -227,13 +227,13 @@ pub(super) unsafe fn leaf_occluded<K: NodeKernel>(
     bvh: &WideBvh,
     first_block: u32,
     blocks: u32,
-    triangle_ray: &WatertightRay,
+    triangle_ray: &TriangleRay<K::BlockRay>,
     t_max: f32,
 ) -> bool {
     for block in &bvh.blocks[first_block as usize..(first_block + blocks) as usize] {
         // SAFETY: the caller guarantees `K`'s instruction set.
         let decided = unsafe { K::block_hits(triangle_ray, block, t_max) };
-        if decided.hits != 0 || triangle_ray.any_lane_hits(block, 0, decided.undecided, t_max) {
+        if decided.hits != 0 || triangle_ray.ray.any_lane_hits(block, 0, decided.undecided, t_max) {
             return true;
         }
     }
@@ -267,7 +267,9 @@ pub(crate) unsafe fn closest_hit_counted<K: NodeKernel, C: Counter>(
     let box_ray = RayBoxTest::new(ray);
     let margin = box_ray.margin(&bvh.root);
     let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-    // SAFETY: the caller guarantees `K`'s instruction set.
+    // SAFETY (both): the caller guarantees `K`'s instruction set.
+    let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
+    // SAFETY: as above.
     let box_ray = unsafe { K::prepare(&box_ray, margin) };
     let mut closest = Closest::new(ray);
 
@@ -387,7 +389,9 @@ pub(crate) unsafe fn occluded_counted<K: NodeKernel, C: Counter>(
     let box_ray = RayBoxTest::new(ray);
     let margin = box_ray.margin(&bvh.root);
     let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-    // SAFETY: the caller guarantees `K`'s instruction set.
+    // SAFETY (both): the caller guarantees `K`'s instruction set.
+    let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
+    // SAFETY: as above.
     let box_ray = unsafe { K::prepare(&box_ray, margin) };
     let box_limit = ray.t_max;
     let mut stack = Stack::<u32>::new();
