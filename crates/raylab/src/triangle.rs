@@ -214,6 +214,20 @@ impl WatertightRay {
         }
     }
 
+    /// [`intersect`](Self::intersect) out of line, for the rare triangles a vector test leaves
+    /// undecided (see [`any_lane_hits`](Self::any_lane_hits)).
+    #[cold]
+    #[inline(never)]
+    pub(crate) fn intersect_rarely(
+        &self,
+        v0: Vec3,
+        v1: Vec3,
+        v2: Vec3,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        self.intersect(v0, v1, v2, t_max)
+    }
+
     /// Intersects the ray with triangle `(v0, v1, v2)`, counting hits on edges and vertices,
     /// for `0 < t < t_max` and `t >= ray.t_min`. Both sides of the triangle are hit.
     #[inline(always)]
@@ -389,8 +403,23 @@ impl WatertightRay {
     /// Whether [`intersect`](Self::intersect) hits any of the triangles in lanes `first + k` of
     /// `block` for the bits `k` set in `lanes` (the lanes a vector test left to the
     /// double-precision path).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn any_lane_hits<const N: usize>(
+        &self,
+        block: &TriangleBlock<N>,
+        first: usize,
+        lanes: u32,
+        t_max: f32,
+    ) -> bool {
+        lanes != 0 && self.any_lane_hits_rarely(block, first, lanes, t_max)
+    }
+
+    /// [`any_lane_hits`](Self::any_lane_hits) for some lanes: rare (an edge function rounded to
+    /// zero), so out of the traversal loops, which then keep their registers (a call in a loop
+    /// makes the compiler keep every vector value on the stack).
+    #[cold]
+    #[inline(never)]
+    fn any_lane_hits_rarely<const N: usize>(
         &self,
         block: &TriangleBlock<N>,
         first: usize,

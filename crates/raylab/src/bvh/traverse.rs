@@ -201,7 +201,7 @@ impl Closest {
                 } else {
                     undecided &= !bit;
                     let [v0, v1, v2] = block.triangle(lane);
-                    match triangle_ray.ray.intersect(v0, v1, v2, self.triangle_limit) {
+                    match triangle_ray.ray.intersect_rarely(v0, v1, v2, self.triangle_limit) {
                         Some(h) => (h.t, h.b1, h.b2),
                         None => continue,
                     }
