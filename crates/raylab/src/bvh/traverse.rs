@@ -395,17 +395,24 @@ pub(crate) unsafe fn occluded_counted<K: NodeKernel, C: Counter>(
     let box_ray = unsafe { K::prepare(&box_ray, margin) };
     let box_limit = ray.t_max;
     let mut stack = Stack::<u32>::new();
-    stack.push(0);
-    while let Some(index) = stack.pop() {
+    let mut index = 0;
+    loop {
         counter.node();
         let node = &bvh.nodes[index as usize];
         // SAFETY: the caller guarantees `K`'s instruction set.
         let (mut mask, _) = unsafe { K::enter(node, &box_ray, box_limit) };
+        // Leaves are tested at once (a hit ends the search); the first interior child is
+        // visited next without going through the stack, the others pushed.
+        let mut next = None;
         while mask != 0 {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
             match decode(node.children[k]) {
-                Child::Node(index) => stack.push(index),
+                Child::Node(child) => {
+                    if let Some(other) = next.replace(child) {
+                        stack.push(other);
+                    }
+                }
                 Child::Leaf { first_block, blocks } => {
                     counter.leaf(blocks);
                     // SAFETY: the caller guarantees `K`'s instruction set.
@@ -418,8 +425,11 @@ pub(crate) unsafe fn occluded_counted<K: NodeKernel, C: Counter>(
                 Child::Empty => {}
             }
         }
+        match next.or_else(|| stack.pop()) {
+            Some(child) => index = child,
+            None => return false,
+        }
     }
-    false
 }
 
 const _: () = assert!(WIDTH == 8);
