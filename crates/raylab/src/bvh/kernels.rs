@@ -332,6 +332,23 @@ mod x86 {
             if negative[2] { lo.z } else { hi.z },
         ];
         let [kx, ky, kz] = rays.k;
+        // The leaf's triangles some line of the packet may cross (bit `4·block + lane`, at
+        // most 16 blocks of 4): where the rays share their origin, the others are culled once
+        // for the whole packet.
+        let mut live = u64::MAX;
+        if let Some(bundle) = &rays.bundle {
+            live = 0;
+            for (k, b) in (first_block as usize..(first_block + blocks) as usize).enumerate() {
+                for lane in 0..BLOCK {
+                    if bundle.may_cross(bvh.blocks[b].triangle(lane)) {
+                        live |= 1 << (BLOCK * k + lane);
+                    }
+                }
+            }
+            if live == 0 {
+                return;
+            }
+        }
         // SAFETY: the caller's guarantee; every load reads `L` lanes from `base`, and
         // `base + L <= PACKET` because `PACKET` is a multiple of `L`.
         unsafe {
@@ -373,10 +390,12 @@ mod x86 {
                     lanes::<V>(&rays.origin[kz], base),
                 ];
                 let t_min = lanes::<V>(&rays.triangle_t_min, base);
-                'blocks: for b in first_block as usize..(first_block + blocks) as usize {
+                'blocks: for (k, b) in
+                    (first_block as usize..(first_block + blocks) as usize).enumerate()
+                {
                     let block = &bvh.blocks[b];
                     for (lane, &id) in bvh.ids[b].iter().enumerate() {
-                        if id == u32::MAX {
+                        if id == u32::MAX || live & (1 << (BLOCK * k + lane)) == 0 {
                             continue;
                         }
                         let [p0, p1, p2] = &block.vertices;

@@ -33,6 +33,7 @@
 
 mod bounds;
 mod build;
+mod bundle;
 mod flat;
 mod kernels;
 #[cfg(target_arch = "x86_64")]

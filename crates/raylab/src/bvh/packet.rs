@@ -16,6 +16,7 @@
 use glam::Vec3;
 
 use super::bounds::{Bounds, FAR_SCALE, Frustum, RayBoxTest};
+use super::bundle::LineBundle;
 use super::kernels::{NodeKernel, prepare_triangle_ray};
 use super::traverse::{Closest, Stack, can_hit, closest_hit, leaf_occluded, occluded};
 use super::wide::{Child, WideBvh, decode};
@@ -58,6 +59,8 @@ pub(crate) struct PacketRays {
     /// (whose `kz` is the dominant axis).
     pub negative: [bool; 3],
     pub k: [usize; 3],
+    /// The rays' lines, when they share their origin: culls a leaf's triangles for all of them.
+    pub bundle: Option<LineBundle>,
 }
 
 impl PacketRays {
@@ -78,6 +81,7 @@ impl PacketRays {
             len: 0,
             negative: [false; 3],
             k: [0, 1, 2],
+            bundle: None,
         }
     }
 
@@ -504,6 +508,7 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let all = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
+    rays.bundle = LineBundle::of(&frustum);
     let mut limit = rays.limit();
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };
@@ -579,6 +584,7 @@ unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -
     let mut open = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
+    rays.bundle = LineBundle::of(&frustum);
     let mut limit = rays.limit();
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };

@@ -1,0 +1,169 @@
+//! Culling triangles for a packet of rays from one point: the lines of a camera tile.
+//!
+//! A packet's frustum ([`Frustum`]) prunes boxes, but a leaf whose box it enters is then tested
+//! triangle by triangle against every ray, and in a small scene of large triangles (the Cornell
+//! box's walls) most of those triangles lie nowhere near the tile. When the rays share their
+//! origin `o` (camera rays), a triangle `abc` can be culled for the whole packet in a few
+//! operations:
+//!
+//! - Each edge spans a plane through `o`, with normal `n = (p − o) × (q − o)` for the edge `pq`.
+//!   The line `o + t·d` passes through the triangle (in front of `o` or behind it) only if the
+//!   three edge functions `nᵢ·d` have one sign (zeros count as either): the watertight test
+//!   decides exactly this, up to rounding, before its range test on `t`.
+//! - Over the packet's directions, bounded by a box `[d_lo, d_hi]`, each `nᵢ·d` lies in an
+//!   interval (interval arithmetic). If one edge function is below zero for every direction and
+//!   another above zero for every direction, no ray of the packet can hit the triangle.
+//!
+//! Both tests are made with a margin far above any rounding: `10⁻⁴·‖p − o‖₁·‖q − o‖₁·max|d|`
+//! for the edge `pq`, where rounding in the edge normals, in the direction bound (taken from the
+//! rays' `1/d`) and in the watertight test's own edge functions errs by some `10⁻⁷` of the same
+//! products. So a culled triangle is one no ray of the packet would have hit, and the answers
+//! stay exactly those of single rays (the tests check every packet against them).
+
+use glam::Vec3;
+
+use super::bounds::Frustum;
+
+/// The relative margin of the cull (see the module documentation).
+const MARGIN: f32 = 1e-4;
+
+/// The lines of a packet's rays: one origin, a box of directions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct LineBundle {
+    apex: Vec3,
+    dir_lo: Vec3,
+    dir_hi: Vec3,
+    /// `MARGIN` times the largest direction component's magnitude.
+    margin_scale: f32,
+}
+
+impl LineBundle {
+    /// The bundle of a packet whose frustum is `frustum`, if its rays share their origin (bit
+    /// for bit). The frustum's `1/d` are finite, non-zero and of one sign per axis.
+    #[inline(always)]
+    pub fn of(frustum: &Frustum) -> Option<LineBundle> {
+        if frustum.origin_lo != frustum.origin_hi {
+            return None;
+        }
+        // `1/(1/d)` is `d` within two roundings; the margin covers far more.
+        let (a, b) = (frustum.inv_lo.recip(), frustum.inv_hi.recip());
+        let (dir_lo, dir_hi) = (a.min(b), a.max(b));
+        let largest = dir_lo.abs().max(dir_hi.abs()).max_element();
+        let bundle =
+            LineBundle { apex: frustum.origin_lo, dir_lo, dir_hi, margin_scale: MARGIN * largest };
+        (bundle.dir_lo.is_finite() && bundle.dir_hi.is_finite() && largest.is_finite())
+            .then_some(bundle)
+    }
+
+    /// Whether some line of the bundle may pass through the triangle: `false` only where none
+    /// does, by the margin of the module documentation. Triangles with a NaN vertex are kept
+    /// (no comparison with NaN culls).
+    #[inline(always)]
+    pub fn may_cross(&self, [a, b, c]: [Vec3; 3]) -> bool {
+        let (a, b, c) = (a - self.apex, b - self.apex, c - self.apex);
+        let mut below = false;
+        let mut above = false;
+        for (p, q) in [(b, c), (c, a), (a, b)] {
+            let n = p.cross(q);
+            let (x, y) = (n * self.dir_lo, n * self.dir_hi);
+            let lo = x.min(y).element_sum();
+            let hi = x.max(y).element_sum();
+            let margin = self.margin_scale * l1(p) * l1(q);
+            below |= hi < -margin;
+            above |= lo > margin;
+        }
+        !(below && above)
+    }
+}
+
+/// `|x| + |y| + |z|`.
+#[inline(always)]
+fn l1(v: Vec3) -> f32 {
+    v.abs().element_sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::RayBoxTest;
+    use crate::ray::Ray;
+    use crate::triangle::WatertightRay;
+
+    /// A small deterministic generator.
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn vec(&mut self) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next())
+        }
+    }
+
+    fn bundle_of(rays: &[Ray]) -> Option<LineBundle> {
+        LineBundle::of(&Frustum::of(rays.iter().map(RayBoxTest::new))?)
+    }
+
+    /// Packets of camera-like rays from one origin, against triangles near and across them (on
+    /// a coarse grid half of the time, so that rays pass exactly through edges and vertices):
+    /// a triangle that any ray hits is never culled, and most of those no ray hits are.
+    #[test]
+    fn no_triangle_a_ray_hits_is_culled() {
+        let mut rng = Lcg(7);
+        let (mut hit, mut missed, mut culled) = (0, 0, 0);
+        for case in 0..4000 {
+            let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
+            let origin = snap(rng.vec() * 2.0 - 1.0);
+            // A tile of directions around a central one, all with positive components.
+            let centre = Vec3::new(0.2, 0.2, 1.0) + rng.vec() * 0.5;
+            let spread = [0.01, 0.1, 0.5][case % 3];
+            let rays: Vec<Ray> = (0..16)
+                .map(|k| {
+                    let (i, j) = ((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0);
+                    Ray::new(origin, centre + Vec3::new(i - 0.5, j - 0.5, 0.0) * spread)
+                })
+                .collect();
+            let Some(bundle) = bundle_of(&rays) else { continue };
+            for _ in 0..8 {
+                // Around a point one of the rays passes through, or anywhere ahead.
+                let target = if rng.next() < 0.5 {
+                    rays[(rng.next() * 16.0) as usize % 16].at(1.0 + 3.0 * rng.next())
+                } else {
+                    origin + rng.vec() * 6.0 - Vec3::new(3.0, 3.0, 0.0)
+                };
+                let size = [0.05, 0.5, 3.0][(rng.next() * 3.0) as usize % 3];
+                let triangle = [
+                    snap(target + (rng.vec() - 0.5) * size),
+                    snap(target + (rng.vec() - 0.5) * size),
+                    snap(target + (rng.vec() - 0.5) * size),
+                ];
+                if crate::triangle::is_degenerate(triangle) {
+                    continue;
+                }
+                let [v0, v1, v2] = triangle;
+                let any_hit = rays.iter().any(|ray| {
+                    WatertightRay::new(ray).intersect(v0, v1, v2, f32::INFINITY).is_some()
+                });
+                let kept = bundle.may_cross(triangle);
+                if any_hit {
+                    hit += 1;
+                    assert!(kept, "culled {triangle:?}, hit by a ray of {rays:?}");
+                } else {
+                    missed += 1;
+                    culled += !kept as u32;
+                }
+            }
+        }
+        assert!(hit > 3000 && missed > 3000, "{hit} hit, {missed} missed");
+        assert!(culled * 2 > missed, "only {culled} of {missed} missed triangles culled");
+    }
+
+    #[test]
+    fn packets_from_several_origins_have_no_bundle() {
+        let rays = [Ray::new(Vec3::ZERO, Vec3::ONE), Ray::new(Vec3::X, Vec3::ONE)];
+        assert_eq!(bundle_of(&rays), None);
+        assert!(bundle_of(&rays[..1]).is_some());
+    }
+}
