@@ -39,6 +39,7 @@ mod kernels;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod packet;
+mod packet_setup;
 mod refit;
 mod sweep;
 mod traverse;

@@ -18,6 +18,7 @@ use glam::Vec3;
 use super::bounds::{Bounds, FAR_SCALE, Frustum, RayBoxTest};
 use super::bundle::LineBundle;
 use super::kernels::{NodeKernel, prepare_triangle_ray};
+use super::packet_setup;
 use super::traverse::{Closest, Stack, can_hit, closest_hit, leaf_occluded, occluded};
 use super::wide::{Child, WideBvh, decode};
 use crate::accel::Hit;
@@ -65,7 +66,7 @@ pub(crate) struct PacketRays {
 
 impl PacketRays {
     /// An empty packet, to be filled.
-    fn new() -> PacketRays {
+    pub(super) fn new() -> PacketRays {
         PacketRays {
             origin: [[0.0; PACKET]; 3],
             inv_direction: [[0.0; PACKET]; 3],
@@ -87,8 +88,10 @@ impl PacketRays {
 
     /// Prepares `ray` in lane `i`, and returns its group (direction octant and dominant axis,
     /// `0..24`) with what the group's rays share, or `None` if it cannot join a packet.
-    #[inline(always)]
-    fn set_lane(&mut self, i: usize, ray: &Ray) -> Option<(usize, Shared)> {
+    ///
+    /// The scalar twin of [`packet_setup::fill`], which fills every lane at once.
+    #[cfg_attr(not(test), expect(dead_code, reason = "the scalar twin of `fill`"))]
+    pub(super) fn set_lane(&mut self, i: usize, ray: &Ray) -> Option<(usize, Shared)> {
         let box_ray = RayBoxTest::new(ray);
         if !can_hit(ray) || !Frustum::can_join(&box_ray) {
             return None;
@@ -348,16 +351,17 @@ impl Chunk {
         self.groups = [0; 24];
         self.present = 0;
         self.alone = 0;
-        self.lanes.len = rays.len();
-        for (i, ray) in rays.iter().enumerate() {
-            match self.lanes.set_lane(i, ray) {
-                Some((group, shared)) => {
-                    self.groups[group] |= 1 << i;
-                    self.present |= 1 << group;
-                    self.shared[group] = shared;
-                }
-                None => self.alone |= 1 << i,
+        let groups = packet_setup::fill(&mut self.lanes, rays);
+        for (i, &group) in groups[..rays.len()].iter().enumerate() {
+            if group == packet_setup::ALONE {
+                self.alone |= 1 << i;
+            } else {
+                self.groups[group as usize] |= 1 << i;
+                self.present |= 1 << group;
             }
+        }
+        for group in bits(self.present as u64) {
+            self.shared[group] = packet_setup::shared(group as u8);
         }
     }
 
