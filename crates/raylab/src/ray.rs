@@ -93,18 +93,21 @@ pub fn offset_ray_origin(point: &SurfacePoint, w: Vec3) -> Vec3 {
     if !po.is_finite() {
         return offset_ray_origin_scalar(po, offset);
     }
-    // One float away from the surface on each axis that moved, without a branch per axis:
-    // the bit pattern of a finite float steps by ±1 (its magnitude grows when it moves away from
-    // zero), after a zero has taken the sign of the step.
-    let step = |value: f32, offset: f32| -> f32 {
-        let direction = (offset > 0.0) as i32 - (offset < 0.0) as i32;
-        let value = if value == 0.0 && direction != 0 { 0.0f32.copysign(offset) } else { value };
-        let away_from_zero = (value.is_sign_negative() == (direction < 0)) as i32;
-        // +1 to grow the magnitude, −1 to shrink it, 0 where the axis did not move.
-        let delta = direction.abs() * (2 * away_from_zero - 1);
-        f32::from_bits((value.to_bits() as i32).wrapping_add(delta) as u32)
-    };
-    Vec3::new(step(po.x, offset.x), step(po.y, offset.y), step(po.z, offset.z))
+    Vec3::new(step_away(po.x, offset.x), step_away(po.y, offset.y), step_away(po.z, offset.z))
+}
+
+/// [`offset_ray_origin`]'s last step on one axis: `value` (finite) moved one float further in the
+/// direction of `offset`, or kept where `offset` is zero. Without a branch: the bit pattern of a
+/// finite float steps by ±1 (its magnitude grows when it moves away from zero), after a zero has
+/// taken the sign of the step.
+#[inline(always)]
+pub(crate) fn step_away(value: f32, offset: f32) -> f32 {
+    let direction = (offset > 0.0) as i32 - (offset < 0.0) as i32;
+    let value = if value == 0.0 && direction != 0 { 0.0f32.copysign(offset) } else { value };
+    let away_from_zero = (value.is_sign_negative() == (direction < 0)) as i32;
+    // +1 to grow the magnitude, −1 to shrink it, 0 where the axis did not move.
+    let delta = direction.abs() * (2 * away_from_zero - 1);
+    f32::from_bits((value.to_bits() as i32).wrapping_add(delta) as u32)
 }
 
 /// [`offset_ray_origin`]'s rounding step with the general `next_float_up`/`down` (which keep

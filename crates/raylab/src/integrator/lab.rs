@@ -10,6 +10,7 @@
 //! lit only by a light on that side. Shadow rays leave the surface with a rounding-error-aware offset (see [`crate::ray`]) rather
 //! than a magic epsilon, so there is no shadow acne at any scene scale.
 
+use std::f32::consts::PI;
 use std::fmt;
 use std::str::FromStr;
 
@@ -17,8 +18,9 @@ use glam::Vec3;
 
 use super::Integrator;
 use crate::accel::{Accelerator, Hit};
+use crate::float::gamma;
 use crate::light::PointLight;
-use crate::ray::Ray;
+use crate::ray::{Ray, step_away};
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 
@@ -125,6 +127,142 @@ impl Shading {
     const NONE: Shading = Shading { albedo: Vec3::ZERO, direct: Vec3::ZERO, shadow_ray: None };
 }
 
+/// Rays shaded together: one tile of [`Integrator::radiance_each`].
+const TILE: usize = 64;
+
+/// [`Lab::shade`] for a tile's hits, lane by lane in arrays: the triangles' data gathered
+/// first, then every lane computed by the same operations as `shade` (and
+/// [`SurfacePoint::spawn_ray_to`]), in the same order and without branches, which the compiler
+/// vectorizes. The values are `shade`'s bit for bit (the test below compares them).
+struct TileShading {
+    albedo: [[f32; TILE]; 3],
+    direct: [[f32; TILE]; 3],
+    /// Whether the lane's shadow ray decides its `direct`.
+    shadow: [bool; TILE],
+    /// The shadow rays' origins, moved off their surfaces, where `shadow` is set.
+    shadow_origin: [[f32; TILE]; 3],
+    /// Lanes whose moved origin is not finite: their shadow ray is `shade`'s own.
+    unusual: [bool; TILE],
+}
+
+impl TileShading {
+    fn new<A: Accelerator + ?Sized>(lab: &Lab<'_, A>, rays: &[Ray], hits: &[Option<Hit>]) -> Self {
+        let geometry = &lab.scene.geometry;
+        let mut tile = TileShading {
+            albedo: [[0.0; TILE]; 3],
+            direct: [[0.0; TILE]; 3],
+            shadow: [false; TILE],
+            shadow_origin: [[0.0; TILE]; 3],
+            unusual: [false; TILE],
+        };
+        // Gathered: the corners, normal and barycentrics of each hit (zeros for misses).
+        let mut corner = [[[0.0f32; TILE]; 3]; 3];
+        let mut normal = [[0.0f32; TILE]; 3];
+        let mut direction = [[0.0f32; TILE]; 3];
+        let (mut b1, mut b2) = ([0.0f32; TILE], [0.0f32; TILE]);
+        let mut hit_mask = [false; TILE];
+        // Neighbouring hits mostly share a material: its albedo is looked up once for them.
+        let mut material = (u32::MAX, Vec3::ZERO);
+        for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
+            let Some(hit) = hit else { continue };
+            let triangle = hit.triangle as usize;
+            let id = geometry.material_id(triangle);
+            if id != material.0 {
+                material = (id, lab.scene.materials[id as usize].bsdf.albedo());
+            }
+            let albedo = material.1;
+            let vertices = geometry.triangle(triangle);
+            let n = geometry.normal(triangle);
+            for axis in 0..3 {
+                tile.albedo[axis][i] = albedo[axis];
+                for (j, v) in vertices.iter().enumerate() {
+                    corner[j][axis][i] = v[axis];
+                }
+                normal[axis][i] = n[axis];
+                direction[axis][i] = ray.direction[axis];
+            }
+            (b1[i], b2[i]) = (hit.b1, hit.b2);
+            hit_mask[i] = true;
+        }
+        if lab.stage == Stage::Flat {
+            return tile;
+        }
+        let light = lab.light.position.to_array();
+        let power = lab.light.power.to_array();
+        let shadows = matches!(lab.stage, Stage::Shadows | Stage::Ambient);
+        let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        for i in 0..TILE {
+            // `Geometry::surface_point`.
+            let b0 = 1.0 - b1[i] - b2[i];
+            let mut p = [0.0f32; 3];
+            let mut error = [0.0f32; 3];
+            for axis in 0..3 {
+                let (a, b, c) = (
+                    b0 * corner[0][axis][i],
+                    b1[i] * corner[1][axis][i],
+                    b2[i] * corner[2][axis][i],
+                );
+                p[axis] = a + b + c;
+                error[axis] = gamma(7) * (a.abs() + b.abs() + c.abs());
+            }
+            let mut n = [normal[0][i], normal[1][i], normal[2][i]];
+            let d = [direction[0][i], direction[1][i], direction[2][i]];
+            // Toward the viewer (see `shade`).
+            if dot(n, d) >= 0.0 {
+                n = n.map(|x| -x);
+            }
+            // `PointLight::direct`.
+            let to_light = [light[0] - p[0], light[1] - p[1], light[2] - p[2]];
+            let r2 = dot(to_light, to_light);
+            let w_dot_n = dot(to_light, n);
+            let r_dot_n = w_dot_n.max(0.0);
+            let scale = r_dot_n / (4.0 * PI * r2 * r2.sqrt());
+            let mut nonzero = false;
+            for (row, power) in tile.direct.iter_mut().zip(power) {
+                let direct = if r2 == 0.0 { 0.0 } else { power * scale };
+                row[i] = direct;
+                nonzero |= direct != 0.0;
+            }
+            tile.shadow[i] = hit_mask[i] & shadows & nonzero;
+            // `offset_ray_origin` toward the light.
+            let along = n[0].abs() * error[0] + n[1].abs() * error[1] + n[2].abs() * error[2];
+            let mut finite = true;
+            for axis in 0..3 {
+                let offset = if w_dot_n < 0.0 { -(along * n[axis]) } else { along * n[axis] };
+                let po = p[axis] + offset;
+                finite &= po.is_finite();
+                tile.shadow_origin[axis][i] = step_away(po, offset);
+            }
+            tile.unusual[i] = !finite;
+        }
+        tile
+    }
+
+    /// Lane `i` as `shade` returns it (its shadow ray as a flag).
+    #[inline]
+    fn lane(&self, i: usize) -> Shading {
+        let get = |rows: &[[f32; TILE]; 3]| Vec3::new(rows[0][i], rows[1][i], rows[2][i]);
+        Shading { albedo: get(&self.albedo), direct: get(&self.direct), shadow_ray: None }
+    }
+
+    /// Lane `i`'s shadow ray, as `shade` makes it for `ray` and `hit` (that lane's).
+    #[inline]
+    fn shadow_ray<A: Accelerator + ?Sized>(
+        &self,
+        i: usize,
+        lab: &Lab<'_, A>,
+        ray: &Ray,
+        hit: Option<Hit>,
+    ) -> Ray {
+        if self.unusual[i] {
+            return lab.shade(ray, hit).shadow_ray.expect("a lane with a shadow ray");
+        }
+        let get = |axis: usize| self.shadow_origin[axis][i];
+        let origin = Vec3::new(get(0), get(1), get(2));
+        Ray::segment(origin, lab.light.position - origin, 1.0)
+    }
+}
+
 impl<A: Accelerator + ?Sized> Lab<'_, A> {
     /// Shades a hit up to the shadow test (inlined into the tile loop: it returns a large
     /// value, which a call would copy through memory).
@@ -183,34 +321,29 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
     }
 
     /// Camera rays together, then their shadow rays together (toward one light, so they are
-    /// coherent too).
+    /// coherent too), the shading in between lane by lane over the tile ([`TileShading`]).
     fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
         assert_eq!(rays.len(), out.len(), "one colour per ray");
         assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
         // A tile at a time, in arrays on the stack: no allocation per tile.
-        const TILE: usize = 64;
         for (rays, out) in rays.chunks(TILE).zip(out.chunks_mut(TILE)) {
             let n = rays.len();
             let mut hits = [None; TILE];
             self.accel.closest_hits(rays, &mut hits[..n]);
-            let shading: [Shading; TILE] = std::array::from_fn(|i| {
-                if i < n { self.shade(&rays[i], hits[i]) } else { Shading::NONE }
-            });
+            let shading = TileShading::new(self, rays, &hits[..n]);
             let mut shadow_rays = [Ray::new(Vec3::ZERO, Vec3::Z); TILE];
             let mut shadows = 0;
-            for s in &shading[..n] {
-                if let Some(ray) = s.shadow_ray {
-                    shadow_rays[shadows] = ray;
-                    shadows += 1;
-                }
+            for i in (0..n).filter(|&i| shading.shadow[i]) {
+                shadow_rays[shadows] = shading.shadow_ray(i, self, &rays[i], hits[i]);
+                shadows += 1;
             }
             let mut occluded = [false; TILE];
             self.accel.occluded_each(&shadow_rays[..shadows], &mut occluded[..shadows]);
             let mut blocked = occluded[..shadows].iter();
-            for ((colour, hit), s) in out.iter_mut().zip(&hits).zip(&shading) {
+            for (i, (colour, hit)) in out.iter_mut().zip(&hits).enumerate() {
                 let occluded =
-                    s.shadow_ray.is_some() && *blocked.next().expect("one answer per shadow ray");
-                *colour = self.finish(hit.is_some(), s, occluded);
+                    shading.shadow[i] && *blocked.next().expect("one answer per shadow ray");
+                *colour = self.finish(hit.is_some(), &shading.lane(i), occluded);
             }
         }
     }
@@ -224,6 +357,52 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The tile's lanes are `shade`'s values bit for bit, shadow rays included, for rays from
+    /// inside and outside the lab's box in every direction, at every stage, with the light
+    /// inside the box and on a wall.
+    #[test]
+    fn tile_shading_is_shade_lane_by_lane() {
+        use crate::bvh::Bvh;
+        let scene = Scene::built_in("cornell").expect("the lab scene");
+        let bvh = Bvh::new(&scene.vertices());
+        let mut seed = 5u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut shadows = 0;
+        for (k, stage) in Stage::ALL.into_iter().cycle().take(40).enumerate() {
+            let mut lab = Lab::new(&scene, &bvh, stage);
+            if k % 2 == 1 {
+                lab.light.position = Vec3::new(next(), 1.0, next());
+            }
+            let rays: Vec<Ray> = (0..TILE - k % 3)
+                .map(|_| {
+                    let origin = Vec3::new(next(), next(), next()) * [0.9, 3.0][k % 2];
+                    Ray::new(origin, Vec3::new(next(), next(), next()))
+                })
+                .collect();
+            let hits: Vec<Option<Hit>> = rays.iter().map(|r| bvh.closest_hit(r)).collect();
+            let tile = TileShading::new(&lab, &rays, &hits);
+            for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
+                let expected = lab.shade(ray, *hit);
+                let lane = tile.lane(i);
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(bits(lane.albedo), bits(expected.albedo), "{ray:?} {stage}");
+                assert_eq!(bits(lane.direct), bits(expected.direct), "{ray:?} {stage}");
+                assert_eq!(tile.shadow[i], expected.shadow_ray.is_some(), "{ray:?} {stage}");
+                if let Some(shadow) = expected.shadow_ray {
+                    shadows += 1;
+                    let got = tile.shadow_ray(i, &lab, ray, *hit);
+                    assert_eq!(bits(got.origin), bits(shadow.origin), "{ray:?}");
+                    assert_eq!(bits(got.direction), bits(shadow.direction), "{ray:?}");
+                    assert_eq!((got.t_min, got.t_max), (shadow.t_min, shadow.t_max));
+                }
+            }
+        }
+        assert!(shadows > 300, "only {shadows} shadow rays");
+    }
 
     #[test]
     fn stages_parse_by_name_and_number() {
