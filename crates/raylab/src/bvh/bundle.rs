@@ -14,6 +14,10 @@
 //!   interval (interval arithmetic). If one edge function is below zero for every direction and
 //!   another above zero for every direction, no ray of the packet can hit the triangle.
 //!
+//! The same holds for rays from many origins whose lines meet in one point: shadow rays toward a
+//! point light all pass through the light ([`LineBundle::through_ends`]), with a margin for how
+//! far from it each line may pass.
+//!
 //! Both tests are made with a margin far above any rounding: `10⁻⁴·‖p − o‖₁·‖q − o‖₁·max|d|`
 //! for the edge `pq`, where rounding in the edge normals, in the direction bound (taken from the
 //! rays' `1/d`) and in the watertight test's own edge functions errs by some `10⁻⁷` of the same
@@ -27,14 +31,16 @@ use super::bounds::Frustum;
 /// The relative margin of the cull (see the module documentation).
 const MARGIN: f32 = 1e-4;
 
-/// The lines of a packet's rays: one origin, a box of directions.
+/// The lines of a packet's rays: all through one point (within `spread`), a box of directions.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct LineBundle {
     apex: Vec3,
     dir_lo: Vec3,
     dir_hi: Vec3,
-    /// `MARGIN` times the largest direction component's magnitude.
+    /// `MARGIN` times the largest direction component's magnitude `D`.
     margin_scale: f32,
+    /// `δ·D`, `δ` a bound on each line's distance from `apex` (0 for a shared origin).
+    apex_scale: f32,
 }
 
 impl LineBundle {
@@ -45,13 +51,52 @@ impl LineBundle {
         if frustum.origin_lo != frustum.origin_hi {
             return None;
         }
+        Self::with_apex(frustum, frustum.origin_lo, 0.0)
+    }
+
+    /// The bundle of a packet whose rays' points at `t = 1`, `o + d` (the light, for shadow
+    /// rays toward a point light), all lie in the box `[end_lo, end_hi]` of edge at most
+    /// `10⁻³·max|d|`; `None` if they spread further.
+    ///
+    /// Each line then passes within `δ = 2·(s + 10⁻⁶·(max|end| + max|d|))` of the box's low
+    /// corner, `s` the box's largest edge: `√3·s` from the box, and the ends, computed from
+    /// `o` and the rounded `1/(1/d)`, are within a few units of rounding (well under `10⁻⁶`)
+    /// of the exact ones. Moving a line's point by `δ` changes the edge function of edge `pq`
+    /// by at most `δ·(‖p − apex‖ + ‖q − apex‖)·|d|`, which the cull's margin adds.
+    #[inline(always)]
+    pub fn through_ends(frustum: &Frustum, end_lo: Vec3, end_hi: Vec3) -> Option<LineBundle> {
+        let spread = (end_hi - end_lo).max_element();
+        let largest = Self::directions(frustum).1;
+        // Also `None` for a NaN spread.
+        if spread.partial_cmp(&(1e-3 * largest)).is_none_or(|o| o.is_gt()) {
+            return None;
+        }
+        let magnitude = end_lo.abs().max(end_hi.abs()).max_element();
+        let delta = 2.0 * (spread + 1e-6 * (magnitude + largest));
+        Self::with_apex(frustum, end_lo, delta)
+    }
+
+    /// The box of directions, from the frustum's `1/d`, and its largest component's magnitude.
+    #[inline(always)]
+    fn directions(frustum: &Frustum) -> ((Vec3, Vec3), f32) {
         // `1/(1/d)` is `d` within two roundings; the margin covers far more.
         let (a, b) = (frustum.inv_lo.recip(), frustum.inv_hi.recip());
-        let (dir_lo, dir_hi) = (a.min(b), a.max(b));
-        let largest = dir_lo.abs().max(dir_hi.abs()).max_element();
-        let bundle =
-            LineBundle { apex: frustum.origin_lo, dir_lo, dir_hi, margin_scale: MARGIN * largest };
-        (bundle.dir_lo.is_finite() && bundle.dir_hi.is_finite() && largest.is_finite())
+        let (lo, hi) = (a.min(b), a.max(b));
+        ((lo, hi), lo.abs().max(hi.abs()).max_element())
+    }
+
+    #[inline(always)]
+    fn with_apex(frustum: &Frustum, apex: Vec3, delta: f32) -> Option<LineBundle> {
+        let ((dir_lo, dir_hi), largest) = Self::directions(frustum);
+        let bundle = LineBundle {
+            apex,
+            dir_lo,
+            dir_hi,
+            margin_scale: MARGIN * largest,
+            apex_scale: delta * largest,
+        };
+        let finite = apex.is_finite() && dir_lo.is_finite() && dir_hi.is_finite();
+        (finite && bundle.margin_scale.is_finite() && bundle.apex_scale.is_finite())
             .then_some(bundle)
     }
 
@@ -68,7 +113,8 @@ impl LineBundle {
             let (x, y) = (n * self.dir_lo, n * self.dir_hi);
             let lo = x.min(y).element_sum();
             let hi = x.max(y).element_sum();
-            let margin = self.margin_scale * l1(p) * l1(q);
+            let (lp, lq) = (l1(p), l1(q));
+            let margin = self.margin_scale * lp * lq + self.apex_scale * (lp + lq);
             below |= hi < -margin;
             above |= lo > margin;
         }
@@ -160,10 +206,78 @@ mod tests {
         assert!(culled * 2 > missed, "only {culled} of {missed} missed triangles culled");
     }
 
+    /// The bundle of segments from many points to one (as shadow rays to a light are made).
+    fn bundle_of_segments(rays: &[Ray]) -> Option<LineBundle> {
+        let frustum = Frustum::of(rays.iter().map(RayBoxTest::new))?;
+        let ends = rays.iter().map(|r| {
+            let inv = RayBoxTest::new(r).inv_direction;
+            r.origin + inv.recip()
+        });
+        let (lo, hi) =
+            ends.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), e| (lo.min(e), hi.max(e)));
+        LineBundle::through_ends(&frustum, lo, hi)
+    }
+
+    /// Shadow rays from points of a patch toward one light (the segment `o → light`, `t_max`
+    /// 1), against triangles between them and elsewhere, some on a grid through the light: no
+    /// triangle a segment hits is culled, and most of those none hits are.
+    #[test]
+    fn no_triangle_a_shadow_ray_hits_is_culled() {
+        let mut rng = Lcg(17);
+        let (mut hit, mut missed, mut culled) = (0, 0, 0);
+        for case in 0..4000 {
+            let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
+            let light = snap(Vec3::new(0.0, 4.0, 0.0) + rng.vec() * 2.0 - 1.0);
+            let corner = Vec3::new(rng.next() * 4.0 - 2.0, 0.0, rng.next() * 4.0 - 2.0);
+            let spread = [0.05, 0.3, 1.5][case % 3];
+            let rays: Vec<Ray> = (0..16)
+                .map(|k| {
+                    let (i, j) = ((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0);
+                    let origin = corner + Vec3::new(i, 1e-3 * rng.next(), j) * spread;
+                    Ray::segment(origin, light - origin, 1.0)
+                })
+                .collect();
+            let Some(bundle) = bundle_of_segments(&rays) else { continue };
+            for _ in 0..8 {
+                let ray = rays[(rng.next() * 16.0) as usize % 16];
+                let target = if rng.next() < 0.6 {
+                    ray.at(rng.next())
+                } else {
+                    corner + rng.vec() * 6.0 - 3.0
+                };
+                let size = [0.05, 0.5, 3.0][(rng.next() * 3.0) as usize % 3];
+                let triangle = [
+                    snap(target + (rng.vec() - 0.5) * size),
+                    snap(target + (rng.vec() - 0.5) * size),
+                    snap(target + (rng.vec() - 0.5) * size),
+                ];
+                if crate::triangle::is_degenerate(triangle) {
+                    continue;
+                }
+                let [v0, v1, v2] = triangle;
+                let any_hit = rays
+                    .iter()
+                    .any(|ray| WatertightRay::new(ray).intersect(v0, v1, v2, ray.t_max).is_some());
+                let kept = bundle.may_cross(triangle);
+                if any_hit {
+                    hit += 1;
+                    assert!(kept, "culled {triangle:?}, hit by a ray of {rays:?}");
+                } else {
+                    missed += 1;
+                    culled += !kept as u32;
+                }
+            }
+        }
+        assert!(hit > 3000 && missed > 3000, "{hit} hit, {missed} missed");
+        assert!(culled * 3 > missed, "only {culled} of {missed} missed triangles culled");
+    }
+
     #[test]
     fn packets_from_several_origins_have_no_bundle() {
         let rays = [Ray::new(Vec3::ZERO, Vec3::ONE), Ray::new(Vec3::X, Vec3::ONE)];
         assert_eq!(bundle_of(&rays), None);
         assert!(bundle_of(&rays[..1]).is_some());
+        // Parallel lines meet nowhere near.
+        assert_eq!(bundle_of_segments(&rays), None);
     }
 }

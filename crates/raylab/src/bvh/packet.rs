@@ -224,6 +224,26 @@ impl PacketRays {
         }
     }
 
+    /// The lines of the packet, if they meet in one point: the shared origin, or the rays'
+    /// common point at `t = 1` (shadow rays toward a point light).
+    #[inline(always)]
+    fn bundle(&self, frustum: &Frustum) -> Option<LineBundle> {
+        if let Some(bundle) = LineBundle::of(frustum) {
+            return Some(bundle);
+        }
+        let n = self.len;
+        let mut end = [[0.0f32; PACKET]; 3];
+        for (axis, end) in end.iter_mut().enumerate() {
+            let lanes = self.origin[axis].iter().zip(&self.inv_direction[axis]);
+            for (end, (&o, &inv)) in end.iter_mut().zip(lanes) {
+                *end = o + 1.0 / inv;
+            }
+        }
+        let lo = Vec3::new(lowest(&end[0][..n]), lowest(&end[1][..n]), lowest(&end[2][..n]));
+        let hi = Vec3::new(highest(&end[0][..n]), highest(&end[1][..n]), highest(&end[2][..n]));
+        LineBundle::through_ends(frustum, lo, hi)
+    }
+
     /// The mask of all rays of the packet.
     #[inline(always)]
     fn all(&self) -> u64 {
@@ -512,7 +532,7 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let all = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
-    rays.bundle = LineBundle::of(&frustum);
+    rays.bundle = rays.bundle(&frustum);
     let mut limit = rays.limit();
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };
@@ -588,7 +608,7 @@ unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -
     let mut open = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
-    rays.bundle = LineBundle::of(&frustum);
+    rays.bundle = rays.bundle(&frustum);
     let mut limit = rays.limit();
     // SAFETY: the caller guarantees `K`'s instruction set.
     let frustum = unsafe { K::prepare_frustum(&frustum) };
