@@ -26,7 +26,9 @@
 
 use glam::Vec3;
 
-use super::bounds::Frustum;
+use super::bounds::{Bounds, Frustum};
+use super::build::BLOCK;
+use crate::triangle::TriangleBlock;
 
 /// The relative margin of the cull (see the module documentation).
 const MARGIN: f32 = 1e-4;
@@ -41,6 +43,8 @@ pub(crate) struct LineBundle {
     margin_scale: f32,
     /// `δ·D`, `δ` a bound on each line's distance from `apex` (0 for a shared origin).
     apex_scale: f32,
+    /// The directions' spread: the direction box's largest edge over `D`.
+    spread: f32,
 }
 
 impl LineBundle {
@@ -94,16 +98,65 @@ impl LineBundle {
             dir_hi,
             margin_scale: MARGIN * largest,
             apex_scale: delta * largest,
+            spread: (dir_hi - dir_lo).max_element() / largest,
         };
         let finite = apex.is_finite() && dir_lo.is_finite() && dir_hi.is_finite();
         (finite && bundle.margin_scale.is_finite() && bundle.apex_scale.is_finite())
             .then_some(bundle)
     }
 
+    /// Whether culling the triangles of a leaf in `bounds` is likely to pay: where the box is
+    /// larger than twice the packet's footprint at its distance (the Cornell box's walls seen
+    /// by a tile). In a fine mesh, whose leaves are smaller than a tile's footprint, the lines
+    /// cross nearly every triangle of a leaf they reach and the test would only cost. A
+    /// heuristic for speed: it never changes an answer.
+    #[inline(always)]
+    pub fn worth_culling(&self, bounds: &Bounds) -> bool {
+        let distance = (bounds.centroid() - self.apex).length();
+        (bounds.max - bounds.min).max_element() > 2.0 * distance * self.spread
+    }
+
+    /// [`may_cross`](Self::may_cross) for the four triangles of a block at once, lane by lane
+    /// in arrays (the compiler vectorizes it): bit `lane` set where the triangle is kept. The
+    /// same operations in the same order, so the same answers (the tests compare them).
+    #[inline(always)]
+    pub fn may_cross_block(&self, block: &TriangleBlock<BLOCK>) -> u32 {
+        let apex = self.apex.to_array();
+        let (dir_lo, dir_hi) = (self.dir_lo.to_array(), self.dir_hi.to_array());
+        // `corner[j][axis][lane]`: vertex `j` relative to the apex.
+        let mut corner = [[[0.0f32; BLOCK]; 3]; 3];
+        for (corner, vertex) in corner.iter_mut().zip(&block.vertices) {
+            for ((corner, vertex), apex) in corner.iter_mut().zip(vertex).zip(apex) {
+                for (c, v) in corner.iter_mut().zip(vertex) {
+                    *c = v - apex;
+                }
+            }
+        }
+        let mut below = [false; BLOCK];
+        let mut above = [false; BLOCK];
+        for (p, q) in [(1, 2), (2, 0), (0, 1)] {
+            let (p, q) = (&corner[p], &corner[q]);
+            for lane in 0..BLOCK {
+                let p = Vec3::new(p[0][lane], p[1][lane], p[2][lane]);
+                let q = Vec3::new(q[0][lane], q[1][lane], q[2][lane]);
+                let n = p.cross(q);
+                let (x, y) = (n * Vec3::from(dir_lo), n * Vec3::from(dir_hi));
+                let lo = x.min(y).element_sum();
+                let hi = x.max(y).element_sum();
+                let (lp, lq) = (l1(p), l1(q));
+                let margin = self.margin_scale * lp * lq + self.apex_scale * (lp + lq);
+                below[lane] |= hi < -margin;
+                above[lane] |= lo > margin;
+            }
+        }
+        (0..BLOCK).fold(0, |mask, lane| mask | ((!(below[lane] & above[lane])) as u32) << lane)
+    }
+
     /// Whether some line of the bundle may pass through the triangle: `false` only where none
     /// does, by the margin of the module documentation. Triangles with a NaN vertex are kept
     /// (no comparison with NaN culls).
-    #[inline(always)]
+    /// The scalar twin of [`may_cross_block`](Self::may_cross_block).
+    #[cfg_attr(not(test), expect(dead_code, reason = "the scalar twin of `may_cross_block`"))]
     pub fn may_cross(&self, [a, b, c]: [Vec3; 3]) -> bool {
         let (a, b, c) = (a - self.apex, b - self.apex, c - self.apex);
         let mut below = false;
@@ -193,6 +246,8 @@ mod tests {
                     WatertightRay::new(ray).intersect(v0, v1, v2, f32::INFINITY).is_some()
                 });
                 let kept = bundle.may_cross(triangle);
+                let block = TriangleBlock::<BLOCK>::pack([triangle, [target; 3]])[0];
+                assert_eq!(bundle.may_cross_block(&block) & 1 != 0, kept, "{triangle:?}");
                 if any_hit {
                     hit += 1;
                     assert!(kept, "culled {triangle:?}, hit by a ray of {rays:?}");

@@ -10,6 +10,7 @@
 
 use super::bounds::{Bounds, FAR_SCALE, Frustum, RayBoxTest, SLAB_PAD};
 use super::build::BLOCK;
+use super::bundle::LineBundle;
 use super::packet::{PACKET, PacketRays, packet_leaf_scalar};
 use super::wide::{WIDTH, WideBvh, WideNode};
 use crate::triangle::{TriangleBlock, WatertightRay};
@@ -333,22 +334,18 @@ mod x86 {
         ];
         let [kx, ky, kz] = rays.k;
         // The leaf's triangles some line of the packet may cross (bit `4·block + lane`, at
-        // most 16 blocks of 4): where the rays share their origin, the others are culled once
-        // for the whole packet.
-        let mut live = u64::MAX;
-        if let Some(bundle) = &rays.bundle {
-            live = 0;
+        // most 16 blocks of 4): where the rays' lines meet in one point, the others are culled
+        // once for the whole packet, when the first rays enter the leaf's box (in large meshes
+        // most leaves the packet's frustum reaches are entered by none of its rays), and only
+        // where the leaf is large beside the packet (`LineBundle::worth_culling`).
+        let mut live = None;
+        let culled = |bundle: &LineBundle| {
+            let mut live = 0u64;
             for (k, b) in (first_block as usize..(first_block + blocks) as usize).enumerate() {
-                for lane in 0..BLOCK {
-                    if bundle.may_cross(bvh.blocks[b].triangle(lane)) {
-                        live |= 1 << (BLOCK * k + lane);
-                    }
-                }
+                live |= (bundle.may_cross_block(&bvh.blocks[b]) as u64) << (BLOCK * k);
             }
-            if live == 0 {
-                return;
-            }
-        }
+            live
+        };
         // SAFETY: the caller's guarantee; every load reads `L` lanes from `base`, and
         // `base + L <= PACKET` because `PACKET` is a multiple of `L`.
         unsafe {
@@ -377,6 +374,13 @@ mod x86 {
                 active &= near.sub(pad).le_mask(far.add(pad));
                 if active == 0 {
                     continue;
+                }
+                let live = *live.get_or_insert_with(|| match &rays.bundle {
+                    Some(bundle) if bundle.worth_culling(bounds) => culled(bundle),
+                    _ => u64::MAX,
+                });
+                if live == 0 {
+                    return;
                 }
 
                 let shear = [
