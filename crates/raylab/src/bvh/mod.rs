@@ -39,6 +39,8 @@ mod kernels;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod packet;
+#[cfg(target_arch = "x86_64")]
+mod packet_kernels;
 mod packet_setup;
 mod refit;
 mod sweep;

@@ -321,7 +321,7 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
     }
 
     /// Camera rays together, then their shadow rays together (toward one light, so they are
-    /// coherent too), the shading in between lane by lane over the tile ([`TileShading`]).
+    /// coherent too), the shading in between lane by lane over the tile (`TileShading`).
     fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
         assert_eq!(rays.len(), out.len(), "one colour per ray");
         assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
