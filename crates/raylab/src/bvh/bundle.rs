@@ -205,13 +205,63 @@ mod tests {
         LineBundle::of(&Frustum::of(rays.iter().map(RayBoxTest::new))?)
     }
 
+    /// A triangle of random size around `target`, its corners snapped by `snap`.
+    fn triangle_around(rng: &mut Lcg, target: Vec3, snap: impl Fn(Vec3) -> Vec3) -> [Vec3; 3] {
+        let size = [0.05, 0.5, 3.0][(rng.next() * 3.0) as usize % 3];
+        [(); 3].map(|_| snap(target + (rng.vec() - 0.5) * size))
+    }
+
+    /// Triangles checked against a bundle: hit by some ray, or missed by all (and then culled
+    /// or not).
+    #[derive(Default)]
+    struct Tally {
+        hit: u32,
+        missed: u32,
+        culled: u32,
+    }
+
+    impl Tally {
+        /// Checks that `triangle` is kept if a ray of `rays` hits it (below its `t_max`), and
+        /// that the block test agrees with the one-triangle test.
+        fn check(&mut self, bundle: &LineBundle, rays: &[Ray], triangle: [Vec3; 3]) {
+            if crate::triangle::is_degenerate(triangle) {
+                return;
+            }
+            let [v0, v1, v2] = triangle;
+            let any_hit = rays
+                .iter()
+                .any(|ray| WatertightRay::new(ray).intersect(v0, v1, v2, ray.t_max).is_some());
+            let kept = bundle.may_cross(triangle);
+            let block = TriangleBlock::<BLOCK>::pack([triangle, [v0; 3]])[0];
+            assert_eq!(bundle.may_cross_block(&block) & 1 != 0, kept, "{triangle:?}");
+            if any_hit {
+                self.hit += 1;
+                assert!(kept, "culled {triangle:?}, hit by a ray of {rays:?}");
+            } else {
+                self.missed += 1;
+                self.culled += !kept as u32;
+            }
+        }
+
+        /// Enough of both kinds were seen, and more than one in `fraction` of the missed ones
+        /// culled.
+        fn assert_culls(&self, fraction: u32) {
+            let Tally { hit, missed, culled } = *self;
+            assert!(hit > 3000 && missed > 3000, "{hit} hit, {missed} missed");
+            assert!(
+                culled * fraction > missed,
+                "only {culled} of {missed} missed triangles culled"
+            );
+        }
+    }
+
     /// Packets of camera-like rays from one origin, against triangles near and across them (on
     /// a coarse grid half of the time, so that rays pass exactly through edges and vertices):
     /// a triangle that any ray hits is never culled, and most of those no ray hits are.
     #[test]
     fn no_triangle_a_ray_hits_is_culled() {
         let mut rng = Lcg(7);
-        let (mut hit, mut missed, mut culled) = (0, 0, 0);
+        let mut tally = Tally::default();
         for case in 0..4000 {
             let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
             let origin = snap(rng.vec() * 2.0 - 1.0);
@@ -232,33 +282,10 @@ mod tests {
                 } else {
                     origin + rng.vec() * 6.0 - Vec3::new(3.0, 3.0, 0.0)
                 };
-                let size = [0.05, 0.5, 3.0][(rng.next() * 3.0) as usize % 3];
-                let triangle = [
-                    snap(target + (rng.vec() - 0.5) * size),
-                    snap(target + (rng.vec() - 0.5) * size),
-                    snap(target + (rng.vec() - 0.5) * size),
-                ];
-                if crate::triangle::is_degenerate(triangle) {
-                    continue;
-                }
-                let [v0, v1, v2] = triangle;
-                let any_hit = rays.iter().any(|ray| {
-                    WatertightRay::new(ray).intersect(v0, v1, v2, f32::INFINITY).is_some()
-                });
-                let kept = bundle.may_cross(triangle);
-                let block = TriangleBlock::<BLOCK>::pack([triangle, [target; 3]])[0];
-                assert_eq!(bundle.may_cross_block(&block) & 1 != 0, kept, "{triangle:?}");
-                if any_hit {
-                    hit += 1;
-                    assert!(kept, "culled {triangle:?}, hit by a ray of {rays:?}");
-                } else {
-                    missed += 1;
-                    culled += !kept as u32;
-                }
+                tally.check(&bundle, &rays, triangle_around(&mut rng, target, snap));
             }
         }
-        assert!(hit > 3000 && missed > 3000, "{hit} hit, {missed} missed");
-        assert!(culled * 2 > missed, "only {culled} of {missed} missed triangles culled");
+        tally.assert_culls(2);
     }
 
     /// The bundle of segments from many points to one (as shadow rays to a light are made).
@@ -279,7 +306,7 @@ mod tests {
     #[test]
     fn no_triangle_a_shadow_ray_hits_is_culled() {
         let mut rng = Lcg(17);
-        let (mut hit, mut missed, mut culled) = (0, 0, 0);
+        let mut tally = Tally::default();
         for case in 0..4000 {
             let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
             let light = snap(Vec3::new(0.0, 4.0, 0.0) + rng.vec() * 2.0 - 1.0);
@@ -300,31 +327,10 @@ mod tests {
                 } else {
                     corner + rng.vec() * 6.0 - 3.0
                 };
-                let size = [0.05, 0.5, 3.0][(rng.next() * 3.0) as usize % 3];
-                let triangle = [
-                    snap(target + (rng.vec() - 0.5) * size),
-                    snap(target + (rng.vec() - 0.5) * size),
-                    snap(target + (rng.vec() - 0.5) * size),
-                ];
-                if crate::triangle::is_degenerate(triangle) {
-                    continue;
-                }
-                let [v0, v1, v2] = triangle;
-                let any_hit = rays
-                    .iter()
-                    .any(|ray| WatertightRay::new(ray).intersect(v0, v1, v2, ray.t_max).is_some());
-                let kept = bundle.may_cross(triangle);
-                if any_hit {
-                    hit += 1;
-                    assert!(kept, "culled {triangle:?}, hit by a ray of {rays:?}");
-                } else {
-                    missed += 1;
-                    culled += !kept as u32;
-                }
+                tally.check(&bundle, &rays, triangle_around(&mut rng, target, snap));
             }
         }
-        assert!(hit > 3000 && missed > 3000, "{hit} hit, {missed} missed");
-        assert!(culled * 3 > missed, "only {culled} of {missed} missed triangles culled");
+        tally.assert_culls(3);
     }
 
     #[test]
