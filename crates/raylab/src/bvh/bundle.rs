@@ -19,7 +19,8 @@
 //! far from it each line may pass.
 //!
 //! Both tests are made with a margin far above any rounding: `10⁻⁴·‖p − o‖₁·‖q − o‖₁·max|d|`
-//! for the edge `pq`, where rounding in the edge normals, in the direction bound (taken from the
+//! for the edge `pq` (distances from the rays' origins, which the watertight test computes
+//! from, bounded through the apex), where rounding in the edge normals, in the direction bound (taken from the
 //! rays' `1/d`) and in the watertight test's own edge functions errs by some `10⁻⁷` of the same
 //! products. So a culled triangle is one no ray of the packet would have hit, and the answers
 //! stay exactly those of single rays (the tests check every packet against them).
@@ -43,6 +44,8 @@ pub(crate) struct LineBundle {
     margin_scale: f32,
     /// `δ·D`, `δ` a bound on each line's distance from `apex` (0 for a shared origin).
     apex_scale: f32,
+    /// The rays' origins' greatest distance from `apex` (`‖o − apex‖₁`; 0 for a shared origin).
+    origin_reach: f32,
     /// The directions' spread: the direction box's largest edge over `D`.
     spread: f32,
 }
@@ -92,15 +95,19 @@ impl LineBundle {
     #[inline(always)]
     fn with_apex(frustum: &Frustum, apex: Vec3, delta: f32) -> Option<LineBundle> {
         let ((dir_lo, dir_hi), largest) = Self::directions(frustum);
+        let reach = (frustum.origin_lo - apex).abs().max((frustum.origin_hi - apex).abs());
         let bundle = LineBundle {
             apex,
             dir_lo,
             dir_hi,
             margin_scale: MARGIN * largest,
             apex_scale: delta * largest,
+            // Rounded up a little: a bound, not an estimate.
+            origin_reach: reach.element_sum() * (1.0 + 1e-6),
             spread: (dir_hi - dir_lo).max_element() / largest,
         };
         let finite = apex.is_finite() && dir_lo.is_finite() && dir_hi.is_finite();
+        let finite = finite && bundle.origin_reach.is_finite();
         (finite && bundle.margin_scale.is_finite() && bundle.apex_scale.is_finite())
             .then_some(bundle)
     }
@@ -114,6 +121,18 @@ impl LineBundle {
     pub fn worth_culling(&self, bounds: &Bounds) -> bool {
         let distance = (bounds.centroid() - self.apex).length();
         (bounds.max - bounds.min).max_element() > 2.0 * distance * self.spread
+    }
+
+    /// The margin of the edge `pq` whose corners are `lp = ‖p − apex‖₁` and `lq` from the apex.
+    ///
+    /// The watertight test computes each edge function from the ray's own origin, so its
+    /// rounding grows with the corners' distances from the origin, `‖p − o‖ ≤ lp + origin_reach`,
+    /// not from the apex: for shadow rays toward a light, a triangle near the light has small
+    /// edge functions about the apex that the test, from the far origin, rounds coarsely.
+    #[inline(always)]
+    fn margin(&self, lp: f32, lq: f32) -> f32 {
+        let reach = self.origin_reach;
+        self.margin_scale * (lp + reach) * (lq + reach) + self.apex_scale * (lp + lq)
     }
 
     /// [`may_cross`](Self::may_cross) for the four triangles of a block at once, lane by lane
@@ -144,7 +163,7 @@ impl LineBundle {
                 let lo = x.min(y).element_sum();
                 let hi = x.max(y).element_sum();
                 let (lp, lq) = (l1(p), l1(q));
-                let margin = self.margin_scale * lp * lq + self.apex_scale * (lp + lq);
+                let margin = self.margin(lp, lq);
                 below[lane] |= hi < -margin;
                 above[lane] |= lo > margin;
             }
@@ -167,7 +186,7 @@ impl LineBundle {
             let lo = x.min(y).element_sum();
             let hi = x.max(y).element_sum();
             let (lp, lq) = (l1(p), l1(q));
-            let margin = self.margin_scale * lp * lq + self.apex_scale * (lp + lq);
+            let margin = self.margin(lp, lq);
             below |= hi < -margin;
             above |= lo > margin;
         }
@@ -207,7 +226,7 @@ mod tests {
 
     /// A triangle of random size around `target`, its corners snapped by `snap`.
     fn triangle_around(rng: &mut Lcg, target: Vec3, snap: impl Fn(Vec3) -> Vec3) -> [Vec3; 3] {
-        let size = [0.05, 0.5, 3.0][(rng.next() * 3.0) as usize % 3];
+        let size = [1e-3, 0.05, 0.5, 3.0][(rng.next() * 4.0) as usize % 4];
         [(); 3].map(|_| snap(target + (rng.vec() - 0.5) * size))
     }
 
@@ -322,8 +341,12 @@ mod tests {
             let Some(bundle) = bundle_of_segments(&rays) else { continue };
             for _ in 0..8 {
                 let ray = rays[(rng.next() * 16.0) as usize % 16];
-                let target = if rng.next() < 0.6 {
+                let u = rng.next();
+                let target = if u < 0.3 {
                     ray.at(rng.next())
+                } else if u < 0.6 {
+                    // Near the light, where the edge functions about it are small.
+                    ray.at(1.0 - 1e-2 * rng.next())
                 } else {
                     corner + rng.vec() * 6.0 - 3.0
                 };
