@@ -76,7 +76,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "SUMMARY")]
     embree: Vec<PathBuf>,
 
-    /// Also count, per ray, the tree's nodes, leaves and 4-triangle blocks visited (the cost of a
+    /// Also count, per ray, the tree's nodes, leaves and leaf records visited (the cost of a
     /// ray in the tree's own units; the tree is walked even where a small scene's flat list
     /// answers single rays).
     #[arg(long)]
@@ -382,12 +382,14 @@ struct SetResult {
 
 /// Runs `f` over `rays` on `threads` threads that take chunks of [`CHUNK`] rays from a shared
 /// counter; `f` writes each chunk's answers into its slots.
-/// Prints the mean nodes, leaves and blocks each set's rays visit (`--counts`), counted on
+/// Prints the mean nodes, leaves and leaf records each set's rays visit (`--counts`), counted on
 /// `threads` threads.
 fn print_counts(bvh: &Bvh, sets: &[(&str, bool, Vec<Ray>)], threads: usize) {
     use raylab::bvh::TraversalStats;
     use rayon::prelude::*;
-    println!("per ray, in the tree: wide nodes tested, leaves entered, 4-triangle blocks in them");
+    println!(
+        "per ray, in the tree: wide nodes tested, leaves entered, records in them (up to 8 triangles each)"
+    );
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build();
     for (name, occlusion, rays) in sets {
         let count = || {
@@ -409,10 +411,10 @@ fn print_counts(bvh: &Bvh, sets: &[(&str, bool, Vec<Ray>)], threads: usize) {
             Ok(pool) => pool.install(count),
             Err(_) => count(),
         };
-        let [nodes, leaves, blocks] = stats.per_ray();
+        let [nodes, leaves, records] = stats.per_ray();
         let query = if *occlusion { "occluded" } else { "closest" };
         println!(
-            "{name:<9} {query:<9} {nodes:>7.2} nodes {leaves:>6.2} leaves {blocks:>6.2} blocks"
+            "{name:<9} {query:<9} {nodes:>7.2} nodes {leaves:>6.2} leaves {records:>6.2} records"
         );
     }
 }

@@ -281,7 +281,7 @@ fn bench_generates_traces_and_reports() {
     }
     // The box's 32 triangles make one wide node over eight leaves of four: every camera ray
     // tests exactly that node.
-    let counts: Vec<&str> = stdout.lines().filter(|l| l.ends_with(" blocks")).collect();
+    let counts: Vec<&str> = stdout.lines().filter(|l| l.ends_with(" records")).collect();
     assert_eq!(counts.len(), 3, "{stdout}");
     assert!(counts[0].starts_with("primary   closest      1.00 nodes"), "{stdout}");
     let json = std::fs::read_to_string(dir.path().join("b.json")).unwrap();

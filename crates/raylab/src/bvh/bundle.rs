@@ -28,8 +28,7 @@
 use glam::Vec3;
 
 use super::bounds::{Bounds, Frustum};
-use super::build::BLOCK;
-use crate::triangle::TriangleBlock;
+use super::leaf::{RECORD_TRIANGLES, RECORD_VERTICES, Record};
 
 /// The relative margin of the cull (see the module documentation).
 const MARGIN: f32 = 1e-4;
@@ -135,27 +134,34 @@ impl LineBundle {
         self.margin_scale * (lp + reach) * (lq + reach) + self.apex_scale * (lp + lq)
     }
 
-    /// [`may_cross`](Self::may_cross) for the four triangles of a block at once, lane by lane
-    /// in arrays (the compiler vectorizes it): bit `lane` set where the triangle is kept. The
-    /// same operations in the same order, so the same answers (the tests compare them).
+    /// [`may_cross`](Self::may_cross) for the triangles of a leaf record at once: bit `t` set
+    /// where triangle `t` is kept. Each vertex is taken relative to the apex once, then the
+    /// edges are tested lane by lane in arrays (the compiler vectorizes it), by the same
+    /// operations in the same order as `may_cross`, so with the same answers (the tests compare
+    /// them).
     #[inline(always)]
-    pub fn may_cross_block(&self, block: &TriangleBlock<BLOCK>) -> u32 {
-        let apex = self.apex.to_array();
-        let (dir_lo, dir_hi) = (self.dir_lo.to_array(), self.dir_hi.to_array());
-        // `corner[j][axis][lane]`: vertex `j` relative to the apex.
-        let mut corner = [[[0.0f32; BLOCK]; 3]; 3];
-        for (corner, vertex) in corner.iter_mut().zip(&block.vertices) {
-            for ((corner, vertex), apex) in corner.iter_mut().zip(vertex).zip(apex) {
-                for (c, v) in corner.iter_mut().zip(vertex) {
-                    *c = v - apex;
+    pub fn may_cross_record(&self, record: &Record) -> u32 {
+        let (nv, nt) = (record.vertices(), record.triangles());
+        let mut relative = [Vec3::ZERO; RECORD_VERTICES];
+        for (v, relative) in relative.iter_mut().enumerate().take(nv) {
+            *relative = record.vertex(v) - self.apex;
+        }
+        // `corner[j][axis][t]`: corner `j` of triangle `t` relative to the apex (zero past `nt`:
+        // kept, and masked off below).
+        let mut corner = [[[0.0f32; RECORD_TRIANGLES]; 3]; 3];
+        for t in 0..nt {
+            for (corner, v) in corner.iter_mut().zip(record.corners(t)) {
+                for (axis, row) in corner.iter_mut().enumerate() {
+                    row[t] = relative[v][axis];
                 }
             }
         }
-        let mut below = [false; BLOCK];
-        let mut above = [false; BLOCK];
+        let (dir_lo, dir_hi) = (self.dir_lo.to_array(), self.dir_hi.to_array());
+        let mut below = [false; RECORD_TRIANGLES];
+        let mut above = [false; RECORD_TRIANGLES];
         for (p, q) in [(1, 2), (2, 0), (0, 1)] {
             let (p, q) = (&corner[p], &corner[q]);
-            for lane in 0..BLOCK {
+            for lane in 0..RECORD_TRIANGLES {
                 let p = Vec3::new(p[0][lane], p[1][lane], p[2][lane]);
                 let q = Vec3::new(q[0][lane], q[1][lane], q[2][lane]);
                 let n = p.cross(q);
@@ -168,14 +174,16 @@ impl LineBundle {
                 above[lane] |= lo > margin;
             }
         }
-        (0..BLOCK).fold(0, |mask, lane| mask | ((!(below[lane] & above[lane])) as u32) << lane)
+        let kept = (0..RECORD_TRIANGLES)
+            .fold(0, |mask, lane| mask | ((!(below[lane] & above[lane])) as u32) << lane);
+        kept & ((1 << nt) - 1)
     }
 
     /// Whether some line of the bundle may pass through the triangle: `false` only where none
     /// does, by the margin of the module documentation. Triangles with a NaN vertex are kept
     /// (no comparison with NaN culls).
-    /// The scalar twin of [`may_cross_block`](Self::may_cross_block).
-    #[cfg_attr(not(test), expect(dead_code, reason = "the scalar twin of `may_cross_block`"))]
+    /// The scalar twin of [`may_cross_record`](Self::may_cross_record).
+    #[cfg_attr(not(test), expect(dead_code, reason = "the scalar twin of `may_cross_record`"))]
     pub fn may_cross(&self, [a, b, c]: [Vec3; 3]) -> bool {
         let (a, b, c) = (a - self.apex, b - self.apex, c - self.apex);
         let mut below = false;
@@ -204,6 +212,7 @@ fn l1(v: Vec3) -> f32 {
 mod tests {
     use super::*;
     use crate::bvh::RayBoxTest;
+    use crate::bvh::leaf::Leaves;
     use crate::ray::Ray;
     use crate::triangle::WatertightRay;
 
@@ -241,7 +250,8 @@ mod tests {
 
     impl Tally {
         /// Checks that `triangle` is kept if a ray of `rays` hits it (below its `t_max`), and
-        /// that the block test agrees with the one-triangle test.
+        /// that the record test agrees with the one-triangle test (the triangle in a record
+        /// with another that shares two of its corners).
         fn check(&mut self, bundle: &LineBundle, rays: &[Ray], triangle: [Vec3; 3]) {
             if crate::triangle::is_degenerate(triangle) {
                 return;
@@ -251,8 +261,14 @@ mod tests {
                 .iter()
                 .any(|ray| WatertightRay::new(ray).intersect(v0, v1, v2, ray.t_max).is_some());
             let kept = bundle.may_cross(triangle);
-            let block = TriangleBlock::<BLOCK>::pack([triangle, [v0; 3]])[0];
-            assert_eq!(bundle.may_cross_block(&block) & 1 != 0, kept, "{triangle:?}");
+            let other = [v2, v1, v0 + (v1 - v0) * 2.0];
+            let mut leaves = Leaves::default();
+            let offset = leaves.push_leaf(&[(0, other), (1, triangle)]);
+            let record = leaves.record(offset);
+            assert_eq!(record.triangles(), 2);
+            let kept_in_record = bundle.may_cross_record(&record);
+            assert_eq!(kept_in_record & 2 != 0, kept, "{triangle:?}");
+            assert_eq!(kept_in_record & 1 != 0, bundle.may_cross(other), "{other:?}");
             if any_hit {
                 self.hit += 1;
                 assert!(kept, "culled {triangle:?}, hit by a ray of {rays:?}");

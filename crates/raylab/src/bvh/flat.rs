@@ -26,7 +26,7 @@
 //! skipped), as in the tree.
 //!
 //! ## The answer is the tree's and brute force's
-//! Each lane runs the watertight test's own arithmetic ([`watertight_lanes`](super::kernels)),
+//! Each lane runs the watertight test's own arithmetic ([`watertight_lanes_with`](super::watertight_lanes::watertight_lanes_with)),
 //! lanes whose edge functions round to zero go to [`WatertightRay::intersect`]'s double-precision
 //! path, and hits are merged in index order, keeping the smallest `t` and, at equal `t`, the lowest
 //! index. So `t`, triangle and barycentrics are bit for bit [`BruteForce`](crate::BruteForce)'s.
@@ -151,7 +151,8 @@ mod x86 {
     use std::arch::x86_64::{__m128, __m256, __m512};
 
     use super::*;
-    use crate::bvh::lanes::{LaneHits, LaneMask, Lanes, WatertightLanes, watertight_lanes_with};
+    use crate::bvh::lanes::{LaneMask, Lanes};
+    use crate::bvh::watertight_lanes::{LaneHits, WatertightLanes, watertight_lanes_with};
 
     /// The ray's part of the lane test, broadcast once per query.
     struct RayLanes<V> {

@@ -9,10 +9,11 @@
 //! `bvh/tests.rs` check that all kernels agree bit for bit.
 
 use super::bounds::{Bounds, Frustum, RayBoxTest};
-use super::build::BLOCK;
-use super::packet::{PacketRays, packet_leaf_scalar};
+use super::leaf::{Record, RecordHits, record_hits_scalar};
+use super::packet::packet_leaf_scalar;
+use super::packet_rays::PacketRays;
 use super::wide::{WIDTH, WideBvh, WideNode};
-use crate::triangle::{TriangleBlock, WatertightRay};
+use crate::triangle::WatertightRay;
 
 /// Which children a ray enters, and where.
 pub(crate) trait NodeKernel: Sized {
@@ -47,13 +48,10 @@ pub(crate) trait NodeKernel: Sized {
         occlusion: bool,
         bvh: &WideBvh,
         bounds: &Bounds,
-        first_block: u32,
-        blocks: u32,
+        offset: u32,
     ) {
         // SAFETY: the caller's guarantee.
-        unsafe {
-            packet_leaf_scalar::<Self>(rays, open, occlusion, bvh, bounds, first_block, blocks)
-        }
+        unsafe { packet_leaf_scalar::<Self>(rays, open, occlusion, bvh, bounds, offset) }
     }
 
     /// A packet's bound, prepared for this kernel once per packet.
@@ -78,33 +76,33 @@ pub(crate) trait NodeKernel: Sized {
     ) -> (u32, [f32; WIDTH]);
 
     /// What a ray's triangle tests need, in this kernel's registers, prepared once per ray.
-    type BlockRay: Copy;
+    type RecordRay: Copy;
 
-    /// Prepares a ray for [`block_hits`](Self::block_hits).
+    /// Prepares a ray for [`record_hits`](Self::record_hits).
     ///
     /// # Safety
     /// As for [`enter`](Self::enter).
-    unsafe fn prepare_block_ray(ray: &WatertightRay) -> Self::BlockRay;
+    unsafe fn prepare_record_ray(ray: &WatertightRay) -> Self::RecordRay;
 
-    /// The hits of a ray on the triangles of `block` below `t_max`, as
-    /// [`WatertightRay::intersect`] decides them. The blocks must hold no zero-area triangles
-    /// (the BVH leaves them out). The scalar twin is [`block_hits_scalar`].
+    /// The hits of a ray on the triangles of a leaf record below `t_max`, as
+    /// [`WatertightRay::intersect`] decides them. The records must hold no zero-area triangles
+    /// (the BVH leaves them out). The scalar twin is [`record_hits_scalar`].
     ///
     /// # Safety
     /// As for [`enter`](Self::enter).
-    unsafe fn block_hits(
-        ray: &TriangleRay<Self::BlockRay>,
-        block: &TriangleBlock<BLOCK>,
+    unsafe fn record_hits(
+        ray: &TriangleRay<Self::RecordRay>,
+        record: &Record,
         t_max: f32,
-    ) -> BlockHits;
+    ) -> RecordHits;
 }
 
-/// A ray prepared for the triangle tests of a kernel whose per-ray form is `B`: the scalar test's
-/// setup (for the lanes a kernel leaves undecided) and the kernel's.
+/// A ray prepared for the triangle tests of a kernel whose per-ray form is `R`: the scalar test's
+/// setup (for the triangles a kernel leaves undecided) and the kernel's.
 #[derive(Clone, Copy)]
-pub(crate) struct TriangleRay<B> {
+pub(crate) struct TriangleRay<R> {
     pub ray: WatertightRay,
-    pub block: B,
+    pub lanes: R,
 }
 
 /// Prepares `ray` for `K`'s triangle tests.
@@ -114,49 +112,9 @@ pub(crate) struct TriangleRay<B> {
 #[inline(always)]
 pub(crate) unsafe fn prepare_triangle_ray<K: NodeKernel>(
     ray: &WatertightRay,
-) -> TriangleRay<K::BlockRay> {
+) -> TriangleRay<K::RecordRay> {
     // SAFETY: the caller's guarantee.
-    TriangleRay { ray: *ray, block: unsafe { K::prepare_block_ray(ray) } }
-}
-
-/// What a block test decides for each of its four lanes.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct BlockHits {
-    /// Lanes hit, with their `t` and barycentrics below, exactly as `intersect` computes them.
-    pub hits: u32,
-    /// Lanes that only [`WatertightRay::intersect`] can decide (an edge function rounded to zero
-    /// and must be recomputed in double precision).
-    pub undecided: u32,
-    /// Ray parameter per lane (meaningful where `hits` has the bit).
-    pub t: [f32; BLOCK],
-    /// Barycentric weight of `v1` per lane.
-    pub b1: [f32; BLOCK],
-    /// Barycentric weight of `v2` per lane.
-    pub b2: [f32; BLOCK],
-}
-
-/// The scalar twin of the block kernels: the batched pre-test, then the full scalar test on each
-/// candidate. Decides every lane.
-#[inline(always)]
-pub(crate) fn block_hits_scalar(
-    ray: &WatertightRay,
-    block: &TriangleBlock<BLOCK>,
-    t_max: f32,
-) -> BlockHits {
-    let mut out = BlockHits::default();
-    let mut candidates = ray.block_candidates(block, t_max);
-    while candidates != 0 {
-        let lane = candidates.trailing_zeros() as usize;
-        candidates &= candidates - 1;
-        let [v0, v1, v2] = block.triangle(lane);
-        if let Some(h) = ray.intersect(v0, v1, v2, t_max) {
-            out.hits |= 1 << lane;
-            out.t[lane] = h.t;
-            out.b1[lane] = h.b1;
-            out.b2[lane] = h.b2;
-        }
-    }
-    out
+    TriangleRay { ray: *ray, lanes: unsafe { K::prepare_record_ray(ray) } }
 }
 
 /// Plane rows of the near and far planes per axis: the box's min for a positive direction.
@@ -174,18 +132,14 @@ pub(crate) struct Scalar;
 
 impl NodeKernel for Scalar {
     type Ray = (RayBoxTest, f32);
-    type BlockRay = ();
+    type RecordRay = ();
 
     #[inline(always)]
-    unsafe fn prepare_block_ray(_: &WatertightRay) {}
+    unsafe fn prepare_record_ray(_: &WatertightRay) {}
 
     #[inline(always)]
-    unsafe fn block_hits(
-        ray: &TriangleRay<()>,
-        block: &TriangleBlock<BLOCK>,
-        t_max: f32,
-    ) -> BlockHits {
-        block_hits_scalar(&ray.ray, block, t_max)
+    unsafe fn record_hits(ray: &TriangleRay<()>, record: &Record, t_max: f32) -> RecordHits {
+        record_hits_scalar(&ray.ray, record, t_max)
     }
 
     #[inline(always)]
@@ -237,14 +191,13 @@ impl NodeKernel for Scalar {
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Avx512, Sse};
-#[cfg(all(test, target_arch = "x86_64"))]
-pub(crate) use x86::{SseBlockRay, block_hits_sse};
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
 
     use super::*;
-    use crate::bvh::lanes::{Lanes, WatertightLanes, watertight_lanes};
+    use crate::bvh::lanes::Lanes;
+    use crate::bvh::leaf_kernels::{RecordRay, record_hits_avx2, record_hits_sse};
     use crate::bvh::packet_kernels::{FrustumBroadcast, packet_leaf_lanes};
 
     /// Eight children with two 4-wide SSE halves: every x86-64 CPU has SSE2.
@@ -302,21 +255,10 @@ mod x86 {
             occlusion: bool,
             bvh: &WideBvh,
             bounds: &Bounds,
-            first_block: u32,
-            blocks: u32,
+            offset: u32,
         ) {
             // SAFETY: the caller's guarantee.
-            unsafe {
-                packet_leaf_lanes::<__m128, 4>(
-                    rays,
-                    open,
-                    occlusion,
-                    bvh,
-                    bounds,
-                    first_block,
-                    blocks,
-                )
-            }
+            unsafe { packet_leaf_lanes::<__m128, 4>(rays, open, occlusion, bvh, bounds, offset) }
         }
 
         #[inline(always)]
@@ -340,20 +282,21 @@ mod x86 {
             }
         }
 
-        type BlockRay = SseBlockRay;
+        type RecordRay = RecordRay<__m128>;
 
         #[inline(always)]
-        unsafe fn prepare_block_ray(ray: &WatertightRay) -> SseBlockRay {
-            SseBlockRay::new(ray)
+        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RecordRay<__m128> {
+            // SAFETY: SSE2 is part of x86-64.
+            unsafe { RecordRay::new(ray) }
         }
 
         #[inline(always)]
-        unsafe fn block_hits(
-            ray: &TriangleRay<SseBlockRay>,
-            block: &TriangleBlock<BLOCK>,
+        unsafe fn record_hits(
+            ray: &TriangleRay<RecordRay<__m128>>,
+            record: &Record,
             t_max: f32,
-        ) -> BlockHits {
-            block_hits_sse(ray, block, t_max)
+        ) -> RecordHits {
+            record_hits_sse(ray, record, t_max)
         }
 
         #[inline(always)]
@@ -392,91 +335,6 @@ mod x86 {
         }
     }
 
-    /// One row of a block.
-    ///
-    /// # Safety
-    /// As for [`Lanes::load`]: SSE2 is part of x86-64 and a block's rows are 16-byte aligned.
-    #[inline(always)]
-    unsafe fn row(r: &[f32; BLOCK]) -> __m128 {
-        // SAFETY: as above.
-        unsafe { __m128::load(r.as_ptr()) }
-    }
-
-    /// A ray's triangle-test values broadcast into SSE registers, permuted to its `(kx, ky, kz)`.
-    #[derive(Clone, Copy)]
-    pub(crate) struct SseBlockRay {
-        origin: [__m128; 3],
-        shear: [__m128; 3],
-        abs_shear: [__m128; 2],
-        t_min: __m128,
-        k: [usize; 3],
-    }
-
-    impl SseBlockRay {
-        #[inline(always)]
-        pub(crate) fn new(ray: &WatertightRay) -> Self {
-            let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
-            // SAFETY: SSE2 is part of x86-64.
-            unsafe {
-                SseBlockRay {
-                    origin: [
-                        __m128::splat(ray.origin[kx]),
-                        __m128::splat(ray.origin[ky]),
-                        __m128::splat(ray.origin[kz]),
-                    ],
-                    shear: [
-                        __m128::splat(ray.shear_x),
-                        __m128::splat(ray.shear_y),
-                        __m128::splat(ray.shear_z),
-                    ],
-                    abs_shear: [__m128::splat(ray.shear_x.abs()), __m128::splat(ray.shear_y.abs())],
-                    t_min: __m128::splat(ray.t_min),
-                    k: [kx, ky, kz],
-                }
-            }
-        }
-    }
-
-    /// [`block_hits_scalar`] for four triangles with SSE2, by [`watertight_lanes`].
-    #[inline(always)]
-    pub(crate) fn block_hits_sse(
-        ray: &TriangleRay<SseBlockRay>,
-        block: &TriangleBlock<BLOCK>,
-        t_max: f32,
-    ) -> BlockHits {
-        let r = &ray.block;
-        let [kx, ky, kz] = r.k;
-        // SAFETY: SSE2 is part of x86-64; each load reads one row of 4 floats of the block,
-        // which is 16-byte aligned (`repr(align(16))`); stores go to arrays of 4 floats.
-        unsafe {
-            let [p0, p1, p2] = &block.vertices;
-            let lanes = WatertightLanes {
-                origin: r.origin,
-                shear: r.shear,
-                abs_shear: r.abs_shear,
-                t_min: r.t_min,
-                t_max: __m128::splat(t_max),
-                vertices: [
-                    [row(&p0[kx]), row(&p0[ky]), row(&p0[kz])],
-                    [row(&p1[kx]), row(&p1[ky]), row(&p1[kz])],
-                    [row(&p2[kx]), row(&p2[ky]), row(&p2[kz])],
-                ],
-            };
-            let decided = watertight_lanes(&lanes, 0xF);
-            let mut out = BlockHits {
-                hits: decided.hits,
-                undecided: decided.undecided,
-                ..BlockHits::default()
-            };
-            if decided.hits != 0 {
-                decided.t.store(out.t.as_mut_ptr());
-                decided.b1.store(out.b1.as_mut_ptr());
-                decided.b2.store(out.b2.as_mut_ptr());
-            }
-            out
-        }
-    }
-
     /// All eight children in one AVX2 register.
     pub(crate) struct Avx2;
 
@@ -491,21 +349,10 @@ mod x86 {
             occlusion: bool,
             bvh: &WideBvh,
             bounds: &Bounds,
-            first_block: u32,
-            blocks: u32,
+            offset: u32,
         ) {
             // SAFETY: the caller's guarantee.
-            unsafe {
-                packet_leaf_lanes::<__m256, 8>(
-                    rays,
-                    open,
-                    occlusion,
-                    bvh,
-                    bounds,
-                    first_block,
-                    blocks,
-                )
-            }
+            unsafe { packet_leaf_lanes::<__m256, 8>(rays, open, occlusion, bvh, bounds, offset) }
         }
 
         #[inline(always)]
@@ -528,20 +375,22 @@ mod x86 {
             }
         }
 
-        type BlockRay = SseBlockRay;
+        type RecordRay = RecordRay<__m256>;
 
         #[inline(always)]
-        unsafe fn prepare_block_ray(ray: &WatertightRay) -> SseBlockRay {
-            SseBlockRay::new(ray)
+        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RecordRay<__m256> {
+            // SAFETY: the caller checked AVX2 support (this function's contract).
+            unsafe { RecordRay::new(ray) }
         }
 
         #[inline(always)]
-        unsafe fn block_hits(
-            ray: &TriangleRay<SseBlockRay>,
-            block: &TriangleBlock<BLOCK>,
+        unsafe fn record_hits(
+            ray: &TriangleRay<RecordRay<__m256>>,
+            record: &Record,
             t_max: f32,
-        ) -> BlockHits {
-            block_hits_sse(ray, block, t_max)
+        ) -> RecordHits {
+            // SAFETY: the caller checked AVX2 support (this function's contract).
+            unsafe { record_hits_avx2::<false>(ray, record, t_max) }
         }
 
         #[inline(always)]
@@ -575,7 +424,8 @@ mod x86 {
         }
     }
 
-    /// AVX2's node and block kernels, and packet leaves 16 rays per instruction with AVX-512.
+    /// AVX2's node kernel, leaf records with AVX-512 VL's two-table permute, and packet leaves
+    /// 16 rays per instruction with AVX-512.
     pub(crate) struct Avx512;
 
     impl NodeKernel for Avx512 {
@@ -589,21 +439,10 @@ mod x86 {
             occlusion: bool,
             bvh: &WideBvh,
             bounds: &Bounds,
-            first_block: u32,
-            blocks: u32,
+            offset: u32,
         ) {
             // SAFETY: the caller checked AVX-512 F support (this function's contract).
-            unsafe {
-                packet_leaf_lanes::<__m512, 16>(
-                    rays,
-                    open,
-                    occlusion,
-                    bvh,
-                    bounds,
-                    first_block,
-                    blocks,
-                )
-            }
+            unsafe { packet_leaf_lanes::<__m512, 16>(rays, open, occlusion, bvh, bounds, offset) }
         }
 
         #[inline(always)]
@@ -622,20 +461,22 @@ mod x86 {
             unsafe { Avx2::enter_frustum(node, frustum, t_limit) }
         }
 
-        type BlockRay = SseBlockRay;
+        type RecordRay = RecordRay<__m256>;
 
         #[inline(always)]
-        unsafe fn prepare_block_ray(ray: &WatertightRay) -> SseBlockRay {
-            SseBlockRay::new(ray)
+        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RecordRay<__m256> {
+            // SAFETY: the caller checked AVX-512 F support (this function's contract).
+            unsafe { RecordRay::new(ray) }
         }
 
         #[inline(always)]
-        unsafe fn block_hits(
-            ray: &TriangleRay<SseBlockRay>,
-            block: &TriangleBlock<BLOCK>,
+        unsafe fn record_hits(
+            ray: &TriangleRay<RecordRay<__m256>>,
+            record: &Record,
             t_max: f32,
-        ) -> BlockHits {
-            block_hits_sse(ray, block, t_max)
+        ) -> RecordHits {
+            // SAFETY: the caller checked AVX-512 F support (this function's contract).
+            unsafe { record_hits_avx2::<true>(ray, record, t_max) }
         }
 
         #[inline(always)]

@@ -2,8 +2,9 @@
 //!
 //! [`Bvh::build`] makes a binary tree with the binned surface area heuristic (`build`), in
 //! parallel on the current rayon pool, then collapses it into an 8-wide tree (`wide`) whose
-//! nodes test a ray against eight boxes at once with SIMD (`kernels`), and whose leaves hold
-//! triangles four at a time. Traversal (`traverse`) visits the nearest child first for the closest
+//! nodes test a ray against eight boxes at once with SIMD (`kernels`), and whose leaves are
+//! records of up to eight triangles over a table of the vertices they share (`leaf`), tested in
+//! one pass (`leaf_kernels`). Traversal (`traverse`) visits the nearest child first for the closest
 //! hit and stops at the first hit for occlusion. Scenes of a few dozen triangles (the Cornell
 //! boxes) answer single rays without the tree: every triangle is tested, sixteen per instruction
 //! (`flat`, up to [`BuildSettings::flat_limit`] triangles). Moving geometry keeps its tree:
@@ -38,13 +39,19 @@ mod flat;
 mod kernels;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
+mod leaf;
+#[cfg(target_arch = "x86_64")]
+mod leaf_kernels;
 mod packet;
 #[cfg(target_arch = "x86_64")]
 mod packet_kernels;
+mod packet_rays;
 mod packet_setup;
 mod refit;
 mod sweep;
 mod traverse;
+#[cfg(target_arch = "x86_64")]
+mod watertight_lanes;
 mod wide;
 
 use glam::Vec3;
@@ -55,7 +62,6 @@ pub use traverse::TraversalStats;
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;
-use crate::triangle::TriangleBlock;
 use wide::WideBvh;
 
 /// How a BVH is built: a trade of build time for tracing speed. Never changes the answers.
@@ -63,12 +69,13 @@ use wide::WideBvh;
 pub struct BuildSettings {
     /// Bins per axis for the SAH sweep (2 to 256): more bins find better splits, slower.
     pub bins: usize,
-    /// The most triangles in a leaf (1 to 64). Leaves are tested four triangles at a time.
+    /// The most triangles in a leaf (1 to 64). A leaf's records of up to eight triangles are
+    /// tested one pass each.
     pub max_leaf_size: usize,
-    /// Cost of entering a node, relative to `block_cost`.
+    /// Cost of entering a node, relative to `record_cost`.
     pub traversal_cost: f32,
-    /// Cost of testing a block of four triangles.
-    pub block_cost: f32,
+    /// Cost of testing one leaf record (up to eight triangles over up to sixteen vertices).
+    pub record_cost: f32,
     /// Scenes of at most this many triangles (of non-zero area) also keep them in a flat list,
     /// and single rays test them all, sixteen per instruction, instead of walking the tree
     /// (`flat`): faster for a few dozen triangles. `0` always walks the tree.
@@ -81,7 +88,7 @@ impl BuildSettings {
         bins: 8,
         max_leaf_size: 8,
         traversal_cost: 1.0,
-        block_cost: 1.0,
+        record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
     };
     /// The default: 16 bins, leaves of up to 8 triangles.
@@ -89,7 +96,7 @@ impl BuildSettings {
         bins: 16,
         max_leaf_size: 8,
         traversal_cost: 1.0,
-        block_cost: 1.0,
+        record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
     };
     /// Best trees: 32 bins.
@@ -97,7 +104,7 @@ impl BuildSettings {
         bins: 32,
         max_leaf_size: 8,
         traversal_cost: 1.0,
-        block_cost: 1.0,
+        record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
     };
     /// Every preset with its name.
@@ -111,17 +118,18 @@ impl BuildSettings {
     /// the tree is 1.3 to 1.7 times as fast.
     pub const FLAT_LIMIT: usize = 48;
 
-    /// Scenes below this many triangles get leaves of one block (see
+    /// Scenes below this many triangles get leaves of at most four triangles (see
     /// [`for_triangles`](Self::for_triangles)).
     pub const SMALL_SCENE: usize = 4096;
 
     /// What [`Bvh::new`] builds with: [`MEDIUM`](Self::MEDIUM), with leaves of at most four
-    /// triangles (one block) for scenes of fewer than [`SMALL_SCENE`](Self::SMALL_SCENE).
+    /// triangles for scenes of fewer than [`SMALL_SCENE`](Self::SMALL_SCENE).
     ///
     /// A small scene's tree stays in cache whatever its size, so smaller leaves cost no memory
     /// traffic and save triangle tests, above all for packets of camera rays (the lab frame
     /// renders in 22 rather than 28 ms on one thread). On large meshes, leaves of up to eight
-    /// are faster and smaller (the 871k-triangle dragon: 56 rather than 63 bytes per triangle).
+    /// are faster and smaller (measured with the four-triangle blocks that leaf records replaced;
+    /// the 871k-triangle dragon: 56 rather than 63 bytes per triangle then).
     pub fn for_triangles(triangles: usize) -> BuildSettings {
         if triangles < Self::SMALL_SCENE {
             BuildSettings { max_leaf_size: 4, ..Self::MEDIUM }
@@ -134,14 +142,14 @@ impl BuildSettings {
     fn clamped(&self) -> BuildSettings {
         BuildSettings {
             bins: self.bins.clamp(2, build::MAX_BINS),
-            max_leaf_size: self.max_leaf_size.clamp(1, 4 * wide::MAX_LEAF_BLOCKS),
+            max_leaf_size: self.max_leaf_size.clamp(1, wide::MAX_LEAF_TRIANGLES),
             traversal_cost: if self.traversal_cost.is_finite() {
                 self.traversal_cost.max(0.0)
             } else {
                 1.0
             },
-            block_cost: if self.block_cost > 0.0 && self.block_cost.is_finite() {
-                self.block_cost
+            record_cost: if self.record_cost > 0.0 && self.record_cost.is_finite() {
+                self.record_cost
             } else {
                 1.0
             },
@@ -219,24 +227,23 @@ pub struct BvhStats {
     pub indexed_triangles: usize,
     /// Wide nodes.
     pub nodes: usize,
-    /// Leaf blocks of four triangles.
-    pub blocks: usize,
+    /// Bytes of the leaves' records: each leaf's distinct vertices, three byte indices and the
+    /// caller's index per triangle (see `bvh/leaf.rs`).
+    pub leaf_bytes: usize,
     /// Bytes of the flat list of a small scene's triangles (see
     /// [`BuildSettings::flat_limit`]), `0` for none.
     pub flat_bytes: usize,
 }
 
 impl BvhStats {
-    /// Bytes of the BVH: nodes, the leaves' copies of the triangles, and their indices.
+    /// Bytes of the BVH: nodes, the leaves' records, and a small scene's flat list.
     pub fn bytes(&self) -> usize {
-        self.nodes * size_of::<wide::WideNode>()
-            + self.blocks * (size_of::<TriangleBlock<{ build::BLOCK }>>() + 4 * build::BLOCK)
-            + self.flat_bytes
+        self.nodes * size_of::<wide::WideNode>() + self.leaf_bytes + self.flat_bytes
     }
 }
 
-/// The most triangles one BVH holds: every one could need a leaf block of its own, and leaf
-/// references address 2²⁷ − 1 blocks.
+/// The most triangles one BVH holds: a triangle takes at most 12 words of leaf records (one
+/// alone in its record), and leaf references address 2³¹ − 1 words.
 pub const MAX_TRIANGLES: usize = (1 << 27) - 2;
 
 /// Why a BVH could not be built.
@@ -332,7 +339,7 @@ impl Bvh {
             triangles: triangles.len(),
             indexed_triangles,
             nodes: wide.nodes.len(),
-            blocks: wide.blocks.len(),
+            leaf_bytes: wide.leaves.bytes(),
             flat_bytes: flat.as_ref().map_or(0, flat::Flat::bytes),
         };
         Bvh { wide, flat, isa: Isa::detect(), stats }
@@ -357,7 +364,7 @@ impl Bvh {
     }
 
     /// The closest hit, exactly as [`closest_hit`](Accelerator::closest_hit) answers it, adding
-    /// the nodes, leaves and blocks the tree's traversal visits to `stats` (and one ray).
+    /// the nodes, leaves and leaf records the tree's traversal visits to `stats` (and one ray).
     ///
     /// It runs the portable node kernel, whose box tests decide as every vector kernel's do (the
     /// twin tests), so the counts are those of any instruction set; slower, for measurements. It

@@ -13,269 +13,14 @@
 //! rays is split by these first; rays that cannot join a packet (a zero direction component,
 //! nothing to hit) or that are alone in their group are traced one by one.
 
-use glam::Vec3;
-
-use super::bounds::{Bounds, FAR_SCALE, Frustum, RayBoxTest};
-use super::bundle::LineBundle;
+use super::bounds::{Bounds, Frustum};
 use super::kernels::{NodeKernel, prepare_triangle_ray};
+use super::packet_rays::{PACKET, PacketRays, Shared};
 use super::packet_setup;
-use super::traverse::{Closest, Stack, can_hit, closest_hit, leaf_occluded, occluded};
+use super::traverse::{Closest, Stack, closest_hit, leaf_occluded, occluded};
 use super::wide::{Child, WideBvh, decode};
 use crate::accel::Hit;
-use crate::float::next_float_up;
 use crate::ray::Ray;
-use crate::triangle::WatertightRay;
-
-/// The most rays traced together: an 8×8 tile of camera rays.
-pub(crate) const PACKET: usize = 64;
-
-/// The rays of one packet, lane by lane (structure of arrays), with their search state.
-/// Lanes from `len` on hold stale values and are never counted.
-#[derive(Clone)]
-#[repr(C, align(64))]
-pub(crate) struct PacketRays {
-    /// Origins, per world axis.
-    pub origin: [[f32; PACKET]; 3],
-    /// `1/d`, per world axis.
-    pub inv_direction: [[f32; PACKET]; 3],
-    /// The slab test's `t_min` ([`RayBoxTest::t_min`]).
-    pub box_t_min: [f32; PACKET],
-    /// The watertight test's shear, `shear_x`, `shear_y`, `shear_z`.
-    pub shear: [[f32; PACKET]; 3],
-    /// The watertight test's `t_min` ([`WatertightRay`]).
-    pub triangle_t_min: [f32; PACKET],
-    /// Triangles are accepted below this (see [`Closest`]).
-    pub triangle_limit: [f32; PACKET],
-    /// Boxes are entered up to this.
-    pub box_limit: [f32; PACKET],
-    /// The closest hit so far (`+∞` for none), its triangle (`u32::MAX` for none) and
-    /// barycentrics.
-    pub best_t: [f32; PACKET],
-    pub best_triangle: [u32; PACKET],
-    pub best_b1: [f32; PACKET],
-    pub best_b2: [f32; PACKET],
-    /// The rays in the packet.
-    pub len: usize,
-    /// Shared by all rays: the direction's signs, and the watertight test's `kx, ky, kz`
-    /// (whose `kz` is the dominant axis).
-    pub negative: [bool; 3],
-    pub k: [usize; 3],
-    /// The rays' lines, when they share their origin: culls a leaf's triangles for all of them.
-    pub bundle: Option<LineBundle>,
-}
-
-impl PacketRays {
-    /// An empty packet, to be filled.
-    pub(super) fn new() -> PacketRays {
-        PacketRays {
-            origin: [[0.0; PACKET]; 3],
-            inv_direction: [[0.0; PACKET]; 3],
-            box_t_min: [0.0; PACKET],
-            shear: [[0.0; PACKET]; 3],
-            triangle_t_min: [0.0; PACKET],
-            triangle_limit: [0.0; PACKET],
-            box_limit: [0.0; PACKET],
-            best_t: [0.0; PACKET],
-            best_triangle: [0; PACKET],
-            best_b1: [0.0; PACKET],
-            best_b2: [0.0; PACKET],
-            len: 0,
-            negative: [false; 3],
-            k: [0, 1, 2],
-            bundle: None,
-        }
-    }
-
-    /// Prepares `ray` in lane `i`, and returns its group (direction octant and dominant axis,
-    /// `0..24`) with what the group's rays share, or `None` if it cannot join a packet.
-    ///
-    /// The scalar twin of [`packet_setup::fill`], which fills every lane at once.
-    #[cfg_attr(not(test), expect(dead_code, reason = "the scalar twin of `fill`"))]
-    pub(super) fn set_lane(&mut self, i: usize, ray: &Ray) -> Option<(usize, Shared)> {
-        let box_ray = RayBoxTest::new(ray);
-        if !can_hit(ray) || !Frustum::can_join(&box_ray) {
-            return None;
-        }
-        let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-        for axis in 0..3 {
-            self.origin[axis][i] = box_ray.origin[axis];
-            self.inv_direction[axis][i] = box_ray.inv_direction[axis];
-        }
-        self.box_t_min[i] = box_ray.t_min;
-        self.shear[0][i] = triangle_ray.shear_x;
-        self.shear[1][i] = triangle_ray.shear_y;
-        self.shear[2][i] = triangle_ray.shear_z;
-        self.triangle_t_min[i] = triangle_ray.t_min;
-        self.triangle_limit[i] = ray.t_max;
-        self.box_limit[i] = ray.t_max * FAR_SCALE;
-        self.best_t[i] = f32::INFINITY;
-        self.best_triangle[i] = u32::MAX;
-        let n = box_ray.negative;
-        let group = (n[0] as usize | (n[1] as usize) << 1 | (n[2] as usize) << 2) * 3
-            + box_ray.dominant_axis;
-        Some((group, (n, [triangle_ray.kx, triangle_ray.ky, triangle_ray.kz])))
-    }
-
-    /// Copies lane `j` of `from` (before tracing) into lane `i`.
-    #[inline(always)]
-    fn copy_lane(&mut self, i: usize, from: &PacketRays, j: usize) {
-        for axis in 0..3 {
-            self.origin[axis][i] = from.origin[axis][j];
-            self.inv_direction[axis][i] = from.inv_direction[axis][j];
-            self.shear[axis][i] = from.shear[axis][j];
-        }
-        self.box_t_min[i] = from.box_t_min[j];
-        self.triangle_t_min[i] = from.triangle_t_min[j];
-        self.triangle_limit[i] = from.triangle_limit[j];
-        self.box_limit[i] = from.box_limit[j];
-        self.best_t[i] = from.best_t[j];
-        self.best_triangle[i] = from.best_triangle[j];
-    }
-
-    /// Ray `i`'s slab test.
-    #[inline(always)]
-    pub fn box_ray(&self, i: usize) -> RayBoxTest {
-        RayBoxTest {
-            origin: Vec3::new(self.origin[0][i], self.origin[1][i], self.origin[2][i]),
-            inv_direction: Vec3::new(
-                self.inv_direction[0][i],
-                self.inv_direction[1][i],
-                self.inv_direction[2][i],
-            ),
-            negative: self.negative,
-            t_min: self.box_t_min[i],
-            dominant_axis: self.k[2],
-        }
-    }
-
-    /// Ray `i`'s watertight test.
-    #[inline(always)]
-    pub fn triangle_ray(&self, i: usize) -> WatertightRay {
-        WatertightRay {
-            origin: Vec3::new(self.origin[0][i], self.origin[1][i], self.origin[2][i]),
-            t_min: self.triangle_t_min[i],
-            kx: self.k[0],
-            ky: self.k[1],
-            kz: self.k[2],
-            shear_x: self.shear[0][i],
-            shear_y: self.shear[1][i],
-            shear_z: self.shear[2][i],
-        }
-    }
-
-    /// Ray `i`'s closest hit so far.
-    #[inline(always)]
-    fn best(&self, i: usize) -> Option<Hit> {
-        (self.best_triangle[i] != u32::MAX).then(|| Hit {
-            t: self.best_t[i],
-            triangle: self.best_triangle[i],
-            b1: self.best_b1[i],
-            b2: self.best_b2[i],
-        })
-    }
-
-    /// Offers ray `i` a hit: kept if nearer than its best, or as near with a lower index.
-    #[inline(always)]
-    pub fn offer(&mut self, i: usize, t: f32, triangle: u32, b1: f32, b2: f32) {
-        if t < self.best_t[i] || (t == self.best_t[i] && triangle < self.best_triangle[i]) {
-            self.best_t[i] = t;
-            self.best_triangle[i] = triangle;
-            self.best_b1[i] = b1;
-            self.best_b2[i] = b2;
-            self.triangle_limit[i] = next_float_up(t);
-            self.box_limit[i] = t * FAR_SCALE;
-        }
-    }
-
-    /// The greatest box limit of the rays: the packet's. (Rays that are done have their limit
-    /// set to `-∞` by [`close`](Self::close).)
-    #[inline(always)]
-    fn limit(&self) -> f32 {
-        highest(&self.box_limit[..self.len])
-    }
-
-    /// Takes the rays in `done` out of the packet's limit.
-    #[inline(always)]
-    fn close(&mut self, mut done: u64) {
-        while done != 0 {
-            self.box_limit[done.trailing_zeros() as usize] = f32::NEG_INFINITY;
-            done &= done - 1;
-        }
-    }
-
-    /// The packet's frustum: what [`Frustum::of`] gives for its rays, computed from the lanes
-    /// (the rays were checked by [`Frustum::can_join`] and share their octant and dominant axis).
-    #[inline(always)]
-    fn frustum(&self) -> Frustum {
-        let n = self.len;
-        let mut pad_axes = [false; 3];
-        pad_axes[self.k[2]] = true;
-        // Written out axis by axis: `[0, 1, 2].map(..)` is not inlined into the instruction
-        // set's entry point (its closure is compiled without the entry's target features).
-        let (o, inv) = (&self.origin, &self.inv_direction);
-        Frustum {
-            origin_lo: Vec3::new(lowest(&o[0][..n]), lowest(&o[1][..n]), lowest(&o[2][..n])),
-            origin_hi: Vec3::new(highest(&o[0][..n]), highest(&o[1][..n]), highest(&o[2][..n])),
-            inv_lo: Vec3::new(lowest(&inv[0][..n]), lowest(&inv[1][..n]), lowest(&inv[2][..n])),
-            inv_hi: Vec3::new(highest(&inv[0][..n]), highest(&inv[1][..n]), highest(&inv[2][..n])),
-            negative: self.negative,
-            t_min: lowest(&self.box_t_min[..n]),
-            pad_axes,
-        }
-    }
-
-    /// The lines of the packet, if they meet in one point: the shared origin, or the rays'
-    /// common point at `t = 1` (shadow rays toward a point light).
-    #[inline(always)]
-    fn bundle(&self, frustum: &Frustum) -> Option<LineBundle> {
-        if let Some(bundle) = LineBundle::of(frustum) {
-            return Some(bundle);
-        }
-        let n = self.len;
-        let mut end = [[0.0f32; PACKET]; 3];
-        for (axis, end) in end.iter_mut().enumerate() {
-            let lanes = self.origin[axis].iter().zip(&self.inv_direction[axis]);
-            for (end, (&o, &inv)) in end.iter_mut().zip(lanes) {
-                *end = o + 1.0 / inv;
-            }
-        }
-        let lo = Vec3::new(lowest(&end[0][..n]), lowest(&end[1][..n]), lowest(&end[2][..n]));
-        let hi = Vec3::new(highest(&end[0][..n]), highest(&end[1][..n]), highest(&end[2][..n]));
-        LineBundle::through_ends(frustum, lo, hi)
-    }
-
-    /// The mask of all rays of the packet.
-    #[inline(always)]
-    fn all(&self) -> u64 {
-        if self.len == PACKET { u64::MAX } else { (1 << self.len) - 1 }
-    }
-}
-
-/// The least of finite values, eight lanes at a time (a form the compiler vectorizes).
-#[inline(always)]
-fn lowest(values: &[f32]) -> f32 {
-    reduce(values, f32::INFINITY, |a, b| if b < a { b } else { a })
-}
-
-/// The greatest of finite values.
-#[inline(always)]
-fn highest(values: &[f32]) -> f32 {
-    reduce(values, f32::NEG_INFINITY, |a, b| if b > a { b } else { a })
-}
-
-/// Folds `values` by `pick` in eight columns, then the columns and the rest.
-#[inline(always)]
-fn reduce(values: &[f32], start: f32, pick: impl Fn(f32, f32) -> f32 + Copy) -> f32 {
-    let mut columns = [start; 8];
-    let chunks = values.chunks_exact(8);
-    let rest = chunks.remainder();
-    for chunk in chunks {
-        for (c, &v) in columns.iter_mut().zip(chunk) {
-            *c = pick(*c, v);
-        }
-    }
-    columns.into_iter().chain(rest.iter().copied()).fold(start, pick)
-}
 
 /// The scalar twin of [`NodeKernel::packet_leaf`]: ray by ray, the single-ray tests.
 ///
@@ -288,8 +33,7 @@ pub(crate) unsafe fn packet_leaf_scalar<K: NodeKernel>(
     occlusion: bool,
     bvh: &WideBvh,
     bounds: &Bounds,
-    first_block: u32,
-    blocks: u32,
+    offset: u32,
 ) {
     let mut rest = *open;
     while rest != 0 {
@@ -303,7 +47,7 @@ pub(crate) unsafe fn packet_leaf_scalar<K: NodeKernel>(
         if occlusion {
             // SAFETY: the caller guarantees `K`'s instruction set.
             let t_max = rays.triangle_limit[i];
-            if unsafe { leaf_occluded::<K>(bvh, first_block, blocks, triangle_ray, t_max) } {
+            if unsafe { leaf_occluded::<K>(bvh, offset, triangle_ray, t_max) } {
                 *open &= !(1 << i);
             }
         } else {
@@ -313,17 +57,13 @@ pub(crate) unsafe fn packet_leaf_scalar<K: NodeKernel>(
                 box_limit: rays.box_limit[i],
             };
             // SAFETY: the caller guarantees `K`'s instruction set.
-            unsafe { closest.leaf::<K>(bvh, first_block, blocks, triangle_ray) };
+            unsafe { closest.leaf::<K>(bvh, offset, triangle_ray) };
             if let Some(h) = closest.best {
                 rays.offer(i, h.t, h.triangle, h.b1, h.b2);
             }
         }
     }
 }
-
-/// What the rays of a group share: their direction signs and the watertight test's
-/// `kx, ky, kz`.
-type Shared = ([bool; 3], [usize; 3]);
 
 /// A chunk of up to [`PACKET`] rays, prepared once (lane `i` for ray `i`) and sorted into
 /// groups of one direction octant and dominant axis: the rays that can be traced together.
@@ -569,13 +309,11 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
                     node = index;
                     break;
                 }
-                Child::Leaf { first_block, blocks } => {
+                Child::Leaf(offset) => {
                     let bounds = bvh.nodes[(place / 8) as usize].bounds((place % 8) as usize);
                     let mut open = all;
                     // SAFETY: the caller guarantees `K`'s instruction set.
-                    unsafe {
-                        K::packet_leaf(rays, &mut open, false, bvh, &bounds, first_block, blocks)
-                    };
+                    unsafe { K::packet_leaf(rays, &mut open, false, bvh, &bounds, offset) };
                     limit = rays.limit();
                 }
                 Child::Empty => {}
@@ -624,20 +362,10 @@ unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -
             mask &= mask - 1;
             match decode(node.children[k]) {
                 Child::Node(index) => stack.push(index),
-                Child::Leaf { first_block, blocks } => {
+                Child::Leaf(offset) => {
                     let before = open;
                     // SAFETY: the caller guarantees `K`'s instruction set.
-                    unsafe {
-                        K::packet_leaf(
-                            rays,
-                            &mut open,
-                            true,
-                            bvh,
-                            &node.bounds(k),
-                            first_block,
-                            blocks,
-                        )
-                    };
+                    unsafe { K::packet_leaf(rays, &mut open, true, bvh, &node.bounds(k), offset) };
                     if open == 0 {
                         return 0;
                     }

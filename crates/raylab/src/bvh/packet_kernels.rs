@@ -5,11 +5,11 @@
 //! are in `kernels`.
 
 use super::bounds::{Bounds, FAR_SCALE, Frustum, SLAB_PAD};
-use super::build::BLOCK;
-use super::bundle::LineBundle;
 use super::kernels::plane_rows;
-use super::lanes::{Lanes, WatertightLanes, watertight_lanes};
-use super::packet::{PACKET, PacketRays};
+use super::lanes::Lanes;
+use super::leaf::{RECORD_TRIANGLES, RECORD_VERTICES};
+use super::packet_rays::{PACKET, PacketRays};
+use super::watertight_lanes::{RayLanes, ShearedLanes, shear_point, watertight_sheared};
 use super::wide::{WideBvh, WideNode};
 
 /// The lanes of a packet row from `base` on.
@@ -26,7 +26,7 @@ unsafe fn lanes<V: Lanes>(row: &[f32; PACKET], base: usize) -> V {
 
 /// [`NodeKernel::packet_leaf`] with `L` rays per register `V`: the slab test of the leaf's box
 /// and the watertight test of each of its triangles, for `L` rays at a time, by the same
-/// operations as the single-ray tests ([`RayBoxTest::enter`], [`watertight_lanes`]).
+/// operations as the single-ray tests ([`RayBoxTest::enter`], [`watertight_sheared`]).
 ///
 /// # Safety
 /// The CPU must support `V`'s instruction set, which holds `L` (4, 8 or 16) floats.
@@ -37,8 +37,7 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
     occlusion: bool,
     bvh: &WideBvh,
     bounds: &Bounds,
-    first_block: u32,
-    blocks: u32,
+    offset: u32,
 ) {
     let negative = rays.negative;
     // Per axis, not `[0, 1, 2].map(..)` (see `plane_rows`).
@@ -54,29 +53,21 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
         if negative[2] { lo.z } else { hi.z },
     ];
     let [kx, ky, kz] = rays.k;
-    // The leaf's triangles some line of the packet may cross (bit `4·block + lane`, at
-    // most 16 blocks of 4): where the rays' lines meet in one point, the others are culled
-    // once for the whole packet, when the first rays enter the leaf's box (in large meshes
-    // most leaves the packet's frustum reaches are entered by none of its rays), and only
-    // where the leaf is large beside the packet (`LineBundle::worth_culling`).
-    let mut live = None;
-    let culled = |bundle: &LineBundle| {
-        let mut live = 0u64;
-        for (k, b) in (first_block as usize..(first_block + blocks) as usize).enumerate() {
-            live |= (bundle.may_cross_block(&bvh.blocks[b]) as u64) << (BLOCK * k);
-        }
-        live
-    };
-    // SAFETY: the caller's guarantee; every load reads `L` lanes from `base`, and
-    // `base + L <= PACKET` because `PACKET` is a multiple of `L`.
+    // SAFETY (the whole function): the caller's guarantee; every load reads `L` lanes from
+    // `base`, and `base + L <= PACKET` because `PACKET` is a multiple of `L`.
     unsafe {
-        for base in (0..rays.len).step_by(L) {
-            let mut active = (*open >> base) as u32 & ((1 << L) - 1);
-            if active == 0 {
+        // The slab test of every group of `L` rays first, as `RayBoxTest::enter` per lane (no
+        // operand is NaN: packet rays have finite origins and `1/d`, and a leaf's box is
+        // finite): bit `k` of `active[g]` for ray `L·g + k`.
+        let mut active = [0u32; PACKET / 4];
+        let groups = rays.len.div_ceil(L);
+        let mut any = 0;
+        for (g, active) in active.iter_mut().enumerate().take(groups) {
+            let base = g * L;
+            let open = (*open >> base) as u32 & ((1 << L) - 1);
+            if open == 0 {
                 continue;
             }
-            // The slab test, as `RayBoxTest::enter` per lane (no operand is NaN: packet
-            // rays have finite origins and `1/d`, and a leaf's box is finite).
             let mut near = lanes::<V>(&rays.box_t_min, base);
             let mut far = lanes::<V>(&rays.box_limit, base);
             let mut reach = V::splat(0.0);
@@ -92,73 +83,101 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
                 }
             }
             let pad = reach.mul(V::splat(SLAB_PAD));
-            active &= near.sub(pad).le_mask(far.add(pad));
-            if active == 0 {
+            *active = open & near.sub(pad).le_mask(far.add(pad));
+            any |= *active;
+        }
+        if any == 0 {
+            return;
+        }
+        // The leaf's triangles some line of the packet may cross (bit `k` for its `k`-th
+        // triangle, at most 64): where the rays' lines meet in one point, the others are culled
+        // once for the whole packet (only now that some ray enters the leaf's box: in large
+        // meshes most leaves the packet's frustum reaches are entered by none of its rays), and
+        // only where the leaf is large beside the packet (`LineBundle::worth_culling`).
+        let live = match &rays.bundle {
+            Some(bundle) if bundle.worth_culling(bounds) => {
+                let (mut live, mut first) = (0u64, 0);
+                for record in bvh.leaves.leaf(offset) {
+                    live |= (bundle.may_cross_record(&record) as u64) << first;
+                    first += record.triangles();
+                }
+                live
+            }
+            _ => u64::MAX,
+        };
+
+        // Record by record: its corners decoded and its vertices read once, then for each
+        // group its vertices in the rays' frames (once per vertex) and its triangles tested.
+        let mut table = [std::mem::MaybeUninit::<[V; 3]>::uninit(); RECORD_VERTICES];
+        let mut first = 0;
+        for record in bvh.leaves.leaf(offset) {
+            let (nv, nt) = (record.vertices(), record.triangles());
+            let todo = (live >> first) as u32 & ((1 << nt) - 1);
+            first += nt;
+            if todo == 0 {
                 continue;
             }
-            let live = *live.get_or_insert_with(|| match &rays.bundle {
-                Some(bundle) if bundle.worth_culling(bounds) => culled(bundle),
-                _ => u64::MAX,
-            });
-            if live == 0 {
-                return;
+            let mut corners = [[0usize; 3]; RECORD_TRIANGLES];
+            for (t, corners) in corners.iter_mut().enumerate().take(nt) {
+                *corners = record.corners(t);
             }
-
-            let shear = [
-                lanes::<V>(&rays.shear[0], base),
-                lanes::<V>(&rays.shear[1], base),
-                lanes::<V>(&rays.shear[2], base),
-            ];
-            let origin = [
-                lanes::<V>(&rays.origin[kx], base),
-                lanes::<V>(&rays.origin[ky], base),
-                lanes::<V>(&rays.origin[kz], base),
-            ];
-            let t_min = lanes::<V>(&rays.triangle_t_min, base);
-            'blocks: for (k, b) in
-                (first_block as usize..(first_block + blocks) as usize).enumerate()
-            {
-                let block = &bvh.blocks[b];
-                for (lane, &id) in bvh.ids[b].iter().enumerate() {
-                    if id == u32::MAX || live & (1 << (BLOCK * k + lane)) == 0 {
-                        continue;
-                    }
-                    let [p0, p1, p2] = &block.vertices;
-                    let test = WatertightLanes {
-                        origin,
-                        shear,
-                        abs_shear: [shear[0].abs(), shear[1].abs()],
+            let mut vertices = [[0.0f32; 3]; RECORD_VERTICES];
+            for (v, vertex) in vertices.iter_mut().enumerate().take(nv) {
+                let p = record.vertex(v);
+                *vertex = [p[kx], p[ky], p[kz]];
+            }
+            for (g, active) in active.iter_mut().enumerate().take(groups) {
+                if *active == 0 {
+                    continue;
+                }
+                let base = g * L;
+                let shear = [
+                    lanes::<V>(&rays.shear[0], base),
+                    lanes::<V>(&rays.shear[1], base),
+                    lanes::<V>(&rays.shear[2], base),
+                ];
+                let origin = [
+                    lanes::<V>(&rays.origin[kx], base),
+                    lanes::<V>(&rays.origin[ky], base),
+                    lanes::<V>(&rays.origin[kz], base),
+                ];
+                let abs_shear = [shear[0].abs(), shear[1].abs()];
+                let t_min = lanes::<V>(&rays.triangle_t_min, base);
+                // Rows `0..nv` written here; corners index only those.
+                for (row, p) in table.iter_mut().zip(&vertices).take(nv) {
+                    let p = [V::splat(p[0]), V::splat(p[1]), V::splat(p[2])];
+                    row.write(shear_point(origin, shear, p));
+                }
+                let mut todo = todo;
+                while todo != 0 {
+                    let t = todo.trailing_zeros() as usize;
+                    todo &= todo - 1;
+                    let [a, b, c] = corners[t];
+                    // Not `.map(..)`: a closure would not inherit the target features.
+                    let (a, b, c) =
+                        (table[a].assume_init(), table[b].assume_init(), table[c].assume_init());
+                    let sheared = ShearedLanes {
+                        x: [a[0], b[0], c[0]],
+                        y: [a[1], b[1], c[1]],
+                        z: [a[2], b[2], c[2]],
+                    };
+                    let ray_lanes = RayLanes {
+                        shear_z: shear[2],
+                        abs_shear,
                         t_min,
                         t_max: lanes::<V>(&rays.triangle_limit, base),
-                        vertices: [
-                            [
-                                V::splat(p0[kx][lane]),
-                                V::splat(p0[ky][lane]),
-                                V::splat(p0[kz][lane]),
-                            ],
-                            [
-                                V::splat(p1[kx][lane]),
-                                V::splat(p1[ky][lane]),
-                                V::splat(p1[kz][lane]),
-                            ],
-                            [
-                                V::splat(p2[kx][lane]),
-                                V::splat(p2[ky][lane]),
-                                V::splat(p2[kz][lane]),
-                            ],
-                        ],
                     };
-                    let decided = watertight_lanes(&test, active);
+                    let decided = watertight_sheared::<V, true>(&sheared, &ray_lanes, *active);
                     let mut hits = decided.hits;
-                    let (mut t, mut b1, mut b2) = ([0.0f32; L], [0.0f32; L], [0.0f32; L]);
+                    let (mut t_hit, mut b1, mut b2) = ([0.0f32; L], [0.0f32; L], [0.0f32; L]);
                     if hits != 0 {
-                        decided.t.store(t.as_mut_ptr());
+                        decided.t.store(t_hit.as_mut_ptr());
                         decided.b1.store(b1.as_mut_ptr());
                         decided.b2.store(b2.as_mut_ptr());
                     }
                     let mut undecided = decided.undecided;
                     if undecided != 0 {
-                        let [v0, v1, v2] = block.triangle(lane);
+                        let [v0, v1, v2] = record.triangle(t);
                         while undecided != 0 {
                             let j = undecided.trailing_zeros() as usize;
                             undecided &= undecided - 1;
@@ -166,7 +185,7 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
                             let limit = rays.triangle_limit[i];
                             if let Some(h) = rays.triangle_ray(i).intersect(v0, v1, v2, limit) {
                                 hits |= 1 << j;
-                                (t[j], b1[j], b2[j]) = (h.t, h.b1, h.b2);
+                                (t_hit[j], b1[j], b2[j]) = (h.t, h.b1, h.b2);
                             }
                         }
                     }
@@ -175,18 +194,22 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
                     }
                     if occlusion {
                         *open &= !((hits as u64) << base);
-                        active &= !hits;
-                        if active == 0 {
-                            break 'blocks;
+                        *active &= !hits;
+                        if *active == 0 {
+                            break;
                         }
                     } else {
+                        let id = record.id(t);
                         while hits != 0 {
                             let j = hits.trailing_zeros() as usize;
                             hits &= hits - 1;
-                            rays.offer(base + j, t[j], id, b1[j], b2[j]);
+                            rays.offer(base + j, t_hit[j], id, b1[j], b2[j]);
                         }
                     }
                 }
+            }
+            if occlusion && *open == 0 {
+                return;
             }
         }
     }

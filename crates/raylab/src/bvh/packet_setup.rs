@@ -9,7 +9,7 @@
 //! The values are those of `set_lane`, bit for bit (the test below compares them).
 
 use super::bounds::FAR_SCALE;
-use super::packet::{PACKET, PacketRays};
+use super::packet_rays::{PACKET, PacketRays};
 use crate::ray::Ray;
 
 /// A lane that cannot join a packet (nothing to hit, a zero direction component or a

@@ -1,14 +1,14 @@
 //! Moving geometry without a rebuild: the same tree, its boxes recomputed bottom-up.
 //!
 //! An animated or skinned mesh keeps its triangles and only moves its vertices. [`Bvh::refit`]
-//! writes the new vertices into the leaves' copies (and the flat list of a small scene), then
+//! writes the new vertices into the leaves' records anew (and the flat list of a small scene), then
 //! recomputes every child box from the leaves up. Nodes are stored depth first, every child after
 //! its parent, so one pass over the nodes from last to first sees each child before its parent.
 //! The answers stay exactly brute force's for the new positions (the box test only needs boxes
 //! that contain their triangles); only the tree's quality can suffer if the triangles move far
 //! from where they were built, which a rebuild restores.
 //!
-//! A triangle that loses its area or gets a non-finite vertex is parked: its lane gets NaN
+//! A triangle that loses its area or gets a non-finite vertex is parked: it gets NaN
 //! vertices, which no ray hits (as brute force never hits it). A triangle that was left out of
 //! the build for those reasons and now has area has no place in the tree: refit refuses, and the
 //! caller rebuilds.
@@ -16,7 +16,8 @@
 use glam::Vec3;
 
 use super::bounds::Bounds;
-use super::wide::{Child, WIDTH, decode};
+use super::leaf::Leaves;
+use super::wide::{Child, WIDTH, decode, encode_leaf};
 use super::{Bvh, flat};
 use crate::triangle::is_degenerate;
 
@@ -70,53 +71,62 @@ impl Bvh {
                 given: triangles.len(),
             });
         }
+        let leaf_refs: Vec<(usize, usize, u32)> = (self.wide.nodes.iter().enumerate())
+            .flat_map(|(index, node)| {
+                node.children.iter().enumerate().filter_map(move |(k, &child)| {
+                    match decode(child) {
+                        Child::Leaf(offset) => Some((index, k, offset)),
+                        _ => None,
+                    }
+                })
+            })
+            .collect();
         let mut in_tree = vec![false; triangles.len()];
-        for &id in self.wide.ids.iter().flatten().filter(|&&id| id != u32::MAX) {
-            in_tree[id as usize] = true;
+        for &(_, _, offset) in &leaf_refs {
+            for (id, _) in self.wide.leaves.leaf_triangles(offset) {
+                in_tree[id as usize] = true;
+            }
         }
         if let Some(i) = (0..triangles.len()).find(|&i| !in_tree[i] && hittable(triangles[i])) {
             return Err(RefitError::NewTriangle(i as u32));
         }
-        // The leaves' copies: hittable triangles as given, the rest parked on NaN.
+        // The leaves written anew (which vertices are shared may change): hittable triangles as
+        // given, the rest parked on NaN.
         let parked = [Vec3::NAN; 3];
         let mut indexed = 0;
-        for (block, ids) in self.wide.blocks.iter_mut().zip(&self.wide.ids) {
-            for (lane, &id) in ids.iter().enumerate().filter(|(_, id)| **id != u32::MAX) {
+        let mut leaves = Leaves::with_capacity(triangles.len());
+        let mut child_bounds = vec![[Bounds::EMPTY; WIDTH]; self.wide.nodes.len()];
+        let mut leaf = Vec::new();
+        for &(index, k, offset) in &leaf_refs {
+            leaf.clear();
+            let mut bounds = Bounds::EMPTY;
+            for (id, _) in self.wide.leaves.leaf_triangles(offset) {
                 let triangle = triangles[id as usize];
-                let keep = hittable(triangle);
-                indexed += keep as usize;
-                block.set(lane, if keep { triangle } else { parked });
+                if hittable(triangle) {
+                    indexed += 1;
+                    bounds = bounds.union(Bounds::of_triangle(triangle));
+                    leaf.push((id, triangle));
+                } else {
+                    leaf.push((id, parked));
+                }
             }
+            self.wide.nodes[index].children[k] = encode_leaf(leaves.push_leaf(&leaf));
+            child_bounds[index][k] = bounds;
         }
+        self.wide.leaves = leaves;
         if let Some(flat) = &mut self.flat {
             flat.refit(triangles);
         }
         // Boxes, children before parents.
-        let leaf_bounds = |first_block: u32, blocks: u32| {
-            let mut bounds = Bounds::EMPTY;
-            for b in first_block as usize..(first_block + blocks) as usize {
-                for (lane, &id) in self.wide.ids[b].iter().enumerate() {
-                    let triangle = self.wide.blocks[b].triangle(lane);
-                    if id != u32::MAX && hittable(triangle) {
-                        bounds = bounds.union(Bounds::of_triangle(triangle));
-                    }
-                }
-            }
-            bounds
-        };
         let mut node_bounds = vec![Bounds::EMPTY; self.wide.nodes.len()];
-        let mut child_bounds = vec![[Bounds::EMPTY; WIDTH]; self.wide.nodes.len()];
         for index in (0..self.wide.nodes.len()).rev() {
             let node = &self.wide.nodes[index];
             let mut union = Bounds::EMPTY;
             for (k, &child) in node.children.iter().enumerate() {
-                let bounds = match decode(child) {
-                    Child::Empty => continue,
-                    Child::Node(child) => node_bounds[child as usize],
-                    Child::Leaf { first_block, blocks } => leaf_bounds(first_block, blocks),
-                };
-                child_bounds[index][k] = bounds;
-                union = union.union(bounds);
+                if let Child::Node(child) = decode(child) {
+                    child_bounds[index][k] = node_bounds[child as usize];
+                }
+                union = union.union(child_bounds[index][k]);
             }
             node_bounds[index] = union;
         }
@@ -129,6 +139,7 @@ impl Bvh {
         }
         self.wide.root = self.wide.root_bounds();
         self.stats.indexed_triangles = indexed;
+        self.stats.leaf_bytes = self.wide.leaves.bytes();
         Ok(())
     }
 }

@@ -5,7 +5,7 @@
 //! the SSE2 version weighs the three axes at once, one per lane, and [`sweep_scalar`] is its twin.
 
 #[cfg(any(test, not(target_arch = "x86_64")))]
-use super::build::blocks;
+use super::build::records;
 use super::build::{Aabb, Bin, MAX_BINS};
 
 /// Bin counts up to this (the `fast` and `medium` presets' 8 and 16, `high`'s 32) sweep with
@@ -13,32 +13,36 @@ use super::build::{Aabb, Bin, MAX_BINS};
 const SMALL_BINS: usize = 32;
 
 /// The SAH sweep over binned primitives: the split position (axis, first bin of the right side)
-/// with the least area term `A_L·blocks(n_L) + A_R·blocks(n_R)`, and that term; the first such
+/// with the least area term `A_L·records(n_L, unit) + A_R·records(n_R, unit)`, and that term; the first such
 /// position in axis-major order among equals. Axes whose flag in `axes` is false (no extent) are
 /// skipped, and so are positions with an empty side.
 #[inline]
-pub(super) fn sweep(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f32)> {
+pub(super) fn sweep(
+    binned: &[[Bin; 3]],
+    axes: [bool; 3],
+    unit: u32,
+) -> Option<(usize, usize, f32)> {
     #[cfg(target_arch = "x86_64")]
     {
         // The per-position arrays on the stack are as long as the bins need: clearing 256
         // positions for every small node cost more than its sweep.
         if binned.len() <= SMALL_BINS {
             // SAFETY: SSE2 is part of x86-64.
-            unsafe { sweep_sse2::<SMALL_BINS>(binned, axes) }
+            unsafe { sweep_sse2::<SMALL_BINS>(binned, axes, unit) }
         } else {
             // SAFETY: SSE2 is part of x86-64.
-            unsafe { sweep_sse2::<MAX_BINS>(binned, axes) }
+            unsafe { sweep_sse2::<MAX_BINS>(binned, axes, unit) }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        sweep_scalar(binned, axes)
+        sweep_scalar(binned, axes, unit)
     }
 }
 
 /// [`sweep`] one axis at a time: the scalar twin.
 #[cfg(any(test, not(target_arch = "x86_64")))]
-fn sweep_scalar(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f32)> {
+fn sweep_scalar(binned: &[[Bin; 3]], axes: [bool; 3], unit: u32) -> Option<(usize, usize, f32)> {
     let bins = binned.len();
     let mut best: Option<(usize, usize, f32)> = None;
     // The right side's area term for each split position; zero where the right side is empty
@@ -54,7 +58,7 @@ fn sweep_scalar(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f
             count += bin.count;
             right_count[k] = count;
             right_cost[k] =
-                if count > 0 { bounds.half_area_nonempty() * blocks(count) } else { 0.0 };
+                if count > 0 { bounds.half_area_nonempty() * records(count, unit) } else { 0.0 };
         }
         let (mut left, mut left_count) = (Aabb::EMPTY, 0u32);
         for k in 1..bins {
@@ -64,7 +68,7 @@ fn sweep_scalar(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f
             if left_count == 0 || right_count[k] == 0 {
                 continue;
             }
-            let cost = left.half_area_nonempty() * blocks(left_count) + right_cost[k];
+            let cost = left.half_area_nonempty() * records(left_count, unit) + right_cost[k];
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, k, cost));
             }
@@ -85,6 +89,7 @@ fn sweep_scalar(binned: &[[Bin; 3]], axes: [bool; 3]) -> Option<(usize, usize, f
 unsafe fn sweep_sse2<const N: usize>(
     binned: &[[Bin; 3]],
     axes: [bool; 3],
+    unit: u32,
 ) -> Option<(usize, usize, f32)> {
     use std::arch::x86_64::*;
     let bins = binned.len();
@@ -109,9 +114,10 @@ unsafe fn sweep_sse2<const N: usize>(
             let dz = _mm_movelh_ps(t2, t3);
             _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dy), _mm_mul_ps(dy, dz)), _mm_mul_ps(dz, dx))
         };
-        // `⌈n/4⌉` as a float, exactly `blocks(n)`.
-        let blocks4 =
-            |n: __m128i| _mm_cvtepi32_ps(_mm_srli_epi32::<2>(_mm_add_epi32(n, _mm_set1_epi32(3))));
+        // `⌈n / 2^unit⌉` as a float, exactly `records(n, unit)`.
+        let (round_up, shift) = (_mm_set1_epi32((1 << unit) - 1), _mm_cvtsi32_si128(unit as i32));
+        let records_lanes =
+            |n: __m128i| _mm_cvtepi32_ps(_mm_srl_epi32(_mm_add_epi32(n, round_up), shift));
         let grow = |boxes: &mut [Aabb; 3], k: usize| {
             for (b, bin) in boxes.iter_mut().zip(&binned[k]) {
                 *b = b.union(bin.bounds);
@@ -127,7 +133,7 @@ unsafe fn sweep_sse2<const N: usize>(
             grow(&mut right, k);
             count = _mm_add_epi32(count, counts(k));
             right_count[k] = count;
-            let cost = _mm_mul_ps(areas(&right), blocks4(count));
+            let cost = _mm_mul_ps(areas(&right), records_lanes(count));
             // Zero where the side is empty (its box is, and its area not finite).
             right_cost[k] = _mm_and_ps(cost, _mm_castsi128_ps(_mm_cmpgt_epi32(count, zero_i)));
         }
@@ -143,7 +149,8 @@ unsafe fn sweep_sse2<const N: usize>(
         for k in 1..bins {
             grow(&mut left, k - 1);
             left_count = _mm_add_epi32(left_count, counts(k - 1));
-            let cost = _mm_add_ps(_mm_mul_ps(areas(&left), blocks4(left_count)), right_cost[k]);
+            let cost =
+                _mm_add_ps(_mm_mul_ps(areas(&left), records_lanes(left_count)), right_cost[k]);
             let both_sides = _mm_and_si128(
                 _mm_cmpgt_epi32(left_count, zero_i),
                 _mm_cmpgt_epi32(right_count[k], zero_i),
@@ -179,7 +186,8 @@ mod tests {
     use super::*;
 
     /// The SSE2 sweep picks the scalar twin's split, with the same cost bit for bit: random bins
-    /// (many empty), bin counts from 2 to 32, axes without extent, and copies of one bin on every
+    /// (many empty, counts up to 9 so that the cost units' rounding matters), bin counts from 2
+    /// to 32, both cost units, axes without extent, and copies of one bin on every
     /// axis (equal costs, where the first position and the lowest axis must win).
     #[cfg(target_arch = "x86_64")]
     #[test]
@@ -209,12 +217,14 @@ mod tests {
                 }
             }
             let axes = [next() < 0.9, next() < 0.9, next() < 0.9];
-            let scalar = sweep_scalar(&binned, axes);
+            // Both cost units: leaves of up to eight and of up to four.
+            let unit = [3, 2][case % 2];
+            let scalar = sweep_scalar(&binned, axes, unit);
             // SAFETY: SSE2 is part of x86-64.
-            let sse2 = unsafe { sweep_sse2::<MAX_BINS>(&binned, axes) };
+            let sse2 = unsafe { sweep_sse2::<MAX_BINS>(&binned, axes, unit) };
             let bits = |s: Option<(usize, usize, f32)>| s.map(|(a, k, c)| (a, k, c.to_bits()));
             // SAFETY: as above.
-            let short = unsafe { sweep_sse2::<SMALL_BINS>(&binned, axes) };
+            let short = unsafe { sweep_sse2::<SMALL_BINS>(&binned, axes, unit) };
             assert_eq!(bits(short), bits(sse2), "case {case}: short arrays");
             assert_eq!(bits(sse2), bits(scalar), "case {case}: {binned:?} {axes:?}");
             found += scalar.is_some() as usize;

@@ -279,10 +279,7 @@ fn the_tree_is_the_same_for_every_thread_count() {
             words.extend(node.planes.iter().flatten().map(|x| x.to_bits()));
             words.extend(node.children);
         }
-        for (block, ids) in bvh.wide.blocks.iter().zip(&bvh.wide.ids) {
-            words.extend(block.vertices.iter().flatten().flatten().map(|x| x.to_bits()));
-            words.extend(ids);
-        }
+        words.extend(bvh.wide.leaves.words());
         words
     };
     for (name, settings) in BuildSettings::PRESETS {
@@ -322,18 +319,12 @@ fn wide_trees_cover_every_triangle_once() {
                         assert!(within.min.cmple(b.min).all() && within.max.cmpge(b.max).all());
                         visit(bvh, child, b, seen, triangles);
                     }
-                    Child::Leaf { first_block, blocks } => {
-                        for block in first_block..first_block + blocks {
-                            for (lane, &id) in bvh.wide.ids[block as usize].iter().enumerate() {
-                                if id == u32::MAX {
-                                    continue;
-                                }
-                                seen[id as usize] += 1;
-                                let t = bvh.wide.blocks[block as usize].triangle(lane);
-                                assert_eq!(t, triangles[id as usize]);
-                                let tb = Bounds::of_triangle(t);
-                                assert!(b.min.cmple(tb.min).all() && b.max.cmpge(tb.max).all());
-                            }
+                    Child::Leaf(offset) => {
+                        for (id, t) in bvh.wide.leaves.leaf_triangles(offset) {
+                            seen[id as usize] += 1;
+                            assert_eq!(t, triangles[id as usize]);
+                            let tb = Bounds::of_triangle(t);
+                            assert!(b.min.cmple(tb.min).all() && b.max.cmpge(tb.max).all());
                         }
                     }
                 }
@@ -359,26 +350,25 @@ fn empty_and_single_triangle_trees_answer() {
     assert!(bvh.occluded(&Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z)));
 }
 
-/// Two clusters of four triangles 100 apart: the root has a leaf of one block per cluster, so
+/// Two clusters of eight triangles 100 apart: the root has a leaf of one record per cluster, so
 /// what a ray visits is known exactly.
 #[test]
-fn traversal_counts_are_the_nodes_leaves_and_blocks_visited() {
-    let quad = |x: f32| {
-        let p = |u: f32, v: f32| Vec3::new(x + u, v, 0.0);
-        [
-            [p(0.0, 0.0), p(1.0, 0.0), p(0.0, 1.0)],
-            [p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)],
-            [p(0.0, 1.0), p(1.0, 1.0), p(0.0, 2.0)],
-            [p(1.0, 1.0), p(1.0, 2.0), p(0.0, 2.0)],
-        ]
+fn traversal_counts_are_the_nodes_leaves_and_records_visited() {
+    // A strip of four quads (eight triangles over ten vertices: one record).
+    let strip = |x: f32| {
+        let p = move |u: f32, v: f32| Vec3::new(x + u, v, 0.0);
+        (0..4).flat_map(move |k| {
+            let v = k as f32 * 0.5;
+            [[p(0.0, v), p(1.0, v), p(0.0, v + 0.5)], [p(1.0, v), p(1.0, v + 0.5), p(0.0, v + 0.5)]]
+        })
     };
-    let triangles: Vec<[Vec3; 3]> = quad(0.0).into_iter().chain(quad(100.0)).collect();
+    let triangles: Vec<[Vec3; 3]> = strip(0.0).chain(strip(100.0)).collect();
     let bvh = Bvh::build(&triangles, &BuildSettings { flat_limit: 0, ..BuildSettings::MEDIUM });
-    let stats = |rays: u64, nodes: u64, leaves: u64, blocks: u64| TraversalStats {
+    let stats = |rays: u64, nodes: u64, leaves: u64, records: u64| TraversalStats {
         rays,
         nodes,
         leaves,
-        blocks,
+        records,
     };
     let cases = [
         // Into the first cluster: the root, then its leaf.
@@ -405,78 +395,6 @@ fn traversal_counts_are_the_nodes_leaves_and_blocks_visited() {
     assert_eq!(total, stats(4, 3, 2, 2));
     assert_eq!(total + stats(1, 2, 3, 4), stats(5, 5, 5, 6));
     assert_eq!(total.per_ray(), [0.75, 0.5, 0.5]);
-}
-
-/// The SSE block kernel decides every lane as the scalar test does, with the same `t` and
-/// barycentrics bit for bit; lanes it leaves undecided are exactly those the scalar test must
-/// recompute in double precision.
-#[cfg(target_arch = "x86_64")]
-#[test]
-fn sse2_block_kernel_agrees_with_its_scalar_twin() {
-    use super::kernels::{SseBlockRay, TriangleRay, block_hits_scalar, block_hits_sse};
-    use crate::triangle::{TriangleBlock, WatertightRay};
-    let mut rng = Lcg(11);
-    let mut decided_hits = 0;
-    let mut undecided_lanes = 0;
-    for case in 0..20_000 {
-        // On a coarse grid half of the time, so that edge functions are exactly zero.
-        let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
-        let triangles: Vec<[Vec3; 3]> = (0..4)
-            .map(|_| {
-                let p = snap(rng.vec() * 4.0 - 2.0);
-                [p, snap(p + rng.vec() * 2.0 - 1.0), snap(p + rng.vec() * 2.0 - 1.0)]
-            })
-            .filter(|&t| !crate::triangle::is_degenerate(t))
-            .collect();
-        if triangles.is_empty() {
-            continue;
-        }
-        let block = TriangleBlock::<4>::pack(triangles.iter().copied())[0];
-        let [a, b, c] = triangles[case % triangles.len()];
-        let target = match case % 3 {
-            0 => a,
-            1 => a.lerp(b, rng.next()),
-            _ => a.lerp(b, rng.next()).lerp(c, rng.next()),
-        };
-        // Now and then start just off the surface, where the conservative `t > 0` bound decides.
-        let origin = match case % 4 {
-            3 => target + (rng.vec() * 2.0 - 1.0) * [1e-5, 1e-6, 1e-7][case % 3],
-            _ => snap(rng.vec() * 8.0 - 4.0),
-        };
-        if origin == target {
-            continue;
-        }
-        let mut ray = Ray::new(origin, target - origin);
-        ray.t_min = if case % 5 == 0 { 0.5 * rng.next() } else { 0.0 };
-        let ray = WatertightRay::new(&ray);
-        for t_max in [f32::INFINITY, 1.0, 0.5 + rng.next()] {
-            let scalar = block_hits_scalar(&ray, &block, t_max);
-            let prepared = TriangleRay { ray, block: SseBlockRay::new(&ray) };
-            let simd = block_hits_sse(&prepared, &block, t_max);
-            assert_eq!(simd.hits & simd.undecided, 0);
-            let mut resolved = simd.hits;
-            for lane in 0..4 {
-                if simd.undecided & (1 << lane) != 0 {
-                    undecided_lanes += 1;
-                    let [v0, v1, v2] = block.triangle(lane);
-                    if ray.intersect(v0, v1, v2, t_max).is_some() {
-                        resolved |= 1 << lane;
-                    }
-                }
-                if simd.hits & (1 << lane) != 0 {
-                    decided_hits += 1;
-                    let same = |x: f32, y: f32| x.to_bits() == y.to_bits();
-                    assert!(same(simd.t[lane], scalar.t[lane]), "t {simd:?} {scalar:?}");
-                    assert!(
-                        same(simd.b1[lane], scalar.b1[lane])
-                            && same(simd.b2[lane], scalar.b2[lane])
-                    );
-                }
-            }
-            assert_eq!(resolved, scalar.hits, "case {case}, t_max {t_max}: {simd:?} vs {scalar:?}");
-        }
-    }
-    assert!(decided_hits > 10_000 && undecided_lanes > 1000, "{decided_hits} {undecided_lanes}");
 }
 
 /// Every flat kernel (SSE2, AVX2, AVX-512, as this CPU allows) gives exactly its scalar twin's

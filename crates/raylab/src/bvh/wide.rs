@@ -9,10 +9,11 @@
 //! - `EMPTY` (`u32::MAX`): an unused slot; its box is empty (`min = +∞`, `max = −∞`), so it is
 //!   never hit and needs no special case in the kernels;
 //! - top bit clear: the index of an interior [`WideNode`];
-//! - top bit set: a leaf; bits 27..=30 hold the number of 4-triangle blocks minus one (a leaf has
-//!   1 to 16 blocks), bits 0..=26 the index of its first block (below `2²⁷ − 1`, so that no leaf encodes as `EMPTY`).
+//! - top bit set: a leaf; bits 0..=30 hold the word offset of its first record in the leaf arena
+//!   ([`Leaves`], which describes the records), below `2³¹ − 1` so that no leaf encodes as
+//!   `EMPTY`.
 //!
-//! For example `0x9000_0005` is a leaf of 3 blocks starting at block 5.
+//! For example `0x8000_0011` is a leaf whose first record starts at word 17 of the arena.
 //!
 //! # Collapsing
 //! Each wide node takes a binary node's two children and repeatedly opens the interior child of
@@ -23,8 +24,8 @@
 use glam::Vec3;
 
 use super::bounds::Bounds;
-use super::build::{BLOCK, BinaryBvh};
-use crate::triangle::TriangleBlock;
+use super::build::BinaryBvh;
+use super::leaf::Leaves;
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 8;
@@ -40,17 +41,17 @@ pub(crate) struct WideNode {
 
 pub(crate) const EMPTY: u32 = u32::MAX;
 const LEAF_BIT: u32 = 1 << 31;
-const COUNT_SHIFT: u32 = 27;
-const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
-/// The most 4-triangle blocks one leaf may hold.
-pub(crate) const MAX_LEAF_BLOCKS: usize = 16;
+const OFFSET_MASK: u32 = LEAF_BIT - 1;
+/// The most triangles one leaf may hold (packets cull a leaf's triangles in one `u64` mask).
+pub(crate) const MAX_LEAF_TRIANGLES: usize = 64;
 
 /// A decoded child reference.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Child {
     Empty,
     Node(u32),
-    Leaf { first_block: u32, blocks: u32 },
+    /// The word offset of the leaf's first record in [`WideBvh::leaves`].
+    Leaf(u32),
 }
 
 #[inline]
@@ -60,15 +61,14 @@ pub(crate) fn decode(child: u32) -> Child {
     } else if child & LEAF_BIT == 0 {
         Child::Node(child)
     } else {
-        Child::Leaf { first_block: child & FIRST_MASK, blocks: ((child >> COUNT_SHIFT) & 0xF) + 1 }
+        Child::Leaf(child & OFFSET_MASK)
     }
 }
 
-fn encode_leaf(first_block: usize, blocks: usize) -> u32 {
-    debug_assert!((1..=MAX_LEAF_BLOCKS).contains(&blocks));
-    // `first_block = FIRST_MASK` with 16 blocks would encode as `EMPTY`.
-    assert!(first_block < FIRST_MASK as usize, "too many triangles for one BVH (2^29)");
-    LEAF_BIT | ((blocks as u32 - 1) << COUNT_SHIFT) | first_block as u32
+pub(crate) fn encode_leaf(offset: u32) -> u32 {
+    // `offset = OFFSET_MASK` would encode as `EMPTY`.
+    assert!(offset < OFFSET_MASK, "leaf arena beyond 2^31 words: too many triangles for one BVH");
+    LEAF_BIT | offset
 }
 
 impl WideNode {
@@ -105,10 +105,8 @@ impl WideNode {
 pub(crate) struct WideBvh {
     /// Depth first; the root is node 0 (a tree always has a root node, possibly all empty).
     pub nodes: Vec<WideNode>,
-    /// Leaf triangles, four per block, in leaf order; unused lanes are NaN.
-    pub blocks: Vec<TriangleBlock<BLOCK>>,
-    /// The caller's index of each triangle in `blocks` (unused lanes: `u32::MAX`).
-    pub ids: Vec<[u32; BLOCK]>,
+    /// The leaves' records: their triangles and the caller's indices of them.
+    pub leaves: Leaves,
     /// The box around everything (the root's children): single rays' box margins are bounded
     /// inside it ([`RayBoxTest::margin`](super::RayBoxTest::margin)).
     pub root: Bounds,
@@ -131,8 +129,7 @@ pub(crate) fn collapse(
 ) -> WideBvh {
     let mut wide = WideBvh {
         nodes: Vec::with_capacity(binary.nodes.len() / 4 + 1),
-        blocks: Vec::with_capacity(binary.order.len() / 2 + 1),
-        ids: Vec::with_capacity(binary.order.len() / 2 + 1),
+        leaves: Leaves::with_capacity(binary.order.len()),
         root: Bounds::EMPTY,
     };
     wide.nodes.push(WideNode::UNUSED);
@@ -194,23 +191,14 @@ impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Collapser<'_, T, I> {
         }
     }
 
-    /// Packs binary leaf `node`'s triangles into blocks; returns its reference.
+    /// Writes binary leaf `node`'s triangles as records; returns its reference.
     fn emit_leaf(&self, node: usize, wide: &mut WideBvh) -> u32 {
         let leaf = self.binary.nodes[node];
         let first = leaf.first_or_right as usize;
         let prims = &self.binary.order[first..first + leaf.count as usize];
-        let first_block = wide.blocks.len();
-        for chunk in prims.chunks(BLOCK) {
-            let mut block = TriangleBlock::EMPTY;
-            let mut ids = [u32::MAX; BLOCK];
-            for (lane, &prim) in chunk.iter().enumerate() {
-                block.set(lane, (self.triangle)(prim));
-                ids[lane] = (self.prim_ids)(prim);
-            }
-            wide.blocks.push(block);
-            wide.ids.push(ids);
-        }
-        encode_leaf(first_block, wide.blocks.len() - first_block)
+        let triangles: Vec<(u32, [Vec3; 3])> =
+            prims.iter().map(|&prim| ((self.prim_ids)(prim), (self.triangle)(prim))).collect();
+        encode_leaf(wide.leaves.push_leaf(&triangles))
     }
 }
 
@@ -220,12 +208,9 @@ mod tests {
 
     #[test]
     fn references_round_trip() {
-        assert_eq!(decode(encode_leaf(5, 3)), Child::Leaf { first_block: 5, blocks: 3 });
-        assert_eq!(encode_leaf(5, 3), 0x9000_0005);
-        assert_eq!(
-            decode(encode_leaf(FIRST_MASK as usize - 1, 16)),
-            Child::Leaf { first_block: FIRST_MASK - 1, blocks: 16 }
-        );
+        assert_eq!(decode(encode_leaf(17)), Child::Leaf(17));
+        assert_eq!(encode_leaf(17), 0x8000_0011);
+        assert_eq!(decode(encode_leaf(OFFSET_MASK - 1)), Child::Leaf(OFFSET_MASK - 1));
         assert_eq!(decode(7), Child::Node(7));
         assert_eq!(decode(EMPTY), Child::Empty);
     }
