@@ -142,18 +142,20 @@ impl LineBundle {
     #[inline(always)]
     pub fn may_cross_record(&self, record: &Record) -> u32 {
         let (nv, nt) = (record.vertices(), record.triangles());
+        let [x, y, z] = record.rows();
         let mut relative = [Vec3::ZERO; RECORD_VERTICES];
         for (v, relative) in relative.iter_mut().enumerate().take(nv) {
-            *relative = record.vertex(v) - self.apex;
+            *relative = Vec3::new(x[v], y[v], z[v]) - self.apex;
         }
         // `corner[j][axis][t]`: corner `j` of triangle `t` relative to the apex (zero past `nt`:
         // kept, and masked off below).
         let mut corner = [[[0.0f32; RECORD_TRIANGLES]; 3]; 3];
-        for t in 0..nt {
-            for (corner, v) in corner.iter_mut().zip(record.corners(t)) {
-                for (axis, row) in corner.iter_mut().enumerate() {
-                    row[t] = relative[v][axis];
-                }
+        for (corner, indices) in corner.iter_mut().zip(record.corner_rows()) {
+            for (t, &v) in indices.iter().enumerate() {
+                let p = relative[v as usize];
+                corner[0][t] = p.x;
+                corner[1][t] = p.y;
+                corner[2][t] = p.z;
             }
         }
         let (dir_lo, dir_hi) = (self.dir_lo.to_array(), self.dir_hi.to_array());

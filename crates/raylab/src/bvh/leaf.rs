@@ -106,7 +106,8 @@ impl Leaves {
         self.words.extend(bytes[..3 * nt].chunks(4).map(|chunk| {
             let mut word = [0u8; 4];
             word[..chunk.len()].copy_from_slice(chunk);
-            u32::from_le_bytes(word)
+            // In memory order, so that the words' memory holds the bytes in order.
+            u32::from_ne_bytes(word)
         }));
         self.words.extend(triangles.iter().map(|&(id, _)| id));
     }
@@ -239,32 +240,45 @@ impl<'a> Record<'a> {
         bytes.wrapping_add(corner * self.triangles())
     }
 
-    /// Coordinate `axis` of vertex `v`.
+    /// The vertex table's coordinate rows `[x, y, z]`, [`vertices`](Self::vertices) floats each.
     #[inline(always)]
-    fn coordinate(&self, axis: usize, v: usize) -> f32 {
-        f32::from_bits(self.words[1 + axis * self.vertices() + v])
+    pub fn rows(&self) -> [&'a [f32]; 3] {
+        let nv = self.vertices();
+        let table = &self.words[1..1 + 3 * nv];
+        // SAFETY: `f32` has the size and alignment of `u32`, and every bit pattern is an `f32`.
+        let table: &'a [f32] =
+            unsafe { std::slice::from_raw_parts(table.as_ptr().cast(), table.len()) };
+        let (x, rest) = table.split_at(nv);
+        let (y, z) = rest.split_at(nv);
+        [x, y, z]
     }
 
-    /// The index bytes' word `k`.
+    /// The corner rows: `corner_rows()[c][t]` is the table index of corner `c` of triangle `t`
+    /// (each below [`vertices`](Self::vertices)).
     #[inline(always)]
-    fn index_byte(&self, k: usize) -> usize {
-        let word = self.words[1 + 3 * self.vertices() + k / 4];
-        (word >> (8 * (k % 4)) & 0xFF) as usize
+    pub fn corner_rows(&self) -> [&'a [u8]; 3] {
+        let (nv, nt) = (self.vertices(), self.triangles());
+        let words = &self.words[1 + 3 * nv..1 + 3 * nv + (3 * nt).div_ceil(4)];
+        // SAFETY: the words' memory holds `4·len >= 3·nt` initialized bytes, and `u8` has
+        // alignment 1 (the bytes were stored in memory order: `u32::from_ne_bytes`).
+        let bytes: &'a [u8] = unsafe { std::slice::from_raw_parts(words.as_ptr().cast(), 3 * nt) };
+        let (a, rest) = bytes.split_at(nt);
+        let (b, c) = rest.split_at(nt);
+        [a, b, c]
     }
 
     /// Vertex `v` of the table.
     #[inline(always)]
     pub fn vertex(&self, v: usize) -> Vec3 {
-        debug_assert!(v < self.vertices());
-        Vec3::new(self.coordinate(0, v), self.coordinate(1, v), self.coordinate(2, v))
+        let [x, y, z] = self.rows();
+        Vec3::new(x[v], y[v], z[v])
     }
 
     /// The table indices of triangle `t`'s corners (each below [`vertices`](Self::vertices)).
     #[inline(always)]
     pub fn corners(&self, t: usize) -> [usize; 3] {
-        debug_assert!(t < self.triangles());
-        let nt = self.triangles();
-        [0, 1, 2].map(|corner| self.index_byte(corner * nt + t))
+        let [a, b, c] = self.corner_rows();
+        [a[t] as usize, b[t] as usize, c[t] as usize]
     }
 
     /// The corners of triangle `t`, as the caller gave them.
@@ -380,8 +394,8 @@ mod tests {
         assert_eq!(leaves.bytes(), (17 + PAD_WORDS) * 4);
         assert_eq!(leaves.words[0], 0x0000_0204);
         // v0 = [p, r], v1 = [q, q], v2 = [r, s]: bytes 0, 2, 1, 1, 2, 3.
-        assert_eq!(leaves.words[13], u32::from_le_bytes([0, 2, 1, 1]));
-        assert_eq!(leaves.words[14], u32::from_le_bytes([2, 3, 0, 0]));
+        assert_eq!(leaves.words[13], u32::from_ne_bytes([0, 2, 1, 1]));
+        assert_eq!(leaves.words[14], u32::from_ne_bytes([2, 3, 0, 0]));
         assert_eq!(&leaves.words[15..17], &[7, 9]);
         let back: Vec<_> = leaves.leaf_triangles(0).collect();
         assert_eq!(back, vec![(7, [p, q, r]), (9, [r, q, s])]);

@@ -7,7 +7,7 @@
 use super::bounds::{Bounds, FAR_SCALE, Frustum, SLAB_PAD};
 use super::kernels::plane_rows;
 use super::lanes::Lanes;
-use super::leaf::{RECORD_TRIANGLES, RECORD_VERTICES};
+use super::leaf::RECORD_VERTICES;
 use super::packet_rays::{PACKET, PacketRays};
 use super::watertight_lanes::{RayLanes, ShearedLanes, shear_point, watertight_sheared};
 use super::wide::{WideBvh, WideNode};
@@ -54,7 +54,9 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
     ];
     let [kx, ky, kz] = rays.k;
     // SAFETY (the whole function): the caller's guarantee; every load reads `L` lanes from
-    // `base`, and `base + L <= PACKET` because `PACKET` is a multiple of `L`.
+    // `base`, and `base + L <= PACKET` because `PACKET` is a multiple of `L`; the table's rows
+    // are read only where `shared`, after rows `0..nv` were written, and corners index below
+    // `nv`.
     unsafe {
         // The slab test of every group of `L` rays first, as `RayBoxTest::enter` per lane (no
         // operand is NaN: packet rays have finite origins and `1/d`, and a leaf's box is
@@ -117,15 +119,9 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
             if todo == 0 {
                 continue;
             }
-            let mut corners = [[0usize; 3]; RECORD_TRIANGLES];
-            for (t, corners) in corners.iter_mut().enumerate().take(nt) {
-                *corners = record.corners(t);
-            }
-            let mut vertices = [[0.0f32; 3]; RECORD_VERTICES];
-            for (v, vertex) in vertices.iter_mut().enumerate().take(nv) {
-                let p = record.vertex(v);
-                *vertex = [p[kx], p[ky], p[kz]];
-            }
+            let corner_rows = record.corner_rows();
+            let rows = record.rows();
+            let (x, y, z) = (rows[kx], rows[ky], rows[kz]);
             for (g, active) in active.iter_mut().enumerate().take(groups) {
                 if *active == 0 {
                     continue;
@@ -143,19 +139,48 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
                 ];
                 let abs_shear = [shear[0].abs(), shear[1].abs()];
                 let t_min = lanes::<V>(&rays.triangle_t_min, base);
-                // Rows `0..nv` written here; corners index only those.
-                for (row, p) in table.iter_mut().zip(&vertices).take(nv) {
-                    let p = [V::splat(p[0]), V::splat(p[1]), V::splat(p[2])];
-                    row.write(shear_point(origin, shear, p));
+                // Each vertex into the rays' frames once (rows `0..nv` of the table, which
+                // corners index), where that is less work than each corner of the triangles to
+                // test (about 13 against 21 instructions: where they share vertices, as in a
+                // mesh; the small scenes' leaves of separate quads do not). The same values
+                // either way.
+                let shared = 13 * nv < 21 * todo.count_ones() as usize;
+                if shared {
+                    for (v, row) in table.iter_mut().enumerate().take(nv) {
+                        let p = [V::splat(x[v]), V::splat(y[v]), V::splat(z[v])];
+                        row.write(shear_point(origin, shear, p));
+                    }
                 }
                 let mut todo = todo;
                 while todo != 0 {
                     let t = todo.trailing_zeros() as usize;
                     todo &= todo - 1;
-                    let [a, b, c] = corners[t];
-                    // Not `.map(..)`: a closure would not inherit the target features.
-                    let (a, b, c) =
-                        (table[a].assume_init(), table[b].assume_init(), table[c].assume_init());
+                    let [a, b, c] = corner_rows.map(|row| row[t] as usize);
+                    // Not `.map(..)` on vectors: a closure would not inherit the target
+                    // features.
+                    let (a, b, c) = if shared {
+                        (table[a].assume_init(), table[b].assume_init(), table[c].assume_init())
+                    } else {
+                        let vertex = |v: usize| [x[v], y[v], z[v]];
+                        let [a, b, c] = [vertex(a), vertex(b), vertex(c)];
+                        (
+                            shear_point(
+                                origin,
+                                shear,
+                                [V::splat(a[0]), V::splat(a[1]), V::splat(a[2])],
+                            ),
+                            shear_point(
+                                origin,
+                                shear,
+                                [V::splat(b[0]), V::splat(b[1]), V::splat(b[2])],
+                            ),
+                            shear_point(
+                                origin,
+                                shear,
+                                [V::splat(c[0]), V::splat(c[1]), V::splat(c[2])],
+                            ),
+                        )
+                    };
                     let sheared = ShearedLanes {
                         x: [a[0], b[0], c[0]],
                         y: [a[1], b[1], c[1]],
