@@ -16,7 +16,7 @@ use glam::{Vec2, Vec3};
 use image::RgbImage;
 use rayon::prelude::*;
 
-use crate::camera::Camera;
+use crate::camera::{Camera, RayGenerator};
 use crate::film::{Display, Film, FilmError, to_8bit_clamped};
 use crate::integrator::Integrator;
 use crate::ray::Ray;
@@ -128,10 +128,63 @@ fn add_pass(
     debug_assert_eq!(pixels.len(), width * camera.height as usize);
     let rays = camera.rays();
     let kind = settings.sampler.unwrap_or_else(|| integrator.sampler_kind());
-    let (tile_width, band_rows) = tile_shape(settings.tile);
+    let (_, band_rows) = tile_shape(settings.tile);
+    #[cfg(target_arch = "x86_64")]
+    let avx2 = std::arch::is_x86_feature_detected!("avx2");
     pixels.par_chunks_mut(width * band_rows).enumerate().for_each(|(band, pixels)| {
-        let first_row = band * band_rows;
+        let band = Band {
+            camera: &rays,
+            has_lens: camera.has_lens(),
+            kind,
+            settings,
+            sample,
+            width,
+            first_row: band * band_rows,
+        };
+        #[cfg(target_arch = "x86_64")]
+        if avx2 {
+            // SAFETY: AVX2 was detected above.
+            unsafe { band.add_avx2(integrator, pixels) };
+            progress((pixels.len() / width) as u32);
+            return;
+        }
+        band.add(integrator, pixels);
+        progress((pixels.len() / width) as u32);
+    });
+}
+
+/// A band of whole rows of one pass ([`add_pass`]).
+struct Band<'a> {
+    camera: &'a RayGenerator,
+    has_lens: bool,
+    kind: SamplerKind,
+    settings: &'a SampleSettings,
+    sample: u32,
+    /// Pixels per row.
+    width: usize,
+    first_row: usize,
+}
+
+impl Band<'_> {
+    /// [`add`](Self::add) compiled with AVX2 (camera rays, shading and accumulation in wider
+    /// registers; the same operations, so the same bits: Rust never fuses a multiply and an
+    /// add).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn add_avx2(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) {
+        self.add(integrator, pixels)
+    }
+
+    /// Adds this pass's sample of every pixel of the band (`pixels`, its rows) tile by tile.
+    #[inline(always)]
+    fn add(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) {
+        let (rays, kind, settings, sample) = (self.camera, self.kind, self.settings, self.sample);
+        let (width, first_row, has_lens) = (self.width, self.first_row, self.has_lens);
         let rows = pixels.len() / width;
+        let (tile_width, _) = tile_shape(settings.tile);
         // A tile's rays, samplers and colours, on the stack.
         let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_TILE_PIXELS];
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
@@ -147,7 +200,7 @@ fn add_pass(
                     *sampler = Sampler::new(kind, settings.seed, (x as u32, y as u32), sample);
                     let offset = settings.filter.offset(sampler.pixel_2d());
                     let film = Vec2::new(x as f32 + offset.x, y as f32 + offset.y);
-                    *ray = if camera.has_lens() {
+                    *ray = if has_lens {
                         rays.lens_ray(film, sampler.next_2d())
                     } else {
                         rays.ray(film.x, film.y)
@@ -162,8 +215,7 @@ fn add_pass(
                 }
             }
         }
-        progress(rows as u32);
-    });
+    }
 }
 
 /// A tile shape that fits the tile arrays: both sides at least 1, at most 64 pixels.
@@ -343,5 +395,65 @@ mod tests {
         let mut one = [0u32; 1];
         accumulator.write_0rgb(&mut one, 1, 1);
         assert_eq!(one, [left]);
+    }
+
+    /// A band renders the same bits compiled for AVX2 as for the baseline instruction set, for
+    /// the lab's integrator and the path tracer (a pinhole and a lens), two samples each.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn bands_are_the_same_bits_with_avx2() {
+        use crate::bvh::Bvh;
+        use crate::integrator::{Lab, Path, PathSettings, Stage};
+        use crate::scene::Scene;
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("skipped: this CPU has no AVX2 (its band is never used)");
+            return;
+        }
+        let scene = Scene::built_in("cornell").expect("the lab scene");
+        let bvh = Bvh::new(&scene.vertices());
+        let lab = Lab::new(&scene, &bvh, Stage::Ambient);
+        let path = Path::new(&scene, &bvh, PathSettings::default());
+        let (width, height) = (48, 24);
+        for lens in [false, true] {
+            let mut camera = crate::Camera::lab(width, height);
+            if lens {
+                camera.aperture_radius = 0.05;
+                camera.focus_distance = 3.0;
+            }
+            let integrators: [&dyn Integrator; 2] = [&lab, &path];
+            for integrator in integrators {
+                let rays = camera.rays();
+                let settings = SampleSettings::default();
+                let kind = integrator.sampler_kind();
+                let mut pixels = [vec![Vec3::ZERO; width as usize * height as usize], vec![]];
+                pixels[1] = pixels[0].clone();
+                let (_, band_rows) = tile_shape(settings.tile);
+                let chunk = width as usize * band_rows;
+                for sample in 0..2 {
+                    let [base, wide] = &mut pixels;
+                    for (b, (base, wide)) in
+                        base.chunks_mut(chunk).zip(wide.chunks_mut(chunk)).enumerate()
+                    {
+                        let band = Band {
+                            camera: &rays,
+                            has_lens: camera.has_lens(),
+                            kind,
+                            settings: &settings,
+                            sample,
+                            width: width as usize,
+                            first_row: b * band_rows,
+                        };
+                        band.add(integrator, base);
+                        // SAFETY: AVX2 was detected above.
+                        unsafe { band.add_avx2(integrator, wide) };
+                    }
+                }
+                let bits = |p: &[Vec3]| -> Vec<[u32; 3]> {
+                    p.iter().map(|v| v.to_array().map(f32::to_bits)).collect()
+                };
+                assert!(pixels[0].iter().any(|p| *p != Vec3::ZERO));
+                assert_eq!(bits(&pixels[0]), bits(&pixels[1]), "lens {lens}");
+            }
+        }
     }
 }
