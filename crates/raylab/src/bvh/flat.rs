@@ -152,73 +152,37 @@ mod x86 {
 
     use super::*;
     use crate::bvh::lanes::{LaneMask, Lanes};
-    use crate::bvh::watertight_lanes::{LaneHits, WatertightLanes, watertight_lanes_with};
+    use crate::bvh::watertight_lanes::{LaneHits, RayBroadcast, watertight_lanes_with};
 
-    /// The ray's part of the lane test, broadcast once per query.
-    struct RayLanes<V> {
-        origin: [V; 3],
-        shear: [V; 3],
-        abs_shear: [V; 2],
-        t_min: V,
-        axes: [usize; 3],
-    }
-
-    impl<V: Lanes> RayLanes<V> {
-        /// # Safety
-        /// The CPU must support `V`'s instruction set.
-        #[inline(always)]
-        unsafe fn new(ray: &WatertightRay) -> Self {
-            let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
-            // SAFETY: the caller's guarantee.
-            unsafe {
-                RayLanes {
-                    origin: [
-                        V::splat(ray.origin[kx]),
-                        V::splat(ray.origin[ky]),
-                        V::splat(ray.origin[kz]),
-                    ],
-                    shear: [V::splat(ray.shear_x), V::splat(ray.shear_y), V::splat(ray.shear_z)],
-                    abs_shear: [V::splat(ray.shear_x.abs()), V::splat(ray.shear_y.abs())],
-                    t_min: V::splat(ray.t_min),
-                    axes: [kx, ky, kz],
-                }
-            }
-        }
-
-        /// The lane test of lanes `first..first + W` of `block` for hits below `t_max`.
-        ///
-        /// # Safety
-        /// The CPU must support `V`'s instruction set, `V` must hold `W` floats, and `first` must
-        /// be a multiple of `W` below [`FLAT_LANES`] (rows are 64-byte aligned, so every load is
-        /// aligned to the register's size).
-        #[inline(always)]
-        unsafe fn test<const W: usize>(
-            &self,
-            block: &FlatBlock,
-            first: usize,
-            t_max: f32,
-        ) -> LaneHits<V> {
-            debug_assert!(first.is_multiple_of(W) && first + W <= FLAT_LANES);
-            let [kx, ky, kz] = self.axes;
-            let rows = &block.triangles.vertices;
-            // SAFETY: the caller's guarantee; `first + W <= 16` keeps every load in its row.
-            unsafe {
-                let row = |j: usize, axis: usize| V::load(rows[j][axis][first..].as_ptr());
-                let lanes = WatertightLanes {
-                    origin: self.origin,
-                    shear: self.shear,
-                    abs_shear: self.abs_shear,
-                    t_min: self.t_min,
-                    t_max: V::splat(t_max),
-                    vertices: [
-                        [row(0, kx), row(0, ky), row(0, kz)],
-                        [row(1, kx), row(1, ky), row(1, kz)],
-                        [row(2, kx), row(2, ky), row(2, kz)],
-                    ],
-                };
-                let mask = (block.lanes >> first) & ((1u32 << W) - 1);
-                watertight_lanes_with::<V, true>(&lanes, mask)
-            }
+    /// The lane test of lanes `first..first + W` of `block` for hits below `t_max`.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set, `V` must hold `W` floats, and `first` must
+    /// be a multiple of `W` below [`FLAT_LANES`] (rows are 64-byte aligned, so every load is
+    /// aligned to the register's size).
+    #[inline(always)]
+    unsafe fn test<V: Lanes, const W: usize>(
+        ray: &RayBroadcast<V>,
+        block: &FlatBlock,
+        first: usize,
+        t_max: f32,
+    ) -> LaneHits<V> {
+        debug_assert!(first.is_multiple_of(W) && first + W <= FLAT_LANES);
+        let [kx, ky, kz] = ray.k;
+        let rows = &block.triangles.vertices;
+        // SAFETY: the caller's guarantee; `first + W <= 16` keeps every load in its row.
+        unsafe {
+            let row = |j: usize, axis: usize| V::load(rows[j][axis][first..].as_ptr());
+            let lanes = ray.with_vertices(
+                [
+                    [row(0, kx), row(0, ky), row(0, kz)],
+                    [row(1, kx), row(1, ky), row(1, kz)],
+                    [row(2, kx), row(2, ky), row(2, kz)],
+                ],
+                t_max,
+            );
+            let mask = (block.lanes >> first) & ((1u32 << W) - 1);
+            watertight_lanes_with::<V, true>(&lanes, mask)
         }
     }
 
@@ -243,7 +207,7 @@ mod x86 {
         // SAFETY (the whole body): the caller's guarantee; `first` steps by `W` below 16, ids
         // are as aligned as the rows, and every store writes `W` floats into an array of `W`.
         unsafe {
-            let lanes = RayLanes::<V>::new(&watertight);
+            let lanes = RayBroadcast::<V>::new(&watertight);
             let mut best_t = V::splat(f32::INFINITY);
             let mut best_b1 = V::splat(0.0);
             let mut best_b2 = V::splat(0.0);
@@ -253,7 +217,7 @@ mod x86 {
             let mut rare = None;
             for block in &flat.blocks {
                 for first in (0..FLAT_LANES).step_by(W) {
-                    let decided = lanes.test::<W>(block, first, ray.t_max);
+                    let decided = test::<V, W>(&lanes, block, first, ray.t_max);
                     let nearer = decided.hit_mask.and(decided.t.lt(best_t));
                     best_t = V::select(nearer, decided.t, best_t);
                     best_b1 = V::select(nearer, decided.b1, best_b1);
@@ -310,11 +274,11 @@ mod x86 {
         }
         let watertight = WatertightRay::new(ray);
         // SAFETY: the caller's guarantee.
-        let lanes = unsafe { RayLanes::<V>::new(&watertight) };
+        let lanes = unsafe { RayBroadcast::<V>::new(&watertight) };
         for block in &flat.blocks {
             for first in (0..FLAT_LANES).step_by(W) {
                 // SAFETY: the caller's guarantee; `first` steps by `W` below 16.
-                let decided = unsafe { lanes.test::<W>(block, first, ray.t_max) };
+                let decided = unsafe { test::<V, W>(&lanes, block, first, ray.t_max) };
                 if decided.hits != 0
                     || watertight.any_lane_hits(
                         &block.triangles,

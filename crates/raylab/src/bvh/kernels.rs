@@ -197,8 +197,9 @@ mod x86 {
 
     use super::*;
     use crate::bvh::lanes::Lanes;
-    use crate::bvh::leaf_kernels::{RecordRay, record_hits_avx2, record_hits_sse};
+    use crate::bvh::leaf_kernels::{record_hits_avx2, record_hits_sse};
     use crate::bvh::packet_kernels::{FrustumBroadcast, packet_leaf_lanes};
+    use crate::bvh::watertight_lanes::RayBroadcast;
 
     /// Eight children with two 4-wide SSE halves: every x86-64 CPU has SSE2.
     pub(crate) struct Sse;
@@ -282,17 +283,17 @@ mod x86 {
             }
         }
 
-        type RecordRay = RecordRay<__m128>;
+        type RecordRay = RayBroadcast<__m128>;
 
         #[inline(always)]
-        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RecordRay<__m128> {
+        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RayBroadcast<__m128> {
             // SAFETY: SSE2 is part of x86-64.
-            unsafe { RecordRay::new(ray) }
+            unsafe { RayBroadcast::new(ray) }
         }
 
         #[inline(always)]
         unsafe fn record_hits(
-            ray: &TriangleRay<RecordRay<__m128>>,
+            ray: &TriangleRay<RayBroadcast<__m128>>,
             record: &Record,
             t_max: f32,
         ) -> RecordHits {
@@ -375,17 +376,17 @@ mod x86 {
             }
         }
 
-        type RecordRay = RecordRay<__m256>;
+        type RecordRay = RayBroadcast<__m256>;
 
         #[inline(always)]
-        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RecordRay<__m256> {
+        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RayBroadcast<__m256> {
             // SAFETY: the caller checked AVX2 support (this function's contract).
-            unsafe { RecordRay::new(ray) }
+            unsafe { RayBroadcast::new(ray) }
         }
 
         #[inline(always)]
         unsafe fn record_hits(
-            ray: &TriangleRay<RecordRay<__m256>>,
+            ray: &TriangleRay<RayBroadcast<__m256>>,
             record: &Record,
             t_max: f32,
         ) -> RecordHits {
@@ -461,17 +462,17 @@ mod x86 {
             unsafe { Avx2::enter_frustum(node, frustum, t_limit) }
         }
 
-        type RecordRay = RecordRay<__m256>;
+        type RecordRay = RayBroadcast<__m256>;
 
         #[inline(always)]
-        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RecordRay<__m256> {
+        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RayBroadcast<__m256> {
             // SAFETY: the caller checked AVX-512 F support (this function's contract).
-            unsafe { RecordRay::new(ray) }
+            unsafe { RayBroadcast::new(ray) }
         }
 
         #[inline(always)]
         unsafe fn record_hits(
-            ray: &TriangleRay<RecordRay<__m256>>,
+            ray: &TriangleRay<RayBroadcast<__m256>>,
             record: &Record,
             t_max: f32,
         ) -> RecordHits {

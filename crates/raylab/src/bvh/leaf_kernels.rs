@@ -23,56 +23,9 @@ use std::arch::x86_64::*;
 use super::kernels::TriangleRay;
 use super::lanes::Lanes;
 use super::leaf::{RECORD_TRIANGLES, RECORD_VERTICES, Record, RecordHits};
-use super::watertight_lanes::{RayLanes, ShearedLanes, shear_point, watertight_sheared};
-use crate::triangle::WatertightRay;
-
-/// A ray's triangle-test values broadcast into registers `V`, permuted to its `(kx, ky, kz)`.
-#[derive(Clone, Copy)]
-pub(crate) struct RecordRay<V> {
-    origin: [V; 3],
-    shear: [V; 3],
-    abs_shear: [V; 2],
-    t_min: V,
-    k: [usize; 3],
-}
-
-impl<V: Lanes> RecordRay<V> {
-    /// # Safety
-    /// The CPU must support `V`'s instruction set.
-    #[inline(always)]
-    pub(crate) unsafe fn new(ray: &WatertightRay) -> Self {
-        let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
-        // SAFETY: the caller's guarantee.
-        unsafe {
-            RecordRay {
-                origin: [
-                    V::splat(ray.origin[kx]),
-                    V::splat(ray.origin[ky]),
-                    V::splat(ray.origin[kz]),
-                ],
-                shear: [V::splat(ray.shear_x), V::splat(ray.shear_y), V::splat(ray.shear_z)],
-                abs_shear: [V::splat(ray.shear_x.abs()), V::splat(ray.shear_y.abs())],
-                t_min: V::splat(ray.t_min),
-                k: [kx, ky, kz],
-            }
-        }
-    }
-
-    /// What the test needs of the ray besides the corners, below `t_max`.
-    ///
-    /// # Safety
-    /// The CPU must support `V`'s instruction set.
-    #[inline(always)]
-    unsafe fn lanes(&self, t_max: f32) -> RayLanes<V> {
-        RayLanes {
-            shear_z: self.shear[2],
-            abs_shear: self.abs_shear,
-            t_min: self.t_min,
-            // SAFETY: the caller's guarantee.
-            t_max: unsafe { V::splat(t_max) },
-        }
-    }
-}
+use super::watertight_lanes::{
+    LaneHits, RayBroadcast, ShearedLanes, shear_point, watertight_sheared,
+};
 
 /// The bits of the first `n` lanes (`n <= 8`).
 #[inline(always)]
@@ -143,7 +96,7 @@ unsafe fn pick16_avx512(low: __m256, high: __m256, index: __m256i) -> __m256 {
 /// The CPU must support AVX2, and AVX-512 F and VL if `TWO_TABLE`.
 #[inline(always)]
 pub(crate) unsafe fn record_hits_avx2<const TWO_TABLE: bool>(
-    ray: &TriangleRay<RecordRay<__m256>>,
+    ray: &TriangleRay<RayBroadcast<__m256>>,
     record: &Record,
     t_max: f32,
 ) -> RecordHits {
@@ -211,17 +164,28 @@ pub(crate) unsafe fn record_hits_avx2<const TWO_TABLE: bool>(
         };
         let decided =
             watertight_sheared::<__m256, true>(&sheared, &r.lanes(t_max), first_lanes(nt));
-        let mut out = RecordHits {
-            hits: decided.hits,
-            undecided: decided.undecided,
-            ..RecordHits::default()
-        };
-        if decided.hits != 0 {
-            decided.t.store(out.t.as_mut_ptr());
-            decided.b1.store(out.b1.as_mut_ptr());
-            decided.b2.store(out.b2.as_mut_ptr());
-        }
+        let mut out = RecordHits::default();
+        merge(&mut out, &decided, 0);
         out
+    }
+}
+
+/// Adds a pass's decisions for triangles `first..` (as many as `V` has lanes) to `out`.
+///
+/// # Safety
+/// The CPU must support `V`'s instruction set; `first` plus `V`'s lanes must not pass
+/// [`RECORD_TRIANGLES`].
+#[inline(always)]
+unsafe fn merge<V: Lanes>(out: &mut RecordHits, decided: &LaneHits<V>, first: usize) {
+    out.hits |= decided.hits << first;
+    out.undecided |= decided.undecided << first;
+    if decided.hits != 0 {
+        // SAFETY: the caller's guarantee: each store writes within the arrays of 8.
+        unsafe {
+            decided.t.store(out.t.as_mut_ptr().add(first));
+            decided.b1.store(out.b1.as_mut_ptr().add(first));
+            decided.b2.store(out.b2.as_mut_ptr().add(first));
+        }
     }
 }
 
@@ -241,7 +205,7 @@ unsafe fn pick4_sse(row: &[f32; RECORD_VERTICES], bytes: *const u8) -> __m128 {
 /// The record's hits with SSE2 (every x86-64): four triangles per pass.
 #[inline(always)]
 pub(crate) fn record_hits_sse(
-    ray: &TriangleRay<RecordRay<__m128>>,
+    ray: &TriangleRay<RayBroadcast<__m128>>,
     record: &Record,
     t_max: f32,
 ) -> RecordHits {
@@ -285,13 +249,7 @@ pub(crate) fn record_hits_sse(
             };
             let lanes = first_lanes((nt - first).min(4));
             let decided = watertight_sheared::<__m128, true>(&sheared, &ray_lanes, lanes);
-            out.hits |= decided.hits << first;
-            out.undecided |= decided.undecided << first;
-            if decided.hits != 0 {
-                decided.t.store(out.t.as_mut_ptr().add(first));
-                decided.b1.store(out.b1.as_mut_ptr().add(first));
-                decided.b2.store(out.b2.as_mut_ptr().add(first));
-            }
+            merge(&mut out, &decided, first);
             first += 4;
         }
     }
@@ -308,17 +266,18 @@ mod tests {
     use crate::bvh::Isa;
     use crate::bvh::leaf::{Leaves, record_hits_scalar};
     use crate::ray::Ray;
+    use crate::triangle::WatertightRay;
 
     fn sse(ray: &WatertightRay, record: &Record, t_max: f32) -> RecordHits {
         // SAFETY: SSE2 is part of x86-64.
-        let lanes = unsafe { RecordRay::<__m128>::new(ray) };
+        let lanes = unsafe { RayBroadcast::<__m128>::new(ray) };
         record_hits_sse(&TriangleRay { ray: *ray, lanes }, record, t_max)
     }
 
     #[target_feature(enable = "avx2")]
     fn avx2(ray: &WatertightRay, record: &Record, t_max: f32) -> RecordHits {
         // SAFETY: compiled with AVX2, called only after detection.
-        let lanes = unsafe { RecordRay::<__m256>::new(ray) };
+        let lanes = unsafe { RayBroadcast::<__m256>::new(ray) };
         // SAFETY: as above.
         unsafe { record_hits_avx2::<false>(&TriangleRay { ray: *ray, lanes }, record, t_max) }
     }
@@ -326,7 +285,7 @@ mod tests {
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
     fn avx512(ray: &WatertightRay, record: &Record, t_max: f32) -> RecordHits {
         // SAFETY: compiled with AVX-512 F and VL, called only after detection.
-        let lanes = unsafe { RecordRay::<__m256>::new(ray) };
+        let lanes = unsafe { RayBroadcast::<__m256>::new(ray) };
         // SAFETY: as above.
         unsafe { record_hits_avx2::<true>(&TriangleRay { ray: *ray, lanes }, record, t_max) }
     }

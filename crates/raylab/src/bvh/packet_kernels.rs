@@ -53,10 +53,10 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
         if negative[2] { lo.z } else { hi.z },
     ];
     let [kx, ky, kz] = rays.k;
-    // SAFETY (the whole function): the caller's guarantee; every load reads `L` lanes from
-    // `base`, and `base + L <= PACKET` because `PACKET` is a multiple of `L`; the table's rows
-    // are read only where `shared`, after rows `0..nv` were written, and corners index below
-    // `nv`.
+    // For the whole function: every load reads `L` lanes from `base`, and `base + L <= PACKET`
+    // because `PACKET` is a multiple of `L`; the table's rows are read only where `shared`,
+    // after rows `0..nv` were written, and corners index below `nv`.
+    // SAFETY: the caller's guarantee of the instruction set, and the bounds above.
     unsafe {
         // The slab test of every group of `L` rays first, as `RayBoxTest::enter` per lane (no
         // operand is NaN: packet rays have finite origins and `1/d`, and a leaf's box is

@@ -6,7 +6,6 @@
 //! that a leaf record can transform each of its shared vertices once.
 
 use super::lanes::{LaneMask, Lanes};
-#[cfg(doc)]
 use crate::triangle::WatertightRay;
 
 /// The watertight test's inputs, one test per lane: the lanes are either triangles against one
@@ -191,5 +190,79 @@ pub(crate) unsafe fn watertight_sheared<V: Lanes, const EARLY_OUT: bool>(
         let hits = decidable & accept.bits();
         debug_assert_eq!(hits, hit_mask.bits() & lanes, "the mask is the bits");
         LaneHits { hits, hit_mask, undecided, t, b1: e1.mul(inv_det), b2: e2.mul(inv_det) }
+    }
+}
+
+/// A ray's part of the watertight test broadcast into registers `V` once per query, permuted to
+/// its `(kx, ky, kz)`: what the lane tests of leaf records and of the flat list start from.
+#[derive(Clone, Copy)]
+pub(crate) struct RayBroadcast<V> {
+    /// The origin's `kx`, `ky`, `kz` coordinates.
+    pub origin: [V; 3],
+    /// `shear_x`, `shear_y`, `shear_z`.
+    pub shear: [V; 3],
+    /// `|shear_x|`, `|shear_y|`.
+    pub abs_shear: [V; 2],
+    pub t_min: V,
+    /// `kx`, `ky`, `kz`.
+    pub k: [usize; 3],
+}
+
+impl<V: Lanes> RayBroadcast<V> {
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    pub(crate) unsafe fn new(ray: &WatertightRay) -> Self {
+        let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
+        // SAFETY: the caller's guarantee.
+        unsafe {
+            RayBroadcast {
+                origin: [
+                    V::splat(ray.origin[kx]),
+                    V::splat(ray.origin[ky]),
+                    V::splat(ray.origin[kz]),
+                ],
+                shear: [V::splat(ray.shear_x), V::splat(ray.shear_y), V::splat(ray.shear_z)],
+                abs_shear: [V::splat(ray.shear_x.abs()), V::splat(ray.shear_y.abs())],
+                t_min: V::splat(ray.t_min),
+                k: [kx, ky, kz],
+            }
+        }
+    }
+
+    /// What [`watertight_sheared`] needs of the ray besides the corners, below `t_max`.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    pub(crate) unsafe fn lanes(&self, t_max: f32) -> RayLanes<V> {
+        RayLanes {
+            shear_z: self.shear[2],
+            abs_shear: self.abs_shear,
+            t_min: self.t_min,
+            // SAFETY: the caller's guarantee.
+            t_max: unsafe { V::splat(t_max) },
+        }
+    }
+
+    /// The whole test's inputs for the triangles whose corners are `vertices` (permuted).
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    pub(crate) unsafe fn with_vertices(
+        &self,
+        vertices: [[V; 3]; 3],
+        t_max: f32,
+    ) -> WatertightLanes<V> {
+        WatertightLanes {
+            origin: self.origin,
+            shear: self.shear,
+            abs_shear: self.abs_shear,
+            t_min: self.t_min,
+            // SAFETY: the caller's guarantee.
+            t_max: unsafe { V::splat(t_max) },
+            vertices,
+        }
     }
 }
