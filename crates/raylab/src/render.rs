@@ -218,6 +218,24 @@ impl Band<'_> {
     }
 }
 
+/// Writes the words of a run of pixels.
+#[inline(always)]
+fn write_run(out: &mut [u32], sums: &[Vec3], word: &impl Fn(&Vec3) -> u32) {
+    for (w, s) in out.iter_mut().zip(sums) {
+        *w = word(s);
+    }
+}
+
+/// [`write_run`] compiled with AVX2 (the same operations, so the same words).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn write_run_avx2(out: &mut [u32], sums: &[Vec3], word: &impl Fn(&Vec3) -> u32) {
+    write_run(out, sums, word)
+}
+
 /// A tile shape that fits the tile arrays: both sides at least 1, at most 64 pixels.
 fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
     let height = (height as usize).clamp(1, MAX_TILE_PIXELS);
@@ -357,9 +375,18 @@ impl Accumulator {
         };
         if (source_width, source_height) == (width as usize, height as usize) {
             // Same size: pixel for pixel.
+            #[cfg(target_arch = "x86_64")]
+            let avx2 = std::arch::is_x86_feature_detected!("avx2");
             out.par_chunks_mut(ROWS_PER_TASK * source_width)
                 .zip(self.sum.pixels().par_chunks(ROWS_PER_TASK * source_width))
-                .for_each(|(out, sums)| out.iter_mut().zip(sums).for_each(|(w, s)| *w = word(s)));
+                .for_each(|(out, sums)| {
+                    #[cfg(target_arch = "x86_64")]
+                    if avx2 {
+                        // SAFETY: AVX2 was detected above.
+                        return unsafe { write_run_avx2(out, sums, &word) };
+                    }
+                    write_run(out, sums, &word)
+                });
             return;
         }
         let columns: Vec<usize> = (0..width as usize)
@@ -395,6 +422,36 @@ mod tests {
         let mut one = [0u32; 1];
         accumulator.write_0rgb(&mut one, 1, 1);
         assert_eq!(one, [left]);
+    }
+
+    /// Window words are the same compiled for AVX2 as for the baseline instruction set, for
+    /// values below 0, inside [0, 1], above 1, infinite and NaN, through the lab's clamp.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn window_words_are_the_same_with_avx2() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("skipped: this CPU has no AVX2 (its words are never written so)");
+            return;
+        }
+        let special = [-1.0, 0.0, 0.5, 1.0, 3.0, f32::INFINITY, f32::NAN, 1e-9, 0.999];
+        let sums: Vec<Vec3> = (0..999)
+            .map(|i| {
+                let v =
+                    |k: usize| special[(i * 7 + k * 3) % special.len()] * (1.0 + i as f32 * 1e-3);
+                Vec3::new(v(0), v(1), v(2))
+            })
+            .collect();
+        let factor = 0.75;
+        let word = |sum: &Vec3| {
+            let [r, g, b] = (*sum * factor).to_array().map(to_8bit_clamped);
+            (r as u32) << 16 | (g as u32) << 8 | b as u32
+        };
+        let (mut base, mut wide) = (vec![0u32; sums.len()], vec![1u32; sums.len()]);
+        write_run(&mut base, &sums, &word);
+        // SAFETY: AVX2 was detected above.
+        unsafe { write_run_avx2(&mut wide, &sums, &word) };
+        assert_eq!(base, wide);
+        assert!(base.iter().any(|&w| w & 0xFF == 0xFF) && base.iter().any(|&w| w & 0xFF == 0));
     }
 
     /// A band renders the same bits compiled for AVX2 as for the baseline instruction set, for
