@@ -76,6 +76,30 @@ pub fn size(text: &str) -> Result<Size, String> {
     Ok(Size { width: dimension("width", w)?, height: dimension("height", h)? })
 }
 
+/// Parses `I/N`: tile `I` of `N`, numbered from 0.
+pub fn tile(text: &str) -> Result<(u32, u32), String> {
+    let number = |value: &str| value.trim().parse::<u32>().ok();
+    match text.split_once('/').map(|(i, n)| (number(i), number(n))) {
+        Some((Some(i), Some(n))) if n >= 1 && i < n => Ok((i, n)),
+        Some((Some(i), Some(n))) => {
+            Err(format!("tile {i}/{n}: tiles are numbered 0 to N-1, N at least 1"))
+        }
+        _ => Err(format!("expected I/N, tile I of N numbered from 0 (like 0/4), not '{text}'")),
+    }
+}
+
+/// Parses `X0,Y0,X1,Y1`: four whole numbers, pixel corners (checked against the image later).
+pub fn region(text: &str) -> Result<[u32; 4], String> {
+    let numbers: Vec<Option<u32>> = text.split(',').map(|v| v.trim().parse().ok()).collect();
+    match numbers[..] {
+        [Some(x0), Some(y0), Some(x1), Some(y1)] => Ok([x0, y0, x1, y1]),
+        _ => Err(format!(
+            "expected X0,Y0,X1,Y1, four whole numbers (columns X0..X1 and rows Y0..Y1, the ends \
+             excluded, like 0,0,256,128), not '{text}'"
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,6 +122,17 @@ mod tests {
         assert!(vec3("1,2").is_err());
         assert!(vec3("1,2,3,4").is_err());
         assert!(vec3("1,nan,3").unwrap_err().contains("'nan'"));
+    }
+
+    #[test]
+    fn tiles_and_regions() {
+        assert_eq!(tile("0/4"), Ok((0, 4)));
+        assert_eq!(tile("3/4"), Ok((3, 4)));
+        assert!(tile("4/4").unwrap_err().contains("numbered 0 to N-1"));
+        assert!(tile("0/0").is_err() && tile("1").is_err() && tile("-1/4").is_err());
+        assert_eq!(region("0,8,16,24"), Ok([0, 8, 16, 24]));
+        assert!(region("0,8,16").unwrap_err().contains("X0,Y0,X1,Y1"));
+        assert!(region("0,8,16,-1").is_err());
     }
 
     #[test]

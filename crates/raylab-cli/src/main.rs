@@ -4,7 +4,9 @@
 mod args;
 mod bench_cmd;
 mod embree_columns;
+mod merge_cmd;
 mod render_cmd;
+mod render_state;
 mod scene_args;
 mod stats;
 mod system;
@@ -27,6 +29,9 @@ struct Cli {
 enum Command {
     /// Render a scene to an image file (the lab's Cornell box by default).
     Render(render_cmd::RenderArgs),
+    /// Assemble the parts of a render (`raylab render --tile I/N` or `--region`, .exr) into the
+    /// whole image, exactly as a single render would have made it.
+    Merge(merge_cmd::MergeArgs),
     /// Open the lab's interactive window: move the camera with the arrow keys and the light with
     /// W/S/A/D/Q/E while the picture follows in real time; still, it refines.
     View(view_cmd::ViewArgs),
@@ -55,11 +60,16 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
+        Command::Merge(args) => merge_cmd::run(&args),
         Command::View(args) => view_cmd::run(&args),
         Command::Bench(args) => bench_cmd::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(error) if error.is::<render_state::Interrupted>() => {
+            eprintln!("raylab: {error}");
+            ExitCode::from(render_state::INTERRUPTED_STATUS)
+        }
         Err(error) => {
             // One line: the context chain joined by ": ".
             eprintln!("raylab: error: {error:#}");

@@ -10,16 +10,27 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::film::{Display, ToneMap};
+use raylab::parts::{self, Part, PartHeader, PartKind};
 use raylab::{
-    Accumulator, Aov, AovKind, Film, Filter, Integrator, Lab, Path, PathSettings, SampleSettings,
-    SamplerKind, TriangleSampling, image_io,
+    Accumulator, Aov, AovKind, Film, Filter, Integrator, Lab, Path, PathSettings, Region,
+    SampleSettings, SamplerKind, TriangleSampling, image_io,
 };
 
 use raylab::camera::tidy;
 
 use crate::args;
+use crate::render_state::{self, Command, Interrupted};
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup, tidy_vec3};
 use crate::system;
+
+/// The AOV integrator's kind for `albedo`, `normals` or `depth`.
+fn aov_kind(name: &str) -> AovKind {
+    match name {
+        "albedo" => AovKind::Albedo,
+        "normals" => AovKind::Normals,
+        _ => AovKind::Depth,
+    }
+}
 
 /// Renders longer than this get a progress bar (on a terminal).
 const PROGRESS_AFTER: Duration = Duration::from_millis(500);
@@ -86,12 +97,81 @@ pub struct RenderArgs {
     /// Tone mapping of .png/.ppm output: clamp, reinhard or aces.
     #[arg(long, value_name = "NAME", default_value = "clamp")]
     tonemap: ToneMap,
+
+    /// Render only tile I of N (numbered from 0): a strip of whole rows, the first H mod N
+    /// strips one row taller. The output must be .exr; `raylab merge` assembles the tiles into
+    /// exactly the image a single render gives.
+    #[arg(long, value_name = "I/N", value_parser = args::tile, conflicts_with = "region")]
+    tile: Option<(u32, u32)>,
+
+    /// Render only columns X0..X1 and rows Y0..Y1 (from the top left, the ends excluded) into an
+    /// .exr part for `raylab merge`.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = args::region)]
+    region: Option<[u32; 4]>,
+
+    /// Write a checkpoint beside the output (NAME.checkpoint.exr) at most every SECONDS and on
+    /// an interrupt. Run the same command again (or `--resume` the checkpoint) to go on from it
+    /// to exactly the image of an uninterrupted render; a finished render deletes it.
+    #[arg(long, value_name = "SECONDS", value_parser = args::positive_f32)]
+    checkpoint: Option<f32>,
+
+    /// Go on with the render a checkpoint was written for, with the command line recorded in
+    /// it (run from the directory it was started in).
+    #[arg(long, value_name = "STATE", exclusive = true)]
+    resume: Option<PathBuf>,
+}
+
+/// A wrapper to parse a checkpoint's recorded arguments as `raylab render` would.
+#[derive(clap::Parser, Debug)]
+#[command(name = "raylab render", allow_negative_numbers = true)]
+struct Recorded {
+    #[command(flatten)]
+    args: RenderArgs,
 }
 
 /// The most samples per pixel `--spp` accepts.
 const MAX_SPP: u32 = 1 << 16;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
+    let Some(state) = &args.resume else {
+        let command = match args.checkpoint {
+            Some(_) => Some(Command::of_this_process()?),
+            None => None,
+        };
+        return render(args, command, None);
+    };
+    let part = parts::read_part(state)?;
+    if part.header.kind != PartKind::Checkpoint {
+        bail!("{}: not a checkpoint (it is a finished image)", state.display());
+    }
+    let Some(json) = &part.header.command else {
+        bail!("{}: the checkpoint records no command line to resume", state.display());
+    };
+    let command = Command::from_json(state, json)?;
+    let recorded = <Recorded as clap::Parser>::try_parse_from(
+        std::iter::once("raylab render".to_string()).chain(command.arguments.iter().cloned()),
+    )
+    .map_err(|e| {
+        let text = e.to_string();
+        anyhow::anyhow!(
+            "{}: its recorded command line no longer parses: {}",
+            state.display(),
+            text.lines().next().unwrap_or("").trim_start_matches("error: ")
+        )
+    })?;
+    std::env::set_current_dir(&command.directory).with_context(|| {
+        format!(
+            "{}: cannot go back to the directory the render started in, {}",
+            state.display(),
+            command.directory.display()
+        )
+    })?;
+    render(&recorded.args, Some(command), Some(part))
+}
+
+/// Renders as `args` say; with `command` (the command line to record), writes checkpoints;
+/// with `state`, goes on from that checkpoint.
+fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> Result<()> {
     // Everything that can be checked is checked before rendering, so no work is lost.
     let setup = args.scene.setup()?;
     let Setup { scene, camera, threads } = &setup;
@@ -130,8 +210,26 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         },
         ..SampleSettings::default()
     };
+    let region = match (args.tile, args.region) {
+        (Some((index, count)), _) => Region::tile(index, count, width, height)?,
+        (None, Some(corners)) => Region::new(corners, width, height)?,
+        (None, None) => Region::full(width, height),
+    };
+    let is_part = region != Region::full(width, height);
+    if is_part && format != image_io::ImageFormat::Exr {
+        bail!(
+            "--tile and --region write a part of the image for `raylab merge`, which needs \
+             OpenEXR: the output must end in .exr, not {}",
+            args.output.display()
+        );
+    }
+    let (region_width, region_height) = (region.width(), region.height());
     // The sums and their mean: two films.
-    system::check_memory(Film::bytes_needed(width, height).saturating_mul(2), width, height)?;
+    system::check_memory(
+        Film::bytes_needed(region_width, region_height).saturating_mul(2),
+        region_width,
+        region_height,
+    )?;
     let pool = setup.thread_pool()?;
 
     let start = Instant::now();
@@ -155,31 +253,123 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             &*path.insert(Path::new(scene, &accel, settings))
         }
         other => {
-            let kind = match other {
-                "albedo" => AovKind::Albedo,
-                "normals" => AovKind::Normals,
-                _ => AovKind::Depth,
-            };
-            aov = Aov::new(scene, &accel, kind);
+            aov = Aov::new(scene, &accel, aov_kind(other));
             &aov
         }
     };
-    let progress = Progress::new(height as u64 * spp as u64, width as u64, deadline);
+    // What the pixels depend on besides the scene: parts and checkpoints must agree on it.
+    let settings_text = format!(
+        "size={width}x{height}; camera={camera:?}; integrator={integrator_name}; \
+         stage={stage}; spp={spp}; seed={}; sampler={:?}; filter={:?}; \
+         max_depth={max_depth:?}; light_sampling={:?}",
+        sample_settings.seed,
+        sample_settings.sampler.unwrap_or_else(|| integrator.sampler_kind()),
+        sample_settings.filter,
+        args.light_sampling,
+    );
+    let header = PartHeader {
+        kind: PartKind::Image,
+        image: (width, height),
+        region,
+        samples: 0,
+        scene_hash: format!("{:016x}", scene.content_hash()),
+        settings: settings_text,
+        command: command.as_ref().map(Command::to_json),
+    };
+    let checkpoint = args.checkpoint.map(|seconds| {
+        (render_state::checkpoint_path(&args.output), Duration::from_secs_f32(seconds))
+    });
+    // A checkpoint to go on from: the one asked for, or this render's own from an earlier run.
+    let state = match (state, &checkpoint) {
+        (Some(part), _) => Some(part),
+        (None, Some((path, _))) if path.exists() => Some(parts::read_part(path)?),
+        _ => None,
+    };
+    let mut accumulator = match state {
+        Some(part) => {
+            let h = &part.header;
+            let problem = if h.kind != PartKind::Checkpoint {
+                Some("it is not a checkpoint".to_string())
+            } else if h.scene_hash != header.scene_hash {
+                Some("the scene has changed since".to_string())
+            } else if h.settings != header.settings {
+                Some(format!("it has other settings ('{}')", h.settings))
+            } else if (h.image, h.region) != (header.image, header.region) {
+                Some(format!("it holds region {} of {}×{}", h.region, h.image.0, h.image.1))
+            } else {
+                None
+            };
+            if let Some(problem) = problem {
+                bail!(
+                    "{}: cannot go on from this checkpoint: {problem}; delete it to start \
+                     afresh",
+                    part.path.display()
+                );
+            }
+            let sums = parts::beauty(&part.channels, region_width, region_height)
+                .context("a checkpoint has R, G and B channels")?;
+            eprintln!(
+                "raylab: going on from {} at {} samples per pixel",
+                part.path.display(),
+                h.samples
+            );
+            Accumulator::resume((width, height), region, sums, h.samples, sample_settings)?
+        }
+        None => {
+            let mut accumulator = Accumulator::for_region(width, height, region)?;
+            accumulator.settings = sample_settings;
+            accumulator
+        }
+    };
+    let first_sample = accumulator.samples();
+    let stop = render_state::interrupt_flag()?;
+    let passes = spp.saturating_sub(first_sample) as u64;
+    let progress = Progress::new(region_height as u64 * passes, region_width as u64, deadline);
     let start = Instant::now();
-    let (film, spp) = pool.install(|| -> Result<(Film, u32)> {
-        let mut accumulator = Accumulator::new(width, height)?;
-        accumulator.settings = sample_settings;
-        for _ in 0..spp {
+    let mut last_checkpoint = Instant::now();
+    let mut checkpoint_time = Duration::ZERO;
+    let write_checkpoint = |accumulator: &Accumulator, path: &PathBuf| -> Result<Duration> {
+        let start = Instant::now();
+        let state = PartHeader {
+            kind: PartKind::Checkpoint,
+            samples: accumulator.samples(),
+            ..header.clone()
+        };
+        let sums = parts::film_channels(accumulator.sums(), &[]);
+        parts::write_exr(path, (width, height), region, &sums, Some(&state))?;
+        Ok(start.elapsed())
+    };
+    let mut was_interrupted = false;
+    pool.install(|| -> Result<()> {
+        while accumulator.samples() < spp {
+            if render_state::interrupted(&stop) {
+                was_interrupted = true;
+                break;
+            }
             accumulator
                 .add_sample_with_progress(camera, integrator, &|rows| progress.advance(rows));
             if deadline.is_some_and(|limit| start.elapsed() >= limit) {
                 break;
             }
+            if let Some((path, every)) = &checkpoint
+                && last_checkpoint.elapsed() >= *every
+                && accumulator.samples() < spp
+            {
+                checkpoint_time += write_checkpoint(&accumulator, path)?;
+                last_checkpoint = Instant::now();
+            }
         }
-        Ok((accumulator.mean()?, accumulator.samples()))
+        Ok(())
     })?;
+    was_interrupted |= render_state::interrupted(&stop);
+    let spp = accumulator.samples();
+    if spp == 0 {
+        progress.finish();
+        bail!("interrupted before the first sample: nothing written");
+    }
+    let film = accumulator.mean()?;
     if let Some(discarded) = path.as_ref().map(Path::discarded_samples).filter(|&n| n > 0) {
-        let total = width as u64 * height as u64 * spp as u64;
+        let total = region.pixels() * (spp - first_sample) as u64;
         eprintln!(
             "raylab: warning: {discarded} of {total} samples were not finite (NaN or infinite \
              radiance, e.g. from a degenerate triangle or normal) and count as black"
@@ -188,14 +378,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // The extra layers, over the same samples.
     let mut layers = Vec::new();
     for name in &args.aov {
-        let kind = match name.as_str() {
-            "albedo" => AovKind::Albedo,
-            "normals" => AovKind::Normals,
-            _ => AovKind::Depth,
-        };
-        let aov = Aov::new(scene, &accel, kind);
+        let aov = Aov::new(scene, &accel, aov_kind(name));
         let layer = pool.install(|| -> Result<Film> {
-            let mut accumulator = Accumulator::new(width, height)?;
+            let mut accumulator = Accumulator::for_region(width, height, region)?;
             accumulator.settings = sample_settings;
             for _ in 0..spp {
                 accumulator.add_sample(camera, &aov);
@@ -212,13 +397,46 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     } else {
         Display { exposure: args.exposure, tone_map: args.tonemap, srgb: true }
     };
-    if layers.is_empty() {
-        image_io::save_film(&args.output, &film, &display)?;
-    } else {
-        let layers: Vec<(&str, &Film)> = layers.iter().map(|(name, film)| (*name, film)).collect();
-        image_io::save_exr_layers(&args.output, &film, &layers)?;
+    if was_interrupted && let Some((path, _)) = &checkpoint {
+        write_checkpoint(&accumulator, path)?;
     }
-    let samples = width as f64 * height as f64 * spp as f64;
+    if format == image_io::ImageFormat::Exr {
+        let layers: Vec<(&str, &Film)> = layers.iter().map(|(name, film)| (*name, film)).collect();
+        let channels = parts::film_channels(&film, &layers);
+        let header = PartHeader { samples: spp, command: None, ..header.clone() };
+        parts::write_exr(&args.output, (width, height), region, &channels, Some(&header))?;
+    } else {
+        image_io::save_film(&args.output, &film, &display)?;
+    }
+    if was_interrupted {
+        let mut report = format!(
+            "wrote {} with {spp} of {} samples per pixel",
+            args.output.display(),
+            args.spp.unwrap_or(spp.max(1))
+        );
+        if let Some((path, _)) = &checkpoint {
+            report += &format!("; resume with: raylab render --resume {}", path.display());
+        }
+        return Err(Interrupted { report }.into());
+    }
+    if let Some((path, _)) = &checkpoint
+        && path.exists()
+    {
+        std::fs::remove_file(path).with_context(|| {
+            format!(
+                "the render is written, but its checkpoint {} cannot be deleted",
+                path.display()
+            )
+        })?;
+    }
+    if checkpoint.is_some() && !checkpoint_time.is_zero() {
+        eprintln!(
+            "raylab: checkpoints took {:.1} ms of {:.1} ms",
+            checkpoint_time.as_secs_f64() * 1e3,
+            elapsed.as_secs_f64() * 1e3
+        );
+    }
+    let samples = region.pixels() as f64 * (spp - first_sample) as f64;
     let what = match integrator_name.as_str() {
         "lab" => format!("stage {stage}"),
         "path" => format!(

@@ -69,6 +69,31 @@ pub struct SurfaceInteraction {
 }
 
 impl Geometry {
+    /// Feeds every triangle's vertices, normals, shading normals, texture coordinates and
+    /// material into `hasher`, as their bits.
+    pub(crate) fn hash_into(&self, hasher: &mut xxhash_rust::xxh3::Xxh3) {
+        let mut buffer = Vec::with_capacity(1 << 16);
+        let mut put = |words: &mut dyn Iterator<Item = u32>| {
+            for word in words {
+                buffer.extend_from_slice(&word.to_le_bytes());
+                if buffer.len() >= 1 << 16 {
+                    hasher.update(&buffer);
+                    buffer.clear();
+                }
+            }
+            // A separator, so that arrays of different lengths cannot run into each other.
+            buffer.extend_from_slice(&u32::MAX.to_le_bytes());
+        };
+        let bits = |v: &Vec3| v.to_array().map(f32::to_bits);
+        put(&mut self.positions.iter().flat_map(bits));
+        put(&mut self.triangles.iter().flatten().copied());
+        put(&mut self.normals.iter().flat_map(bits));
+        put(&mut self.shading_normals.iter().flatten().flat_map(bits));
+        put(&mut self.uvs.iter().flatten().flat_map(|v| v.to_array().map(f32::to_bits)));
+        put(&mut self.material_ids.iter().copied());
+        hasher.update(&buffer);
+    }
+
     /// No triangles.
     pub fn new() -> Geometry {
         Geometry::default()

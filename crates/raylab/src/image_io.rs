@@ -15,6 +15,7 @@ use glam::Vec3;
 use image::{ImageEncoder, RgbImage};
 
 use crate::film::{Display, Film};
+use crate::region::Region;
 
 /// Why an image could not be written or read. Every message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -185,24 +186,7 @@ pub fn save_film(path: &Path, film: &Film, display: &Display) -> Result<(), Imag
         message,
     };
     match format {
-        ImageFormat::Exr => write_atomically(path, |out| {
-            use exr::prelude::*;
-            let (width, height) = (film.width() as usize, film.height() as usize);
-            let channels = SpecificChannels::rgb(|position: Vec2<usize>| {
-                let p = film.pixels()[position.y() * width + position.x()];
-                (p.x, p.y, p.z)
-            });
-            let layer = Layer::new(
-                (width, height),
-                LayerAttributes::named("rgb"),
-                Encoding::SMALL_LOSSLESS,
-                channels,
-            );
-            Image::from_layer(layer)
-                .write()
-                .to_buffered(out)
-                .map_err(|e| float_error(e.to_string()))
-        }),
+        ImageFormat::Exr => save_exr_layers(path, film, &[]),
         ImageFormat::Pfm => write_atomically(path, |out| {
             let write_error = |source: io::Error| ImageIoError::Io {
                 action: "write",
@@ -235,43 +219,9 @@ pub fn save_exr_layers(
     beauty: &Film,
     layers: &[(&str, &Film)],
 ) -> Result<(), ImageIoError> {
-    use exr::prelude::*;
-    let (width, height) = (beauty.width() as usize, beauty.height() as usize);
-    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
-    let mut add = |name: String, film: &Film, axis: usize| {
-        assert_eq!(
-            (film.width(), film.height()),
-            (beauty.width(), beauty.height()),
-            "{name}: a layer of the image's size"
-        );
-        let samples = film.pixels().iter().map(|p| p[axis]).collect();
-        channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(samples)));
-    };
-    for (axis, channel) in ["R", "G", "B"].into_iter().enumerate() {
-        add(channel.to_string(), beauty, axis);
-    }
-    for (name, film) in layers {
-        if *name == "depth" {
-            add("depth.Z".to_string(), film, 0);
-        } else {
-            for (axis, channel) in ["R", "G", "B"].into_iter().enumerate() {
-                add(format!("{name}.{channel}"), film, axis);
-            }
-        }
-    }
-    let layer = Layer::new(
-        (width, height),
-        LayerAttributes::named("rgb"),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(channels.into()),
-    );
-    write_atomically(path, |out| {
-        Image::from_layer(layer).write().to_buffered(out).map_err(|e| ImageIoError::Float {
-            action: "write",
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })
-    })
+    let (width, height) = (beauty.width(), beauty.height());
+    let channels = crate::parts::film_channels(beauty, layers);
+    crate::parts::write_exr(path, (width, height), Region::full(width, height), &channels, None)
 }
 
 /// Reads every channel of an OpenEXR file's first layer by name, row by row from the top.

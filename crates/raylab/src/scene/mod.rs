@@ -161,6 +161,18 @@ pub struct RenderSettings {
 }
 
 impl Scene {
+    /// A hash of everything in the scene that decides what a ray sees: every triangle (its
+    /// vertices, normals, texture coordinates and material), the materials and the lights, by
+    /// their bits (XXH3, 64 bits). Not the name, the camera or the render settings. Parts of one
+    /// render carry it, so that `raylab merge` can refuse parts of another scene.
+    pub fn content_hash(&self) -> u64 {
+        let mut hasher = xxhash_rust::xxh3::Xxh3::new();
+        self.geometry.hash_into(&mut hasher);
+        // `Debug` writes every float as the shortest text that reads back as the same bits.
+        hasher.update(format!("{:?}\n{:?}", self.materials, self.lights).as_bytes());
+        hasher.digest()
+    }
+
     /// A scene lit by one point light.
     pub fn new(
         name: &str,

@@ -17,10 +17,13 @@ use image::RgbImage;
 use rayon::prelude::*;
 
 use crate::camera::{Camera, RayGenerator};
-use crate::film::{Display, Film, FilmError, to_8bit_clamped};
+use crate::film::{Film, FilmError};
 use crate::integrator::Integrator;
 use crate::ray::Ray;
+use crate::region::Region;
 use crate::sampling::{Sampler, SamplerKind, square_to_truncated_gaussian};
+
+mod window;
 
 /// Rows per unit of parallel work by default: small enough to balance two cores; a band is
 /// traced in tiles of `tile`×`band` pixels, whose rays are coherent (the accelerator traces them
@@ -30,8 +33,6 @@ const BAND_ROWS: u32 = 8;
 const TILE: u32 = 8;
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
 const MAX_TILE_PIXELS: usize = 64;
-/// Rows per parallel task when writing a window's pixels.
-const ROWS_PER_TASK: usize = 16;
 
 /// The pixel filter: how a sample's position in and around its pixel is drawn. Samples are
 /// distributed as the filter, so every sample has the same weight (importance-sampled filtering).
@@ -115,17 +116,19 @@ pub fn render_samples(
     accumulator.mean()
 }
 
-/// Adds sample `sample` of every pixel to `pixels` (the camera's image, row by row).
+/// Adds sample `sample` of every pixel of `region` (of the camera's image) to `pixels`, the
+/// region's pixels row by row.
 fn add_pass(
     camera: &Camera,
     integrator: &(impl Integrator + ?Sized),
     settings: &SampleSettings,
     sample: u32,
+    region: Region,
     pixels: &mut [Vec3],
     progress: &(dyn Fn(u32) + Sync),
 ) {
-    let width = camera.width as usize;
-    debug_assert_eq!(pixels.len(), width * camera.height as usize);
+    let width = region.width() as usize;
+    debug_assert_eq!(pixels.len() as u64, region.pixels());
     let rays = camera.rays();
     let kind = settings.sampler.unwrap_or_else(|| integrator.sampler_kind());
     let (_, band_rows) = tile_shape(settings.tile);
@@ -139,7 +142,8 @@ fn add_pass(
             settings,
             sample,
             width,
-            first_row: band * band_rows,
+            first_row: region.y0 as usize + band * band_rows,
+            first_column: region.x0 as usize,
         };
         #[cfg(target_arch = "x86_64")]
         if avx2 {
@@ -162,7 +166,9 @@ struct Band<'a> {
     sample: u32,
     /// Pixels per row.
     width: usize,
+    /// The band's first row and column in the camera's image.
     first_row: usize,
+    first_column: usize,
 }
 
 impl Band<'_> {
@@ -183,6 +189,7 @@ impl Band<'_> {
     fn add(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) {
         let (rays, kind, settings, sample) = (self.camera, self.kind, self.settings, self.sample);
         let (width, first_row, has_lens) = (self.width, self.first_row, self.has_lens);
+        let first_column = self.first_column;
         let rows = pixels.len() / width;
         let (tile_width, _) = tile_shape(settings.tile);
         // A tile's rays, samplers and colours, on the stack.
@@ -197,6 +204,7 @@ impl Band<'_> {
             for y in first_row..first_row + rows {
                 for x in columns.clone() {
                     let (ray, sampler) = slot.next().expect("a tile's rays fit");
+                    let x = first_column + x;
                     *sampler = Sampler::new(kind, settings.seed, (x as u32, y as u32), sample);
                     let offset = settings.filter.offset(sampler.pixel_2d());
                     let film = Vec2::new(x as f32 + offset.x, y as f32 + offset.y);
@@ -218,24 +226,6 @@ impl Band<'_> {
     }
 }
 
-/// Writes the words of a run of pixels.
-#[inline(always)]
-fn write_run(out: &mut [u32], sums: &[Vec3], word: &impl Fn(&Vec3) -> u32) {
-    for (w, s) in out.iter_mut().zip(sums) {
-        *w = word(s);
-    }
-}
-
-/// [`write_run`] compiled with AVX2 (the same operations, so the same words).
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn write_run_avx2(out: &mut [u32], sums: &[Vec3], word: &impl Fn(&Vec3) -> u32) {
-    write_run(out, sums, word)
-}
-
 /// A tile shape that fits the tile arrays: both sides at least 1, at most 64 pixels.
 fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
     let height = (height as usize).clamp(1, MAX_TILE_PIXELS);
@@ -246,8 +236,13 @@ fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
 /// Samples added up pass by pass: a picture that refines while the camera stands still.
 #[derive(Clone, Debug)]
 pub struct Accumulator {
+    /// The sums of the region's pixels.
     sum: Film,
     samples: u32,
+    /// The camera's image size.
+    image: (u32, u32),
+    /// The part of the image rendered.
+    region: Region,
     /// How samples are drawn; change it only before the first sample.
     pub settings: SampleSettings,
 }
@@ -255,21 +250,81 @@ pub struct Accumulator {
 impl Accumulator {
     /// An empty accumulator for a `width×height` image.
     pub fn new(width: u32, height: u32) -> Result<Accumulator, FilmError> {
+        Accumulator::for_region(width, height, Region::full(width, height))
+    }
+
+    /// An empty accumulator for the pixels of `region` of a `width×height` image (see
+    /// [`Region`]): exactly the pixels the whole image's accumulator has there, bit for bit.
+    ///
+    /// # Panics
+    /// If the region is empty or reaches outside the image ([`Region::new`] checks both).
+    pub fn for_region(width: u32, height: u32, region: Region) -> Result<Accumulator, FilmError> {
+        assert!(
+            region.x0 < region.x1 && region.y0 < region.y1,
+            "the region {region} must not be empty"
+        );
+        assert!(
+            region.x1 <= width && region.y1 <= height,
+            "the region {region} must lie in the {width}×{height} image"
+        );
         Ok(Accumulator {
-            sum: Film::new(width, height)?,
+            sum: Film::new(region.width(), region.height())?,
             samples: 0,
+            image: (width, height),
+            region,
             settings: SampleSettings::default(),
         })
     }
 
-    /// Width in pixels.
+    /// An accumulator that goes on from `samples` samples whose sums are `sums` (a checkpoint's,
+    /// see [`sums`](Self::sums)): the next sample added is sample `samples`, so the picture is
+    /// the one an accumulator that never stopped would have.
+    ///
+    /// # Panics
+    /// As [`for_region`](Self::for_region), and if `sums` is not the region's size.
+    pub fn resume(
+        (width, height): (u32, u32),
+        region: Region,
+        sums: Film,
+        samples: u32,
+        settings: SampleSettings,
+    ) -> Result<Accumulator, FilmError> {
+        let mut accumulator = Accumulator::for_region(width, height, region)?;
+        assert_eq!(
+            (sums.width(), sums.height()),
+            (region.width(), region.height()),
+            "the sums must be the region's size"
+        );
+        accumulator.sum = sums;
+        accumulator.samples = samples;
+        accumulator.settings = settings;
+        Ok(accumulator)
+    }
+
+    /// Width in pixels of what it holds (the region's).
     pub fn width(&self) -> u32 {
         self.sum.width()
     }
 
-    /// Height in pixels.
+    /// Height in pixels of what it holds (the region's).
     pub fn height(&self) -> u32 {
         self.sum.height()
+    }
+
+    /// The size of the camera's whole image.
+    pub fn image_size(&self) -> (u32, u32) {
+        self.image
+    }
+
+    /// The part of the image it holds.
+    pub fn region(&self) -> Region {
+        self.region
+    }
+
+    /// The sum of every sample of each pixel so far (the region's pixels, row by row): with
+    /// [`samples`](Self::samples), all a checkpoint needs.
+    pub fn sums(&self) -> &Film {
+        &self.sum
     }
 
     /// Samples per pixel so far.
@@ -300,10 +355,11 @@ impl Accumulator {
     ) {
         assert_eq!(
             (camera.width, camera.height),
-            (self.width(), self.height()),
+            self.image,
             "the camera's image size must be the accumulator's"
         );
-        add_pass(camera, integrator, &self.settings, self.samples, self.sum.pixels_mut(), progress);
+        let (settings, sample, region) = (&self.settings, self.samples, self.region);
+        add_pass(camera, integrator, settings, sample, region, self.sum.pixels_mut(), progress);
         self.samples += 1;
     }
 
@@ -327,132 +383,11 @@ impl Accumulator {
     pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {
         self.mean()?.to_rgb8_clamped()
     }
-
-    /// Writes the mean into a `width×height` window buffer of `0x00RRGGBB` words, scaled to fill
-    /// it by nearest neighbour (a picture rendered at a fraction of the window's resolution fills
-    /// the window). Channels as in [`Film::to_rgb8_clamped`]. Runs on the current rayon pool.
-    ///
-    /// # Panics
-    /// If `out` does not hold `width×height` words.
-    pub fn write_0rgb(&self, out: &mut [u32], width: u32, height: u32) {
-        self.write_0rgb_shown(out, width, height, &Display::LAB);
-    }
-
-    /// [`write_0rgb`](Self::write_0rgb) through a display transform (the lab's is the clamp
-    /// without gamma).
-    ///
-    /// # Panics
-    /// If `out` does not hold `width×height` words.
-    pub fn write_0rgb_shown(&self, out: &mut [u32], width: u32, height: u32, display: &Display) {
-        let factor = self.mean_factor();
-        // One loop per conversion, so that the lab's clamp is inlined on its own.
-        if *display == Display::LAB {
-            self.write_words(out, width, height, |sum| {
-                (*sum * factor).to_array().map(to_8bit_clamped)
-            });
-        } else {
-            self.write_words(out, width, height, |sum| {
-                (*sum * factor).to_array().map(|v| display.level(v))
-            });
-        }
-    }
-
-    /// Writes `0x00RRGGBB` words of the levels `level` gives each pixel's sum, scaled by
-    /// nearest neighbour.
-    #[inline]
-    fn write_words(
-        &self,
-        out: &mut [u32],
-        width: u32,
-        height: u32,
-        level: impl Fn(&Vec3) -> [u8; 3] + Sync,
-    ) {
-        assert_eq!(out.len(), width as usize * height as usize, "a word per window pixel");
-        let (source_width, source_height) = (self.width() as usize, self.height() as usize);
-        let word = |sum: &Vec3| {
-            let [r, g, b] = level(sum);
-            (r as u32) << 16 | (g as u32) << 8 | b as u32
-        };
-        if (source_width, source_height) == (width as usize, height as usize) {
-            // Same size: pixel for pixel.
-            #[cfg(target_arch = "x86_64")]
-            let avx2 = std::arch::is_x86_feature_detected!("avx2");
-            out.par_chunks_mut(ROWS_PER_TASK * source_width)
-                .zip(self.sum.pixels().par_chunks(ROWS_PER_TASK * source_width))
-                .for_each(|(out, sums)| {
-                    #[cfg(target_arch = "x86_64")]
-                    if avx2 {
-                        // SAFETY: AVX2 was detected above.
-                        return unsafe { write_run_avx2(out, sums, &word) };
-                    }
-                    write_run(out, sums, &word)
-                });
-            return;
-        }
-        let columns: Vec<usize> = (0..width as usize)
-            .map(|x| (x * source_width / width as usize).min(source_width - 1))
-            .collect();
-        out.par_chunks_exact_mut(width as usize).enumerate().for_each(|(y, row)| {
-            let source_row = (y * source_height / height as usize).min(source_height - 1);
-            let sums = &self.sum.pixels()[source_row * source_width..][..source_width];
-            for (w, &x) in row.iter_mut().zip(&columns) {
-                *w = word(&sums[x]);
-            }
-        });
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn window_words_are_nearest_neighbour_and_clamped() {
-        let mut accumulator = Accumulator::new(2, 1).unwrap();
-        accumulator
-            .sum
-            .pixels_mut()
-            .copy_from_slice(&[Vec3::new(2.0, 1.0, 0.5), Vec3::new(-1.0, 0.0, 0.25)]);
-        accumulator.samples = 2;
-        let mut out = [0u32; 4 * 2];
-        accumulator.write_0rgb(&mut out, 4, 2);
-        let left = 255 << 16 | 128 << 8 | 64; // (1, 0.5, 0.25)
-        let right = 32; // (0, 0, 0.125)
-        assert_eq!(out, [left, left, right, right, left, left, right, right]);
-        let mut one = [0u32; 1];
-        accumulator.write_0rgb(&mut one, 1, 1);
-        assert_eq!(one, [left]);
-    }
-
-    /// Window words are the same compiled for AVX2 as for the baseline instruction set, for
-    /// values below 0, inside [0, 1], above 1, infinite and NaN, through the lab's clamp.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn window_words_are_the_same_with_avx2() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            eprintln!("skipped: this CPU has no AVX2 (its words are never written so)");
-            return;
-        }
-        let special = [-1.0, 0.0, 0.5, 1.0, 3.0, f32::INFINITY, f32::NAN, 1e-9, 0.999];
-        let sums: Vec<Vec3> = (0..999)
-            .map(|i| {
-                let v =
-                    |k: usize| special[(i * 7 + k * 3) % special.len()] * (1.0 + i as f32 * 1e-3);
-                Vec3::new(v(0), v(1), v(2))
-            })
-            .collect();
-        let factor = 0.75;
-        let word = |sum: &Vec3| {
-            let [r, g, b] = (*sum * factor).to_array().map(to_8bit_clamped);
-            (r as u32) << 16 | (g as u32) << 8 | b as u32
-        };
-        let (mut base, mut wide) = (vec![0u32; sums.len()], vec![1u32; sums.len()]);
-        write_run(&mut base, &sums, &word);
-        // SAFETY: AVX2 was detected above.
-        unsafe { write_run_avx2(&mut wide, &sums, &word) };
-        assert_eq!(base, wide);
-        assert!(base.iter().any(|&w| w & 0xFF == 0xFF) && base.iter().any(|&w| w & 0xFF == 0));
-    }
 
     /// A band renders the same bits compiled for AVX2 as for the baseline instruction set, for
     /// the lab's integrator and the path tracer (a pinhole and a lens), two samples each.
@@ -499,6 +434,7 @@ mod tests {
                             sample,
                             width: width as usize,
                             first_row: b * band_rows,
+                            first_column: 0,
                         };
                         band.add(integrator, base);
                         // SAFETY: AVX2 was detected above.
@@ -510,6 +446,44 @@ mod tests {
                 };
                 assert!(pixels[0].iter().any(|p| *p != Vec3::ZERO));
                 assert_eq!(bits(&pixels[0]), bits(&pixels[1]), "lens {lens}");
+            }
+        }
+    }
+
+    /// An accumulator of a region holds exactly the pixels of the whole image's there, for the
+    /// lab's integrator and the path tracer, regions at odd places and of odd sizes.
+    #[test]
+    fn regions_are_the_whole_images_pixels() {
+        use crate::bvh::Bvh;
+        use crate::integrator::{Lab, Path, PathSettings, Stage};
+        use crate::scene::Scene;
+        let scene = Scene::built_in("cornell").expect("the lab scene");
+        let bvh = Bvh::new(&scene.vertices());
+        let lab = Lab::new(&scene, &bvh, Stage::Ambient);
+        let path = Path::new(&scene, &bvh, PathSettings::default());
+        let (width, height) = (37, 29);
+        let camera = crate::Camera::lab(width, height);
+        let integrators: [&dyn Integrator; 2] = [&lab, &path];
+        for integrator in integrators {
+            let mut whole = Accumulator::new(width, height).unwrap();
+            for _ in 0..2 {
+                whole.add_sample(&camera, integrator);
+            }
+            for corners in [[0, 0, 37, 29], [3, 5, 20, 6], [36, 0, 37, 29], [9, 11, 31, 28]] {
+                let region = Region::new(corners, width, height).unwrap();
+                let mut part = Accumulator::for_region(width, height, region).unwrap();
+                for _ in 0..2 {
+                    part.add_sample(&camera, integrator);
+                }
+                let mean = part.mean().unwrap();
+                let all = whole.mean().unwrap();
+                for y in region.y0..region.y1 {
+                    for x in region.x0..region.x1 {
+                        let (a, b) = (mean.pixel(x - region.x0, y - region.y0), all.pixel(x, y));
+                        assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits));
+                    }
+                }
+                assert!(mean.pixels().iter().any(|p| *p != Vec3::ZERO), "{region}");
             }
         }
     }

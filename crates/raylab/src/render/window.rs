@@ -1,0 +1,157 @@
+//! The window's pixels: an [`Accumulator`]'s mean as `0x00RRGGBB` words, the format of
+//! `raylab view`'s frame buffer.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::Accumulator;
+use crate::film::{Display, to_8bit_clamped};
+
+/// Rows per parallel task when writing a window's pixels.
+const ROWS_PER_TASK: usize = 16;
+
+impl Accumulator {
+    /// Writes the mean into a `width×height` window buffer of `0x00RRGGBB` words, scaled to fill
+    /// it by nearest neighbour (a picture rendered at a fraction of the window's resolution fills
+    /// the window). Channels as in [`Film::to_rgb8_clamped`]. Runs on the current rayon pool.
+    ///
+    /// # Panics
+    /// If `out` does not hold `width×height` words.
+    pub fn write_0rgb(&self, out: &mut [u32], width: u32, height: u32) {
+        self.write_0rgb_shown(out, width, height, &Display::LAB);
+    }
+
+    /// [`write_0rgb`](Self::write_0rgb) through a display transform (the lab's is the clamp
+    /// without gamma).
+    ///
+    /// # Panics
+    /// If `out` does not hold `width×height` words.
+    pub fn write_0rgb_shown(&self, out: &mut [u32], width: u32, height: u32, display: &Display) {
+        let factor = self.mean_factor();
+        // One loop per conversion, so that the lab's clamp is inlined on its own.
+        if *display == Display::LAB {
+            self.write_words(out, width, height, |sum| {
+                (*sum * factor).to_array().map(to_8bit_clamped)
+            });
+        } else {
+            self.write_words(out, width, height, |sum| {
+                (*sum * factor).to_array().map(|v| display.level(v))
+            });
+        }
+    }
+
+    /// Writes `0x00RRGGBB` words of the levels `level` gives each pixel's sum, scaled by
+    /// nearest neighbour.
+    #[inline]
+    fn write_words(
+        &self,
+        out: &mut [u32],
+        width: u32,
+        height: u32,
+        level: impl Fn(&Vec3) -> [u8; 3] + Sync,
+    ) {
+        assert_eq!(out.len(), width as usize * height as usize, "a word per window pixel");
+        let (source_width, source_height) = (self.width() as usize, self.height() as usize);
+        let word = |sum: &Vec3| {
+            let [r, g, b] = level(sum);
+            (r as u32) << 16 | (g as u32) << 8 | b as u32
+        };
+        if (source_width, source_height) == (width as usize, height as usize) {
+            // Same size: pixel for pixel.
+            #[cfg(target_arch = "x86_64")]
+            let avx2 = std::arch::is_x86_feature_detected!("avx2");
+            out.par_chunks_mut(ROWS_PER_TASK * source_width)
+                .zip(self.sum.pixels().par_chunks(ROWS_PER_TASK * source_width))
+                .for_each(|(out, sums)| {
+                    #[cfg(target_arch = "x86_64")]
+                    if avx2 {
+                        // SAFETY: AVX2 was detected above.
+                        return unsafe { write_run_avx2(out, sums, &word) };
+                    }
+                    write_run(out, sums, &word)
+                });
+            return;
+        }
+        let columns: Vec<usize> = (0..width as usize)
+            .map(|x| (x * source_width / width as usize).min(source_width - 1))
+            .collect();
+        out.par_chunks_exact_mut(width as usize).enumerate().for_each(|(y, row)| {
+            let source_row = (y * source_height / height as usize).min(source_height - 1);
+            let sums = &self.sum.pixels()[source_row * source_width..][..source_width];
+            for (w, &x) in row.iter_mut().zip(&columns) {
+                *w = word(&sums[x]);
+            }
+        });
+    }
+}
+
+/// Writes the words of a run of pixels.
+#[inline(always)]
+fn write_run(out: &mut [u32], sums: &[Vec3], word: &impl Fn(&Vec3) -> u32) {
+    for (w, s) in out.iter_mut().zip(sums) {
+        *w = word(s);
+    }
+}
+
+/// [`write_run`] compiled with AVX2 (the same operations, so the same words).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn write_run_avx2(out: &mut [u32], sums: &[Vec3], word: &impl Fn(&Vec3) -> u32) {
+    write_run(out, sums, word)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn window_words_are_nearest_neighbour_and_clamped() {
+        let mut accumulator = Accumulator::new(2, 1).unwrap();
+        accumulator
+            .sum
+            .pixels_mut()
+            .copy_from_slice(&[Vec3::new(2.0, 1.0, 0.5), Vec3::new(-1.0, 0.0, 0.25)]);
+        accumulator.samples = 2;
+        let mut out = [0u32; 4 * 2];
+        accumulator.write_0rgb(&mut out, 4, 2);
+        let left = 255 << 16 | 128 << 8 | 64; // (1, 0.5, 0.25)
+        let right = 32; // (0, 0, 0.125)
+        assert_eq!(out, [left, left, right, right, left, left, right, right]);
+        let mut one = [0u32; 1];
+        accumulator.write_0rgb(&mut one, 1, 1);
+        assert_eq!(one, [left]);
+    }
+
+    /// Window words are the same compiled for AVX2 as for the baseline instruction set, for
+    /// values below 0, inside [0, 1], above 1, infinite and NaN, through the lab's clamp.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn window_words_are_the_same_with_avx2() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("skipped: this CPU has no AVX2 (its words are never written so)");
+            return;
+        }
+        let special = [-1.0, 0.0, 0.5, 1.0, 3.0, f32::INFINITY, f32::NAN, 1e-9, 0.999];
+        let sums: Vec<Vec3> = (0..999)
+            .map(|i| {
+                let v =
+                    |k: usize| special[(i * 7 + k * 3) % special.len()] * (1.0 + i as f32 * 1e-3);
+                Vec3::new(v(0), v(1), v(2))
+            })
+            .collect();
+        let factor = 0.75;
+        let word = |sum: &Vec3| {
+            let [r, g, b] = (*sum * factor).to_array().map(to_8bit_clamped);
+            (r as u32) << 16 | (g as u32) << 8 | b as u32
+        };
+        let (mut base, mut wide) = (vec![0u32; sums.len()], vec![1u32; sums.len()]);
+        write_run(&mut base, &sums, &word);
+        // SAFETY: AVX2 was detected above.
+        unsafe { write_run_avx2(&mut wide, &sums, &word) };
+        assert_eq!(base, wide);
+        assert!(base.iter().any(|&w| w & 0xFF == 0xFF) && base.iter().any(|&w| w & 0xFF == 0));
+    }
+}
