@@ -446,8 +446,13 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         other => other.to_string(),
     };
     let spp_text = if spp == 1 { String::new() } else { format!(", {spp} samples per pixel") };
+    let size = if is_part {
+        format!("region {region} of {width}×{height}")
+    } else {
+        format!("{width}×{height}")
+    };
     let mut report = format!(
-        "{}: {width}×{height}, {} ({} triangles) {what}{spp_text}, {:.1} ms on {threads} \
+        "{}: {size}, {} ({} triangles) {what}{spp_text}, {:.1} ms on {threads} \
          thread{} (+{:.1} ms BVH build), {:.2} M samples/s\n{camera}\n",
         args.output.display(),
         scene.name,
