@@ -368,7 +368,9 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         bail!("interrupted before the first sample: nothing written");
     }
     let film = accumulator.mean()?;
-    if let Some(discarded) = path.as_ref().map(Path::discarded_samples).filter(|&n| n > 0) {
+    let discarded =
+        path.as_ref().map_or(0, Path::discarded_samples) + accumulator.discarded_samples();
+    if discarded > 0 {
         let total = region.pixels() * (spp - first_sample) as u64;
         eprintln!(
             "raylab: warning: {discarded} of {total} samples were not finite (NaN or infinite \

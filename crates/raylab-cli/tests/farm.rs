@@ -299,21 +299,24 @@ fn a_checkpoint_of_another_render_is_refused() {
 }
 
 /// A second signal ends the render at once, inside the pass the first one would have waited
-/// for: nothing is written (a pass of this size takes seconds, so a render that waited for it
-/// would have written its image).
+/// for: the image is not written (a pass of this size takes seconds, so a render that waited
+/// for it would have written its image), and the checkpoint of the pass before is left whole.
 #[test]
 fn a_second_signal_exits_at_once() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let scene = mitsuba_box();
-    let child = spawn(d, &["render", &scene, "-o", "y.exr", "--size", "1600x1600", "--spp", "4"]);
-    // Let it start rendering its first pass, then two interrupts in a row.
-    std::thread::sleep(Duration::from_millis(300));
+    let args = ["render", &scene, "-o", "y.exr", "--size", "1600x1600", "--spp", "3"];
+    let child = spawn(d, &[&args[..], &["--checkpoint", "0.001"]].concat());
+    // The first pass is done (its checkpoint written) and the second has begun: two interrupts
+    // in a row.
+    let checkpoint = d.join("y.checkpoint.exr");
+    wait_for(&checkpoint);
     signal(&child, "INT");
     signal(&child, "INT");
     let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
     assert!(!d.join("y.exr").exists(), "it did not wait for the pass to write the image");
-    let left: Vec<_> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert!(left.is_empty(), "no file, whole or partial: {left:?}");
+    let state = parts::read_part(&checkpoint).unwrap();
+    assert_eq!((state.header.kind, state.header.samples), (PartKind::Checkpoint, 1));
 }

@@ -127,6 +127,8 @@ pub mod bvh;
 pub mod camera;
 pub mod film;
 pub mod float;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod geometry;
 pub mod image_compare;
 pub mod image_io;

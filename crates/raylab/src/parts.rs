@@ -243,14 +243,66 @@ pub fn write_exr(
     })
 }
 
+/// The most bytes of samples a part may declare (all its channels as 32-bit floats): files that
+/// declare more are refused before anything is allocated for them.
+pub const MAX_PART_BYTES: u64 = 4 << 30;
+
 /// Reads a part (or a checkpoint) written by [`write_exr`] with a header.
 pub fn read_part(path: &Path) -> Result<Part, PartError> {
-    let not_a_part = |problem: String| PartError::NotAPart { path: path.to_path_buf(), problem };
-    let image = read_all_flat_layers_from_file(path).map_err(|e| ImageIoError::Float {
+    let file = std::fs::File::open(path).map_err(|source| ImageIoError::Io {
         action: "read",
         path: path.to_path_buf(),
-        message: e.to_string(),
+        source,
     })?;
+    read_part_from(path, std::io::BufReader::new(file))
+}
+
+/// [`read_part`] from any reader; `path` names it in messages. The header is read and checked
+/// first ([`MAX_PART_BYTES`]), and a decoder that fails in any way, however damaged the file,
+/// gives an error, never a panic.
+pub fn read_part_from(
+    path: &Path,
+    mut reader: impl std::io::Read + std::io::Seek,
+) -> Result<Part, PartError> {
+    let damaged = |message: String| {
+        PartError::Io(ImageIoError::Float { action: "read", path: path.to_path_buf(), message })
+    };
+    let not_a_part = |problem: String| PartError::NotAPart { path: path.to_path_buf(), problem };
+    // The header alone, to refuse absurd sizes before the decoder allocates for them.
+    let meta =
+        guarded(|| exr::meta::MetaData::read_from_buffered(&mut reader, false)).map_err(damaged)?;
+    let [header] = meta.headers.as_slice() else {
+        return Err(not_a_part(format!(
+            "{} layers, where a raylab part has one",
+            meta.headers.len()
+        )));
+    };
+    let declared = (header.layer_size.0 as u64)
+        .saturating_mul(header.layer_size.1 as u64)
+        .saturating_mul(header.channels.list.len() as u64)
+        .saturating_mul(4);
+    if declared > MAX_PART_BYTES {
+        return Err(not_a_part(format!(
+            "it declares {}×{} pixels of {} channels ({}), more than a part may hold ({})",
+            header.layer_size.0,
+            header.layer_size.1,
+            header.channels.list.len(),
+            crate::film::format_bytes(declared),
+            crate::film::format_bytes(MAX_PART_BYTES)
+        )));
+    }
+    reader.seek(std::io::SeekFrom::Start(0)).map_err(|e| damaged(e.to_string()))?;
+    let image = guarded(|| {
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .all_layers()
+            .all_attributes()
+            .non_parallel()
+            .from_buffered(reader)
+    })
+    .map_err(damaged)?;
     let [layer] = image.layer_data.as_slice() else {
         return Err(not_a_part(format!(
             "{} layers, where a raylab part has one",
@@ -327,6 +379,15 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
         command,
     };
     Ok(Part { path: path.to_path_buf(), header, channels })
+}
+
+/// Runs an OpenEXR decoding step, turning a panic inside the decoder (a damaged file it does
+/// not expect) into an error.
+fn guarded<T>(decode: impl FnOnce() -> exr::error::Result<T>) -> Result<T, String> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(decode)) {
+        Ok(result) => result.map_err(|e| e.to_string()),
+        Err(_) => Err("damaged beyond what the OpenEXR decoder can read".into()),
+    }
 }
 
 /// Puts parts together into the whole image's channels (row by row over the image), checking

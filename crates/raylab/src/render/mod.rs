@@ -126,7 +126,7 @@ fn add_pass(
     region: Region,
     pixels: &mut [Vec3],
     progress: &(dyn Fn(u32) + Sync),
-) {
+) -> u64 {
     let width = region.width() as usize;
     debug_assert_eq!(pixels.len() as u64, region.pixels());
     let rays = camera.rays();
@@ -134,6 +134,12 @@ fn add_pass(
     let (_, band_rows) = tile_shape(settings.tile);
     #[cfg(target_arch = "x86_64")]
     let avx2 = std::arch::is_x86_feature_detected!("avx2");
+    let discarded = std::sync::atomic::AtomicU64::new(0);
+    let count = |n: u64| {
+        if n > 0 {
+            discarded.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        }
+    };
     pixels.par_chunks_mut(width * band_rows).enumerate().for_each(|(band, pixels)| {
         let band = Band {
             camera: &rays,
@@ -148,13 +154,14 @@ fn add_pass(
         #[cfg(target_arch = "x86_64")]
         if avx2 {
             // SAFETY: AVX2 was detected above.
-            unsafe { band.add_avx2(integrator, pixels) };
+            count(unsafe { band.add_avx2(integrator, pixels) });
             progress((pixels.len() / width) as u32);
             return;
         }
-        band.add(integrator, pixels);
+        count(band.add(integrator, pixels));
         progress((pixels.len() / width) as u32);
     });
+    discarded.into_inner()
 }
 
 /// A band of whole rows of one pass ([`add_pass`]).
@@ -180,13 +187,16 @@ impl Band<'_> {
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn add_avx2(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) {
+    unsafe fn add_avx2(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) -> u64 {
         self.add(integrator, pixels)
     }
 
     /// Adds this pass's sample of every pixel of the band (`pixels`, its rows) tile by tile.
     #[inline(always)]
-    fn add(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) {
+    /// Returns how many samples were not finite (NaN or infinite in a channel): they count as
+    /// black, so that one bad sample cannot spoil its pixel for good.
+    fn add(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) -> u64 {
+        let mut discarded = 0;
         let (rays, kind, settings, sample) = (self.camera, self.kind, self.settings, self.sample);
         let (width, first_row, has_lens) = (self.width, self.first_row, self.has_lens);
         let first_column = self.first_column;
@@ -219,10 +229,16 @@ impl Band<'_> {
             let mut colour = colours.iter();
             for y in 0..rows {
                 for x in columns.clone() {
-                    pixels[y * width + x] += *colour.next().expect("one colour per ray");
+                    let colour = *colour.next().expect("one colour per ray");
+                    if colour.is_finite() {
+                        pixels[y * width + x] += colour;
+                    } else {
+                        discarded += 1;
+                    }
                 }
             }
         }
+        discarded
     }
 }
 
@@ -243,6 +259,8 @@ pub struct Accumulator {
     image: (u32, u32),
     /// The part of the image rendered.
     region: Region,
+    /// Samples that were not finite and counted as black.
+    discarded: u64,
     /// How samples are drawn; change it only before the first sample.
     pub settings: SampleSettings,
 }
@@ -272,6 +290,7 @@ impl Accumulator {
             samples: 0,
             image: (width, height),
             region,
+            discarded: 0,
             settings: SampleSettings::default(),
         })
     }
@@ -332,9 +351,16 @@ impl Accumulator {
         self.samples
     }
 
+    /// How many samples so far were NaN or infinite in some channel: they are counted as black
+    /// instead of reaching the picture (`raylab render` reports them).
+    pub fn discarded_samples(&self) -> u64 {
+        self.discarded
+    }
+
     /// Forgets every sample (the camera moved).
     pub fn clear(&mut self) {
         self.sum.pixels_mut().fill(Vec3::ZERO);
+        self.discarded = 0;
         self.samples = 0;
     }
 
@@ -359,7 +385,8 @@ impl Accumulator {
             "the camera's image size must be the accumulator's"
         );
         let (settings, sample, region) = (&self.settings, self.samples, self.region);
-        add_pass(camera, integrator, settings, sample, region, self.sum.pixels_mut(), progress);
+        self.discarded +=
+            add_pass(camera, integrator, settings, sample, region, self.sum.pixels_mut(), progress);
         self.samples += 1;
     }
 
@@ -436,9 +463,9 @@ mod tests {
                             first_row: b * band_rows,
                             first_column: 0,
                         };
-                        band.add(integrator, base);
+                        assert_eq!(band.add(integrator, base), 0);
                         // SAFETY: AVX2 was detected above.
-                        unsafe { band.add_avx2(integrator, wide) };
+                        assert_eq!(unsafe { band.add_avx2(integrator, wide) }, 0);
                     }
                 }
                 let bits = |p: &[Vec3]| -> Vec<[u32; 3]> {
@@ -486,5 +513,45 @@ mod tests {
                 assert!(mean.pixels().iter().any(|p| *p != Vec3::ZERO), "{region}");
             }
         }
+    }
+
+    /// Samples that are NaN or infinite never reach the picture: they are counted and count as
+    /// black, and the finite samples still do.
+    #[test]
+    fn samples_that_are_not_finite_are_counted_not_added() {
+        use std::sync::atomic::{AtomicU64, Ordering};
+        /// Radiance 1, except NaN, +∞ or −∞ (in one channel or all) for rays up and left; it
+        /// counts what it spoils.
+        struct Spoiled(AtomicU64);
+        impl Integrator for Spoiled {
+            fn radiance(&self, ray: &Ray, _: &mut Sampler) -> Vec3 {
+                let d = ray.direction;
+                let spoiled = match (d.x < 0.0, d.y) {
+                    (true, y) if y < -0.3 => Vec3::NAN,
+                    (true, y) if y < -0.2 => Vec3::new(1.0, f32::INFINITY, 1.0),
+                    (true, y) if y < -0.1 => Vec3::new(1.0, 1.0, f32::NEG_INFINITY),
+                    _ => return Vec3::ONE,
+                };
+                self.0.fetch_add(1, Ordering::Relaxed);
+                spoiled
+            }
+        }
+        let spoiled = Spoiled(AtomicU64::new(0));
+        let camera = crate::Camera::lab(8, 8);
+        let mut accumulator = Accumulator::new(8, 8).unwrap();
+        accumulator.add_sample(&camera, &spoiled);
+        accumulator.add_sample(&camera, &spoiled);
+        let returned = spoiled.0.load(Ordering::Relaxed);
+        assert!(returned >= 8, "{returned} samples spoiled");
+        assert_eq!(accumulator.discarded_samples(), returned);
+        let mean = accumulator.mean().unwrap();
+        assert!(mean.pixels().iter().all(|p| p.is_finite()));
+        // Every pixel's mean is its finite samples' share: 0, 1/2 or 1.
+        assert!(mean.pixels().iter().all(|p| [0.0, 0.5, 1.0].contains(&p.x) && p.x == p.z));
+        assert!(
+            mean.pixels().iter().any(|p| p.x == 0.0) && mean.pixels().iter().any(|p| p.x == 1.0)
+        );
+        accumulator.clear();
+        assert_eq!(accumulator.discarded_samples(), 0);
     }
 }

@@ -12,8 +12,8 @@
 mod cornell;
 mod file;
 mod model;
-mod obj;
-mod ply;
+pub(crate) mod obj;
+pub(crate) mod ply;
 mod scene_file;
 
 use glam::Vec3;

@@ -58,11 +58,11 @@ pub(crate) fn parse_obj(path: &Path, text: &[u8]) -> Result<LoadedMesh, LoadErro
 }
 
 /// Finds and reads the material library that an `mtllib` line names: its path and content.
-type ReadLibrary<'a> = dyn Fn(&str) -> Result<(PathBuf, Vec<u8>), LoadError> + 'a;
+pub(crate) type ReadLibrary<'a> = dyn Fn(&str) -> Result<(PathBuf, Vec<u8>), LoadError> + 'a;
 
 /// Reads the OBJ file `text` (named `path` in messages), reading material libraries with
 /// `read_library`.
-fn parse_obj_with(
+pub(crate) fn parse_obj_with(
     path: &Path,
     text: &[u8],
     read_library: &ReadLibrary,

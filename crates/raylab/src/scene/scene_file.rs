@@ -60,6 +60,9 @@ pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneF
         let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
         SceneFileError { path: path.into(), line, column, message }
     };
+    if let Some((span, key, value)) = first_non_finite(text) {
+        return Err(at(Some(span), format!("{key} = {value} is not a finite number")));
+    }
     let document: Document =
         toml::from_str(text).map_err(|e| at(e.span(), e.message().trim().replace('\n', " ")))?;
     let folder = path.parent().unwrap_or(Path::new("."));
@@ -568,6 +571,37 @@ mod shapes;
 
 use materials::MaterialDoc;
 use shapes::{cube, rectangle, sphere};
+
+/// The first number in a TOML text that is NaN or infinite, or too large for a 32-bit float
+/// (`nan`, `inf`, `1e40`): its place, its key (like `camera.position[0]`) and its text. Checked
+/// before anything else, so that every such number is reported where it is, whatever it was
+/// meant to be.
+fn first_non_finite(text: &str) -> Option<(Range<usize>, String, String)> {
+    use toml::de::{DeTable, DeValue};
+    fn walk(
+        value: &toml::Spanned<DeValue<'_>>,
+        key: &str,
+    ) -> Option<(Range<usize>, String, String)> {
+        match value.get_ref() {
+            DeValue::Float(f) => {
+                let number = f.as_str().replace('_', "").parse::<f64>().unwrap_or(f64::NAN);
+                (!(number as f32).is_finite())
+                    .then(|| (value.span(), key.to_string(), f.as_str().to_string()))
+            }
+            DeValue::Array(items) => {
+                items.iter().enumerate().find_map(|(i, item)| walk(item, &format!("{key}[{i}]")))
+            }
+            DeValue::Table(table) => table.iter().find_map(|(name, item)| {
+                let name = name.get_ref();
+                walk(item, &if key.is_empty() { name.to_string() } else { format!("{key}.{name}") })
+            }),
+            _ => None,
+        }
+    }
+    let table = DeTable::parse(text).ok()?;
+    let root = toml::Spanned::new(table.span(), DeValue::Table(table.into_inner()));
+    walk(&root, "")
+}
 
 #[cfg(test)]
 mod tests;

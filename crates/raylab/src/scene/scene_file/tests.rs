@@ -286,3 +286,27 @@ fn an_up_vector_rolls_the_camera() {
     let scene = parse("[camera]\nposition = [0, 0, 0]\nyaw = 10\nroll = 30\n").unwrap();
     assert!((scene.camera.unwrap().roll.to_degrees() - 30.0).abs() < 1e-4);
 }
+
+/// NaN, infinities and numbers beyond a 32-bit float are refused wherever they are, with their
+/// key and place, before they can mean anything.
+#[test]
+fn numbers_that_are_not_finite_are_named_with_their_place() {
+    assert_eq!(
+        error("[camera]\nposition = [0, nan, 3]\n"),
+        "test.toml:2:16: camera.position[1] = nan is not a finite number"
+    );
+    assert_eq!(
+        error("[materials.m]\ntype = \"diffuse\"\nreflectance = [0.5, 0.5, +inf]\n"),
+        "test.toml:3:26: materials.m.reflectance[2] = +inf is not a finite number"
+    );
+    assert_eq!(
+        error("[[shapes]]\ntype = \"cube\"\nto_world = [[1, 0, 0, 0], [0, -inf, 0, 0]]\n"),
+        "test.toml:3:31: shapes[0].to_world[1][1] = -inf is not a finite number"
+    );
+    assert_eq!(
+        error("[camera]\nfov = 1e39\n"),
+        "test.toml:2:7: camera.fov = 1e39 is not a finite number"
+    );
+    // The largest finite float is still a number (refused or not by the key's own rule).
+    assert!(!error("[camera]\nfov = 3e38\n").contains("not a finite number"));
+}

@@ -1,0 +1,65 @@
+//! Entry points for the fuzz targets in `fuzz/` (cargo-fuzz): each takes arbitrary bytes and
+//! must return, whatever they are, without a panic, an abort or an allocation beyond the
+//! declared limits. Not part of the API; the regression tests in `tests/fuzz_crashes.rs` run
+//! every crash input ever found through them.
+
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use crate::bvh::Bvh;
+use crate::scene::{LoadedMesh, Scene};
+
+/// Meshes up to this many triangles are also built into a BVH and asked a ray.
+const BVH_LIMIT: usize = 4096;
+
+/// What a loaded mesh goes through in `raylab render`: a scene, a BVH, a ray.
+fn use_mesh(loaded: &LoadedMesh) {
+    if loaded.mesh.triangles.is_empty() || loaded.mesh.triangles.len() > BVH_LIMIT {
+        return;
+    }
+    let scene = Scene::from_mesh(&loaded.mesh);
+    use_scene(&scene);
+}
+
+fn use_scene(scene: &Scene) {
+    if scene.geometry.len() > BVH_LIMIT {
+        return;
+    }
+    let _ = scene.content_hash();
+    let bvh = Bvh::new(&scene.vertices());
+    let ray = crate::ray::Ray::new(glam::Vec3::new(0.1, 0.2, -5.0), glam::Vec3::Z);
+    let _ = crate::accel::Accelerator::closest_hit(&bvh, &ray);
+}
+
+/// An OBJ file and the material library it names: the first byte splits the rest between them.
+pub fn obj(data: &[u8]) {
+    let Some((&split, rest)) = data.split_first() else { return };
+    let at = rest.len() * split as usize / 256;
+    let (obj, mtl) = rest.split_at(at);
+    let library = |name: &str| Ok((PathBuf::from(name), mtl.to_vec()));
+    if let Ok(loaded) = crate::scene::obj::parse_obj_with(Path::new("fuzz.obj"), obj, &library) {
+        use_mesh(&loaded);
+    }
+}
+
+/// A PLY file.
+pub fn ply(data: &[u8]) {
+    if let Ok(loaded) = crate::scene::ply::parse_ply(Path::new("fuzz.ply"), data) {
+        use_mesh(&loaded);
+    }
+}
+
+/// A TOML scene file (meshes it names are looked for in a folder that does not exist).
+pub fn scene_file(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else { return };
+    if let Ok(scene) = crate::scene::parse_scene(text, Path::new("/nonexistent/raylab/fuzz.toml")) {
+        use_scene(&scene);
+    }
+}
+
+/// An OpenEXR part as `raylab merge` reads it, merged with itself alone.
+pub fn exr_part(data: &[u8]) {
+    if let Ok(part) = crate::parts::read_part_from(Path::new("fuzz.exr"), Cursor::new(data)) {
+        let _ = crate::parts::merge(std::slice::from_ref(&part));
+    }
+}
