@@ -5,6 +5,7 @@ mod args;
 mod bench_cmd;
 mod embree_columns;
 mod merge_cmd;
+mod progress;
 mod render_cmd;
 mod render_state;
 mod scene_args;

@@ -1,24 +1,22 @@
 //! `raylab render`: one frame to an image file.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::film::{Display, ToneMap};
 use raylab::parts::{self, Part, PartHeader, PartKind};
 use raylab::{
-    Accumulator, Aov, AovKind, Film, Filter, Integrator, Lab, Path, PathSettings, Region,
+    Accumulator, Aov, AovKind, Camera, Film, Filter, Integrator, Lab, Path, PathSettings, Region,
     SampleSettings, SamplerKind, TriangleSampling, image_io,
 };
 
 use raylab::camera::tidy;
 
 use crate::args;
+use crate::progress::Progress;
 use crate::render_state::{self, Command, Interrupted};
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup, tidy_vec3};
 use crate::system;
@@ -31,9 +29,6 @@ fn aov_kind(name: &str) -> AovKind {
         _ => AovKind::Depth,
     }
 }
-
-/// Renders longer than this get a progress bar (on a terminal).
-const PROGRESS_AFTER: Duration = Duration::from_millis(500);
 
 #[derive(Args, Debug)]
 #[command(after_long_help = STAGES_HELP, allow_negative_numbers = true)]
@@ -115,6 +110,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "SECONDS", value_parser = args::positive_f32)]
     checkpoint: Option<f32>,
 
+    /// Render frames A to B (both included; or one frame, N) of the animation the scene file's
+    /// camera keyframes describe, each to the output name with its frame number in place of a
+    /// printf-style %d or %0Nd: `-o out_%04d.exr` writes out_0001.exr, out_0002.exr, ...
+    #[arg(long, value_name = "A..B", value_parser = args::frames)]
+    frames: Option<(u32, u32)>,
+
     /// Go on with the render a checkpoint was written for, with the command line recorded in
     /// it (run from the directory it was started in).
     #[arg(long, value_name = "STATE", exclusive = true)]
@@ -174,7 +175,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> Result<()> {
     // Everything that can be checked is checked before rendering, so no work is lost.
     let setup = args.scene.setup()?;
-    let Setup { scene, camera, threads } = &setup;
+    let Setup { scene, camera, threads, .. } = &setup;
     let (width, height) = (camera.width, camera.height);
     let format = image_io::check_writable(&args.output)?;
     if !args.aov.is_empty() && format != image_io::ImageFormat::Exr {
@@ -182,6 +183,16 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
             "--aov writes extra layers into an OpenEXR file: the output must end in .exr, not {}",
             args.output.display()
         );
+    }
+    if let Some((first, _)) = args.frames {
+        if scene.keyframes.is_empty() {
+            bail!(
+                "--frames renders an animation, and {} has no camera keyframes ([[keyframes]] \
+                 in a scene file, see docs/scene-format.md)",
+                scene.name
+            );
+        }
+        args::frame_path(&args.output, first)?;
     }
     let settings = &scene.settings;
     let integrator_name = args
@@ -237,315 +248,283 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
     let build = start.elapsed();
     let stage = args.scene.stage;
     let lab;
-    let mut path = None;
+    let path = (integrator_name == "path").then(|| {
+        let settings = PathSettings {
+            max_depth,
+            light_sampling: args.light_sampling,
+            ..PathSettings::default()
+        };
+        Path::new(scene, &accel, settings)
+    });
     let aov;
-    let integrator: &dyn Integrator = match integrator_name.as_str() {
-        "lab" => {
+    let integrator: &dyn Integrator = match (integrator_name.as_str(), &path) {
+        ("lab", _) => {
             lab = Lab::new(scene, &accel, stage);
             &lab
         }
-        "path" => {
-            let settings = PathSettings {
-                max_depth,
-                light_sampling: args.light_sampling,
-                ..PathSettings::default()
-            };
-            &*path.insert(Path::new(scene, &accel, settings))
-        }
-        other => {
+        (_, Some(path)) => path,
+        (other, None) => {
             aov = Aov::new(scene, &accel, aov_kind(other));
             &aov
         }
     };
-    // What the pixels depend on besides the scene: parts and checkpoints must agree on it.
-    let settings_text = format!(
-        "size={width}x{height}; camera={camera:?}; integrator={integrator_name}; \
+    // One frame (the whole render without --frames) to `output` through `camera`.
+    let render_frame = |camera: &Camera,
+                        output: &std::path::Path,
+                        state: Option<Part>|
+     -> Result<()> {
+        // What the pixels depend on besides the scene: parts and checkpoints must agree on it.
+        let settings_text = format!(
+            "size={width}x{height}; camera={camera:?}; integrator={integrator_name}; \
          stage={stage}; spp={spp}; seed={}; sampler={:?}; filter={:?}; \
          max_depth={max_depth:?}; light_sampling={:?}",
-        sample_settings.seed,
-        sample_settings.sampler.unwrap_or_else(|| integrator.sampler_kind()),
-        sample_settings.filter,
-        args.light_sampling,
-    );
-    let header = PartHeader {
-        kind: PartKind::Image,
-        image: (width, height),
-        region,
-        samples: 0,
-        scene_hash: format!("{:016x}", scene.content_hash()),
-        settings: settings_text,
-        command: command.as_ref().map(Command::to_json),
-    };
-    let checkpoint = args.checkpoint.map(|seconds| {
-        (render_state::checkpoint_path(&args.output), Duration::from_secs_f32(seconds))
-    });
-    // A checkpoint to go on from: the one asked for, or this render's own from an earlier run.
-    let state = match (state, &checkpoint) {
-        (Some(part), _) => Some(part),
-        (None, Some((path, _))) if path.exists() => Some(parts::read_part(path)?),
-        _ => None,
-    };
-    let mut accumulator = match state {
-        Some(part) => {
-            let h = &part.header;
-            let problem = if h.kind != PartKind::Checkpoint {
-                Some("it is not a checkpoint".to_string())
-            } else if h.scene_hash != header.scene_hash {
-                Some("the scene has changed since".to_string())
-            } else if h.settings != header.settings {
-                Some(format!("it has other settings ('{}')", h.settings))
-            } else if (h.image, h.region) != (header.image, header.region) {
-                Some(format!("it holds region {} of {}×{}", h.region, h.image.0, h.image.1))
-            } else {
-                None
-            };
-            if let Some(problem) = problem {
-                bail!(
-                    "{}: cannot go on from this checkpoint: {problem}; delete it to start \
-                     afresh",
-                    part.path.display()
-                );
-            }
-            let sums = parts::beauty(&part.channels, region_width, region_height)
-                .context("a checkpoint has R, G and B channels")?;
-            eprintln!(
-                "raylab: going on from {} at {} samples per pixel",
-                part.path.display(),
-                h.samples
-            );
-            Accumulator::resume((width, height), region, sums, h.samples, sample_settings)?
-        }
-        None => {
-            let mut accumulator = Accumulator::for_region(width, height, region)?;
-            accumulator.settings = sample_settings;
-            accumulator
-        }
-    };
-    let first_sample = accumulator.samples();
-    let stop = render_state::interrupt_flag()?;
-    let passes = spp.saturating_sub(first_sample) as u64;
-    let progress = Progress::new(region_height as u64 * passes, region_width as u64, deadline);
-    let start = Instant::now();
-    let mut last_checkpoint = Instant::now();
-    let mut checkpoint_time = Duration::ZERO;
-    let write_checkpoint = |accumulator: &Accumulator, path: &PathBuf| -> Result<Duration> {
-        let start = Instant::now();
-        let state = PartHeader {
-            kind: PartKind::Checkpoint,
-            samples: accumulator.samples(),
-            ..header.clone()
+            sample_settings.seed,
+            sample_settings.sampler.unwrap_or_else(|| integrator.sampler_kind()),
+            sample_settings.filter,
+            args.light_sampling,
+        );
+        let header = PartHeader {
+            kind: PartKind::Image,
+            image: (width, height),
+            region,
+            samples: 0,
+            scene_hash: format!("{:016x}", scene.content_hash()),
+            settings: settings_text,
+            command: command.as_ref().map(Command::to_json),
         };
-        let sums = parts::film_channels(accumulator.sums(), &[]);
-        parts::write_exr(path, (width, height), region, &sums, Some(&state))?;
-        Ok(start.elapsed())
-    };
-    let mut was_interrupted = false;
-    pool.install(|| -> Result<()> {
-        while accumulator.samples() < spp {
-            if render_state::interrupted(&stop) {
-                was_interrupted = true;
-                break;
-            }
-            accumulator
-                .add_sample_with_progress(camera, integrator, &|rows| progress.advance(rows));
-            if deadline.is_some_and(|limit| start.elapsed() >= limit) {
-                break;
-            }
-            if let Some((path, every)) = &checkpoint
-                && last_checkpoint.elapsed() >= *every
-                && accumulator.samples() < spp
-            {
-                checkpoint_time += write_checkpoint(&accumulator, path)?;
-                last_checkpoint = Instant::now();
-            }
-        }
-        Ok(())
-    })?;
-    was_interrupted |= render_state::interrupted(&stop);
-    let spp = accumulator.samples();
-    if spp == 0 {
-        progress.finish();
-        bail!("interrupted before the first sample: nothing written");
-    }
-    let film = accumulator.mean()?;
-    let discarded =
-        path.as_ref().map_or(0, Path::discarded_samples) + accumulator.discarded_samples();
-    if discarded > 0 {
-        let total = region.pixels() * (spp - first_sample) as u64;
-        eprintln!(
-            "raylab: warning: {discarded} of {total} samples were not finite (NaN or infinite \
-             radiance, e.g. from a degenerate triangle or normal) and count as black"
-        );
-    }
-    // The extra layers, over the same samples.
-    let mut layers = Vec::new();
-    for name in &args.aov {
-        let aov = Aov::new(scene, &accel, aov_kind(name));
-        let layer = pool.install(|| -> Result<Film> {
-            let mut accumulator = Accumulator::for_region(width, height, region)?;
-            accumulator.settings = sample_settings;
-            for _ in 0..spp {
-                accumulator.add_sample(camera, &aov);
-            }
-            Ok(accumulator.mean()?)
-        })?;
-        layers.push((name.as_str(), layer));
-    }
-    let elapsed = start.elapsed();
-    progress.finish();
-
-    let display = if integrator_name == "lab" {
-        Display { exposure: args.exposure, tone_map: args.tonemap, srgb: false }
-    } else {
-        Display { exposure: args.exposure, tone_map: args.tonemap, srgb: true }
-    };
-    if was_interrupted && let Some((path, _)) = &checkpoint {
-        write_checkpoint(&accumulator, path)?;
-    }
-    if format == image_io::ImageFormat::Exr {
-        let layers: Vec<(&str, &Film)> = layers.iter().map(|(name, film)| (*name, film)).collect();
-        let channels = parts::film_channels(&film, &layers);
-        let header = PartHeader { samples: spp, command: None, ..header.clone() };
-        parts::write_exr(&args.output, (width, height), region, &channels, Some(&header))?;
-    } else {
-        image_io::save_film(&args.output, &film, &display)?;
-    }
-    if was_interrupted {
-        let mut report = format!(
-            "wrote {} with {spp} of {} samples per pixel",
-            args.output.display(),
-            args.spp.unwrap_or(spp.max(1))
-        );
-        if let Some((path, _)) = &checkpoint {
-            report += &format!("; resume with: raylab render --resume {}", path.display());
-        }
-        return Err(Interrupted { report }.into());
-    }
-    if let Some((path, _)) = &checkpoint
-        && path.exists()
-    {
-        std::fs::remove_file(path).with_context(|| {
-            format!(
-                "the render is written, but its checkpoint {} cannot be deleted",
-                path.display()
-            )
-        })?;
-    }
-    if checkpoint.is_some() && !checkpoint_time.is_zero() {
-        eprintln!(
-            "raylab: checkpoints took {:.1} ms of {:.1} ms",
-            checkpoint_time.as_secs_f64() * 1e3,
-            elapsed.as_secs_f64() * 1e3
-        );
-    }
-    let samples = region.pixels() as f64 * (spp - first_sample) as f64;
-    let what = match integrator_name.as_str() {
-        "lab" => format!("stage {stage}"),
-        "path" => format!(
-            "path tracing, max depth {}",
-            max_depth.map_or("unlimited".to_string(), |d| d.to_string())
-        ),
-        other => other.to_string(),
-    };
-    let spp_text = if spp == 1 { String::new() } else { format!(", {spp} samples per pixel") };
-    let size = if is_part {
-        format!("region {region} of {width}×{height}")
-    } else {
-        format!("{width}×{height}")
-    };
-    let mut report = format!(
-        "{}: {size}, {} ({} triangles) {what}{spp_text}, {:.1} ms on {threads} \
-         thread{} (+{:.1} ms BVH build), {:.2} M samples/s\n{camera}\n",
-        args.output.display(),
-        scene.name,
-        scene.geometry.len(),
-        elapsed.as_secs_f64() * 1e3,
-        if *threads == 1 { "" } else { "s" },
-        build.as_secs_f64() * 1e3,
-        samples / elapsed.as_secs_f64().max(1e-9) / 1e6,
-    );
-    if integrator_name == "lab" {
-        let light = scene.lab_light();
-        report +=
-            &format!("light at {} power {}\n", tidy_vec3(light.position), tidy(light.power.x));
-    }
-    if format.is_float() {
-        let mean = film.pixels().iter().map(|p| p.as_dvec3()).sum::<glam::DVec3>()
-            / film.pixels().len() as f64;
-        report += &format!("mean radiance ({:.6}, {:.6}, {:.6})\n", mean.x, mean.y, mean.z);
-    }
-    // The image is written; a closed or full standard output is not worth a failure, but it
-    // must not be a panic either (`println!` would panic).
-    match std::io::stdout().lock().write_all(report.as_bytes()) {
-        Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(error).context("cannot print the report to standard output")
-        }
-        _ => Ok(()),
-    }
-}
-
-/// A progress bar that appears only on a terminal and only once a render has taken a while.
-/// It counts rows rendered, or, with a time limit, milliseconds of it; either way it shows the
-/// samples per second and the time left.
-struct Progress {
-    bar: ProgressBar,
-    start: Instant,
-    on_terminal: bool,
-    shown: AtomicBool,
-    rows_done: Arc<AtomicU64>,
-    deadline: Option<Duration>,
-}
-
-impl Progress {
-    /// A bar over `rows` rows of `width` pixels (rows of every pass), or over the time limit.
-    fn new(rows: u64, width: u64, deadline: Option<Duration>) -> Self {
-        let length = deadline.map_or(rows, |limit| limit.as_millis().max(1) as u64);
-        let bar = ProgressBar::with_draw_target(Some(length), ProgressDrawTarget::hidden());
-        let rows_done = Arc::new(AtomicU64::new(0));
-        let start = Instant::now();
-        let counted = Arc::clone(&rows_done);
-        let style = ProgressStyle::with_template(
-            "{bar:40} {percent}%, {samples_per_second} samples/s, {elapsed} elapsed, ~{eta} left",
-        )
-        .expect("the template is valid")
-        .with_key(
-            "samples_per_second",
-            move |_: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
-                let samples = counted.load(Ordering::Relaxed) as f64 * width as f64;
-                let rate = samples / start.elapsed().as_secs_f64().max(1e-9);
-                let _ = if rate >= 1e6 {
-                    write!(w, "{:.2} M", rate / 1e6)
-                } else {
-                    write!(w, "{:.0} k", rate / 1e3)
-                };
-            },
-        );
-        bar.set_style(style);
-        Progress {
-            bar,
-            start,
-            on_terminal: std::io::stderr().is_terminal(),
-            shown: AtomicBool::new(false),
-            rows_done,
-            deadline,
-        }
-    }
-
-    fn advance(&self, rows: u32) {
-        self.rows_done.fetch_add(rows as u64, Ordering::Relaxed);
-        match self.deadline {
-            Some(_) => self.bar.set_position(self.start.elapsed().as_millis() as u64),
-            None => self.bar.inc(rows as u64),
-        }
-        if self.on_terminal
-            && self.start.elapsed() > PROGRESS_AFTER
-            && !self.shown.swap(true, Ordering::Relaxed)
+        // A frame of an animation that a previous run of the same command finished (a requeued
+        // job, a rerun after an interrupt) is not rendered again.
+        if args.frames.is_some()
+            && args.checkpoint.is_some()
+            && output.exists()
+            && parts::read_part(output).is_ok_and(|done| {
+                let h = &done.header;
+                (h.kind, h.samples, &h.scene_hash, &h.settings)
+                    == (PartKind::Image, spp, &header.scene_hash, &header.settings)
+                    && h.region == region
+            })
         {
-            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+            eprintln!("raylab: {} is already rendered", output.display());
+            return Ok(());
         }
-    }
+        let checkpoint = args.checkpoint.map(|seconds| {
+            (render_state::checkpoint_path(output), Duration::from_secs_f32(seconds))
+        });
+        // A checkpoint to go on from: the one asked for, or this render's own from an earlier run.
+        let state = match (state, &checkpoint) {
+            (Some(part), _) => Some(part),
+            (None, Some((path, _))) if path.exists() => Some(parts::read_part(path)?),
+            _ => None,
+        };
+        let mut accumulator = match state {
+            Some(part) => {
+                let h = &part.header;
+                let problem = if h.kind != PartKind::Checkpoint {
+                    Some("it is not a checkpoint".to_string())
+                } else if h.scene_hash != header.scene_hash {
+                    Some("the scene has changed since".to_string())
+                } else if h.settings != header.settings {
+                    Some(format!("it has other settings ('{}')", h.settings))
+                } else if (h.image, h.region) != (header.image, header.region) {
+                    Some(format!("it holds region {} of {}×{}", h.region, h.image.0, h.image.1))
+                } else {
+                    None
+                };
+                if let Some(problem) = problem {
+                    bail!(
+                        "{}: cannot go on from this checkpoint: {problem}; delete it to start \
+                     afresh",
+                        part.path.display()
+                    );
+                }
+                let sums = parts::beauty(&part.channels, region_width, region_height)
+                    .context("a checkpoint has R, G and B channels")?;
+                eprintln!(
+                    "raylab: going on from {} at {} samples per pixel",
+                    part.path.display(),
+                    h.samples
+                );
+                Accumulator::resume((width, height), region, sums, h.samples, sample_settings)?
+            }
+            None => {
+                let mut accumulator = Accumulator::for_region(width, height, region)?;
+                accumulator.settings = sample_settings;
+                accumulator
+            }
+        };
+        let first_sample = accumulator.samples();
+        let stop = render_state::interrupt_flag()?;
+        let passes = spp.saturating_sub(first_sample) as u64;
+        let progress = Progress::new(region_height as u64 * passes, region_width as u64, deadline);
+        let start = Instant::now();
+        let mut last_checkpoint = Instant::now();
+        let mut checkpoint_time = Duration::ZERO;
+        let write_checkpoint = |accumulator: &Accumulator, path: &PathBuf| -> Result<Duration> {
+            let start = Instant::now();
+            let state = PartHeader {
+                kind: PartKind::Checkpoint,
+                samples: accumulator.samples(),
+                ..header.clone()
+            };
+            let sums = parts::film_channels(accumulator.sums(), &[]);
+            parts::write_exr(path, (width, height), region, &sums, Some(&state))?;
+            Ok(start.elapsed())
+        };
+        let mut was_interrupted = false;
+        pool.install(|| -> Result<()> {
+            while accumulator.samples() < spp {
+                if render_state::interrupted(&stop) {
+                    was_interrupted = true;
+                    break;
+                }
+                accumulator
+                    .add_sample_with_progress(camera, integrator, &|rows| progress.advance(rows));
+                if deadline.is_some_and(|limit| start.elapsed() >= limit) {
+                    break;
+                }
+                if let Some((path, every)) = &checkpoint
+                    && last_checkpoint.elapsed() >= *every
+                    && accumulator.samples() < spp
+                {
+                    checkpoint_time += write_checkpoint(&accumulator, path)?;
+                    last_checkpoint = Instant::now();
+                }
+            }
+            Ok(())
+        })?;
+        was_interrupted |= render_state::interrupted(&stop);
+        let spp = accumulator.samples();
+        if spp == 0 {
+            progress.finish();
+            bail!("interrupted before the first sample: nothing written");
+        }
+        let film = accumulator.mean()?;
+        let discarded =
+            path.as_ref().map_or(0, Path::discarded_samples) + accumulator.discarded_samples();
+        if discarded > 0 {
+            let total = region.pixels() * (spp - first_sample) as u64;
+            eprintln!(
+                "raylab: warning: {discarded} of {total} samples were not finite (NaN or infinite \
+             radiance, e.g. from a degenerate triangle or normal) and count as black"
+            );
+        }
+        // The extra layers, over the same samples.
+        let mut layers = Vec::new();
+        for name in &args.aov {
+            let aov = Aov::new(scene, &accel, aov_kind(name));
+            let layer = pool.install(|| -> Result<Film> {
+                let mut accumulator = Accumulator::for_region(width, height, region)?;
+                accumulator.settings = sample_settings;
+                for _ in 0..spp {
+                    accumulator.add_sample(camera, &aov);
+                }
+                Ok(accumulator.mean()?)
+            })?;
+            layers.push((name.as_str(), layer));
+        }
+        let elapsed = start.elapsed();
+        progress.finish();
 
-    fn finish(&self) {
-        self.bar.finish_and_clear();
+        let display = if integrator_name == "lab" {
+            Display { exposure: args.exposure, tone_map: args.tonemap, srgb: false }
+        } else {
+            Display { exposure: args.exposure, tone_map: args.tonemap, srgb: true }
+        };
+        if was_interrupted && let Some((path, _)) = &checkpoint {
+            write_checkpoint(&accumulator, path)?;
+        }
+        if format == image_io::ImageFormat::Exr {
+            let layers: Vec<(&str, &Film)> =
+                layers.iter().map(|(name, film)| (*name, film)).collect();
+            let channels = parts::film_channels(&film, &layers);
+            let header = PartHeader { samples: spp, command: None, ..header.clone() };
+            parts::write_exr(output, (width, height), region, &channels, Some(&header))?;
+        } else {
+            image_io::save_film(output, &film, &display)?;
+        }
+        if was_interrupted {
+            let mut report = format!(
+                "wrote {} with {spp} of {} samples per pixel",
+                output.display(),
+                args.spp.unwrap_or(spp.max(1))
+            );
+            if let Some((path, _)) = &checkpoint {
+                report += &format!("; resume with: raylab render --resume {}", path.display());
+            }
+            return Err(Interrupted { report }.into());
+        }
+        if let Some((path, _)) = &checkpoint
+            && path.exists()
+        {
+            std::fs::remove_file(path).with_context(|| {
+                format!(
+                    "the render is written, but its checkpoint {} cannot be deleted",
+                    path.display()
+                )
+            })?;
+        }
+        if checkpoint.is_some() && !checkpoint_time.is_zero() {
+            eprintln!(
+                "raylab: checkpoints took {:.1} ms of {:.1} ms",
+                checkpoint_time.as_secs_f64() * 1e3,
+                elapsed.as_secs_f64() * 1e3
+            );
+        }
+        let samples = region.pixels() as f64 * (spp - first_sample) as f64;
+        let what = match integrator_name.as_str() {
+            "lab" => format!("stage {stage}"),
+            "path" => format!(
+                "path tracing, max depth {}",
+                max_depth.map_or("unlimited".to_string(), |d| d.to_string())
+            ),
+            other => other.to_string(),
+        };
+        let spp_text = if spp == 1 { String::new() } else { format!(", {spp} samples per pixel") };
+        let size = if is_part {
+            format!("region {region} of {width}×{height}")
+        } else {
+            format!("{width}×{height}")
+        };
+        let mut report = format!(
+            "{}: {size}, {} ({} triangles) {what}{spp_text}, {:.1} ms on {threads} \
+         thread{} (+{:.1} ms BVH build), {:.2} M samples/s\n{camera}\n",
+            output.display(),
+            scene.name,
+            scene.geometry.len(),
+            elapsed.as_secs_f64() * 1e3,
+            if *threads == 1 { "" } else { "s" },
+            build.as_secs_f64() * 1e3,
+            samples / elapsed.as_secs_f64().max(1e-9) / 1e6,
+        );
+        if integrator_name == "lab" {
+            let light = scene.lab_light();
+            report +=
+                &format!("light at {} power {}\n", tidy_vec3(light.position), tidy(light.power.x));
+        }
+        if format.is_float() {
+            let mean = film.pixels().iter().map(|p| p.as_dvec3()).sum::<glam::DVec3>()
+                / film.pixels().len() as f64;
+            report += &format!("mean radiance ({:.6}, {:.6}, {:.6})\n", mean.x, mean.y, mean.z);
+        }
+        // The image is written; a closed or full standard output is not worth a failure, but it
+        // must not be a panic either (`println!` would panic).
+        match std::io::stdout().lock().write_all(report.as_bytes()) {
+            Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
+                Err(error).context("cannot print the report to standard output")
+            }
+            _ => Ok(()),
+        }
+    };
+    let Some((first, last)) = args.frames else {
+        return render_frame(camera, &args.output, state);
+    };
+    let mut state = state;
+    for frame in first..=last {
+        let output = args::frame_path(&args.output, frame)?;
+        let settings = scene.camera_at(frame as f32);
+        let camera = args.scene.camera(settings, scene, setup.is_model, width, height)?;
+        let checkpoint = render_state::checkpoint_path(&output);
+        render_frame(&camera, &output, state.take_if(|s| s.path == checkpoint))?;
     }
+    Ok(())
 }

@@ -5,6 +5,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use glam::Vec3;
 use raylab::camera::tidy;
+use raylab::scene::CameraSettings;
 use raylab::{Camera, Scene, Stage};
 
 use crate::args::{self, Size};
@@ -93,6 +94,8 @@ pub struct Setup {
     pub scene: Scene,
     pub camera: Camera,
     pub threads: usize,
+    /// Whether the scene is a model file (framed by the camera unless told otherwise).
+    pub is_model: bool,
 }
 
 impl SceneArgs {
@@ -112,8 +115,31 @@ impl SceneArgs {
             Some((width, height)) => Size { width, height },
             None => Size { width: 500, height: 500 },
         });
-        // The scene file's camera, or the lab's; options override its parts.
-        let base = match scene_camera {
+        // The scene file's camera; an animation's first keyframe without one.
+        let settings = scene_camera.or(scene.keyframes.first().map(|k| k.camera));
+        let camera = self.camera(settings, &scene, is_model, width, height)?;
+        let threads = match self.threads {
+            None | Some(0) => system::cores(),
+            Some(n) if n > MAX_THREADS => bail!("--threads {n} is more than {MAX_THREADS}"),
+            Some(n) => n,
+        };
+        Ok(Setup { scene, camera, threads, is_model })
+    }
+}
+
+impl SceneArgs {
+    /// The camera of a `width×height` picture of `scene`: `settings` (a scene file's camera, or
+    /// an animation's at some frame; `None`: the lab's, or one framing a model), with the
+    /// command line's options overriding its parts.
+    pub fn camera(
+        &self,
+        settings: Option<CameraSettings>,
+        scene: &Scene,
+        is_model: bool,
+        width: u32,
+        height: u32,
+    ) -> Result<Camera> {
+        let base = match settings {
             Some(settings) => settings.camera(width, height),
             None => Camera::lab(width, height),
         };
@@ -143,7 +169,7 @@ impl SceneArgs {
             aperture_radius: self.aperture.unwrap_or(base.aperture_radius),
             focus_distance: self.focus_distance.unwrap_or(base.focus_distance),
         };
-        if camera.has_lens() && self.focus_distance.is_none() && scene_camera.is_none() {
+        if camera.has_lens() && self.focus_distance.is_none() && settings.is_none() {
             // Focus on what the image's centre sees.
             let centre = camera.ray(width as f32 / 2.0, height as f32 / 2.0);
             let bvh = system::build_bvh(&scene.name, &scene.vertices())?;
@@ -151,12 +177,7 @@ impl SceneArgs {
                 camera.focus_distance = (hit.t * centre.direction.dot(camera.forward())).max(1e-6);
             }
         }
-        let threads = match self.threads {
-            None | Some(0) => system::cores(),
-            Some(n) if n > MAX_THREADS => bail!("--threads {n} is more than {MAX_THREADS}"),
-            Some(n) => n,
-        };
-        Ok(Setup { scene, camera, threads })
+        Ok(camera)
     }
 }
 

@@ -8,6 +8,10 @@ use std::time::{Duration, Instant};
 
 use raylab::parts::{self, PartKind};
 
+#[path = "common/animated.rs"]
+mod animated;
+use animated::animated_box;
+
 fn raylab(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_raylab")).args(args).current_dir(dir).output().expect("runs")
 }
@@ -313,10 +317,74 @@ fn a_second_signal_exits_at_once() {
     let checkpoint = d.join("y.checkpoint.exr");
     wait_for(&checkpoint);
     signal(&child, "INT");
+    // Apart, so that the two are not merged into one pending signal.
+    std::thread::sleep(Duration::from_millis(200));
     signal(&child, "INT");
     let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
     assert!(!d.join("y.exr").exists(), "it did not wait for the pass to write the image");
     let state = parts::read_part(&checkpoint).unwrap();
     assert_eq!((state.header.kind, state.header.samples), (PartKind::Checkpoint, 1));
+}
+
+/// `--frames` renders the keyframed camera's frames to numbered files; each frame alone (a job
+/// of its own) is the same image; frame 0 is the scene's own camera.
+#[test]
+fn frames_render_the_keyframed_camera_to_numbered_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = animated_box(d);
+    let common = ["--size", "32x24", "--spp", "2"];
+    let run = |extra: &[&str]| ok(d, &[&["render", scene.as_str()][..], &common, extra].concat());
+    let out = run(&["--frames", "0..4", "-o", "f_%02d.exr"]);
+    assert_eq!(text(&out.stdout).matches("samples per pixel").count(), 5, "{}", text(&out.stdout));
+    let frames: Vec<_> = (0..=4).map(|f| bits(&d.join(format!("f_{f:02}.exr")))).collect();
+    for pair in frames.windows(2) {
+        assert!(pair[0].0 != pair[1].0, "the camera moves from frame to frame");
+    }
+    // Frame 0 is the scene's own [camera]; frame 2 rendered on its own is the same image.
+    run(&["-o", "still.exr"]);
+    assert_eq!(bits(&d.join("still.exr")), frames[0]);
+    run(&["--frames", "2", "-o", "alone_%d.exr"]);
+    assert_eq!(bits(&d.join("alone_2.exr")), frames[2]);
+    // Mistakes.
+    let out = raylab(d, &["render", scene.as_str(), "--frames", "0..1", "-o", "f.exr"]);
+    assert!(text(&out.stderr).contains("needs the frame number's place"), "{}", text(&out.stderr));
+    let out = raylab(d, &["render", "cornell", "--frames", "0..1", "-o", "f_%d.png"]);
+    assert!(text(&out.stderr).contains("has no camera keyframes"), "{}", text(&out.stderr));
+}
+
+fn strs(a: &[String]) -> Vec<&str> {
+    a.iter().map(String::as_str).collect()
+}
+
+/// An animation interrupted mid-frame and run again with the same command skips the frames it
+/// finished, goes on from the checkpoint of the one it was in, and ends with the frames of an
+/// uninterrupted run.
+#[test]
+fn an_interrupted_animation_goes_on_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = animated_box(d);
+    let args = |pattern: &str| {
+        let mut a = vec!["render", scene.as_str(), "--size", "32x24", "--spp", "2000"];
+        a.extend(["--frames", "0..2", "-o", pattern, "--checkpoint", "0.02"]);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let reference = args("ref_%d.exr");
+    ok(d, &strs(&reference));
+    let animation = args("a_%d.exr");
+    let child = spawn(d, &strs(&animation));
+    wait_for(&d.join("a_1.checkpoint.exr"));
+    signal(&child, "INT");
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
+    assert!(!d.join("a_2.exr").exists(), "the frames after the interrupted one wait");
+    let again = ok(d, &strs(&animation));
+    let stderr = text(&again.stderr);
+    assert!(stderr.contains("a_0.exr is already rendered"), "{stderr}");
+    assert!(stderr.contains("going on from a_1.checkpoint.exr"), "{stderr}");
+    for f in 0..=2 {
+        assert_eq!(bits(&d.join(format!("a_{f}.exr"))), bits(&d.join(format!("ref_{f}.exr"))));
+    }
 }

@@ -12,6 +12,9 @@ use std::time::{Duration, Instant};
 
 use raylab::parts::{self, PartKind};
 
+#[path = "common/animated.rs"]
+mod animated;
+
 fn farm(script: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../farm").join(script)
 }
@@ -136,6 +139,28 @@ fn a_slurm_job_array_renders_tiles_that_merge_to_the_single_render() {
     let merge_log = std::fs::read_to_string(d.join("full.exr.parts/merge.log")).unwrap();
     assert!(merge_log.contains("full.exr: 96×61 from 4 parts, 8 samples per pixel"), "{merge_log}");
     assert_eq!(bits(&d.join("full.exr")), single(d, "single.exr", &options));
+
+    // An animation, one array task per frame, equals the frames rendered in one process.
+    let animated = animated::animated_box(d);
+    let options = ["--size", "32x24", "--spp", "4"];
+    let mut args = vec!["--wait", "1", "3", "frames/f_%02d.exr", animated.as_str()];
+    args.extend_from_slice(&options);
+    cluster.run(farm("submit-slurm-frames.sh"), &args);
+    let out = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(
+            [&["render", animated.as_str(), "--frames", "1..3", "-o", "g_%02d.exr"][..], &options]
+                .concat(),
+        )
+        .current_dir(d)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    for f in 1..=3 {
+        assert_eq!(
+            bits(&d.join(format!("frames/f_{f:02}.exr"))),
+            bits(&d.join(format!("g_{f:02}.exr")))
+        );
+    }
 
     // One long tile, requeued (as pre-emption does: SIGTERM, then the job runs again) once it
     // has written a checkpoint: the same command goes on from it.

@@ -11,6 +11,8 @@
 
 mod cornell;
 mod file;
+mod finite;
+mod keyframes;
 mod model;
 pub(crate) mod obj;
 pub(crate) mod ply;
@@ -23,6 +25,7 @@ pub(crate) use file::read_file_bytes;
 pub use file::{
     LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh, read_limit_bytes,
 };
+pub use keyframes::Keyframe;
 pub use model::model_to_lab;
 pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
 
@@ -79,6 +82,8 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// The camera a scene file sets up, if any.
     pub camera: Option<CameraSettings>,
+    /// The camera's keyframes for an animation, sorted by frame, each frame once (empty: none).
+    pub keyframes: Vec<Keyframe>,
     /// The render settings a scene file gives; the command line overrides them.
     pub settings: RenderSettings,
 }
@@ -161,6 +166,12 @@ pub struct RenderSettings {
 }
 
 impl Scene {
+    /// The camera at `frame` of the animation its keyframes describe (see `keyframes.rs`), or
+    /// `None` when it has none.
+    pub fn camera_at(&self, frame: f32) -> Option<CameraSettings> {
+        keyframes::camera_at(&self.keyframes, frame)
+    }
+
     /// A hash of everything in the scene that decides what a ray sees: every triangle (its
     /// vertices, normals, texture coordinates and material), the materials and the lights, by
     /// their bits (XXH3, 64 bits). Not the name, the camera or the render settings. Parts of one
@@ -329,6 +340,7 @@ impl Scene {
             materials: self.materials.clone(),
             lights,
             camera: self.camera,
+            keyframes: self.keyframes.clone(),
             settings: self.settings.clone(),
         }
     }

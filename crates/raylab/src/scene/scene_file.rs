@@ -14,7 +14,7 @@ use glam::{Affine3A, Mat4, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::{CameraSettings, FovAxis, RenderSettings, Scene};
+use super::{CameraSettings, FovAxis, Keyframe, RenderSettings, Scene};
 use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};
@@ -60,7 +60,7 @@ pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneF
         let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
         SceneFileError { path: path.into(), line, column, message }
     };
-    if let Some((span, key, value)) = first_non_finite(text) {
+    if let Some((span, key, value)) = super::finite::first_non_finite(text) {
         return Err(at(Some(span), format!("{key} = {value} is not a finite number")));
     }
     let document: Document =
@@ -77,6 +77,7 @@ pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneF
 struct Document {
     render: Option<Spanned<RenderDoc>>,
     camera: Option<Spanned<CameraDoc>>,
+    keyframes: Option<Vec<Spanned<CameraDoc>>>,
     #[serde(default)]
     materials: BTreeMap<String, Spanned<MaterialDoc>>,
     #[serde(default)]
@@ -100,6 +101,8 @@ struct RenderDoc {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraDoc {
+    /// Only in `[[keyframes]]`: the frame the camera is for.
+    frame: Option<u32>,
     position: [f32; 3],
     target: Option<[f32; 3]>,
     up: Option<Spanned<[f32; 3]>>,
@@ -180,7 +183,28 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             scene.lights.push(self.light(light)?);
         }
         if let Some(camera) = &document.camera {
+            if camera.get_ref().frame.is_some() {
+                return self.error(camera.span(), "camera: frame belongs in [[keyframes]]");
+            }
             scene.camera = Some(self.camera(camera)?);
+        }
+        for key in document.keyframes.iter().flatten() {
+            let Some(frame) = key.get_ref().frame else {
+                return self.error(key.span(), "a keyframe needs its frame (a whole number)");
+            };
+            let camera = self.camera(key)?;
+            if let Some(last) = scene.keyframes.last()
+                && last.camera.fov_axis != camera.fov_axis
+            {
+                return self.error(key.span(), "keyframes must all have the same fov_axis");
+            }
+            if scene.keyframes.last().is_some_and(|last| last.frame >= frame) {
+                return self.error(
+                    key.span(),
+                    format!("keyframe {frame}: keyframes must be in order of frame, each once"),
+                );
+            }
+            scene.keyframes.push(Keyframe { frame, camera });
         }
         if let Some(render) = &document.render {
             scene.settings = self.render(render)?;
@@ -571,37 +595,6 @@ mod shapes;
 
 use materials::MaterialDoc;
 use shapes::{cube, rectangle, sphere};
-
-/// The first number in a TOML text that is NaN or infinite, or too large for a 32-bit float
-/// (`nan`, `inf`, `1e40`): its place, its key (like `camera.position[0]`) and its text. Checked
-/// before anything else, so that every such number is reported where it is, whatever it was
-/// meant to be.
-fn first_non_finite(text: &str) -> Option<(Range<usize>, String, String)> {
-    use toml::de::{DeTable, DeValue};
-    fn walk(
-        value: &toml::Spanned<DeValue<'_>>,
-        key: &str,
-    ) -> Option<(Range<usize>, String, String)> {
-        match value.get_ref() {
-            DeValue::Float(f) => {
-                let number = f.as_str().replace('_', "").parse::<f64>().unwrap_or(f64::NAN);
-                (!(number as f32).is_finite())
-                    .then(|| (value.span(), key.to_string(), f.as_str().to_string()))
-            }
-            DeValue::Array(items) => {
-                items.iter().enumerate().find_map(|(i, item)| walk(item, &format!("{key}[{i}]")))
-            }
-            DeValue::Table(table) => table.iter().find_map(|(name, item)| {
-                let name = name.get_ref();
-                walk(item, &if key.is_empty() { name.to_string() } else { format!("{key}.{name}") })
-            }),
-            _ => None,
-        }
-    }
-    let table = DeTable::parse(text).ok()?;
-    let root = toml::Spanned::new(table.span(), DeValue::Table(table.into_inner()));
-    walk(&root, "")
-}
 
 #[cfg(test)]
 mod tests;

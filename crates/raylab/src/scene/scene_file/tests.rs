@@ -310,3 +310,37 @@ fn numbers_that_are_not_finite_are_named_with_their_place() {
     // The largest finite float is still a number (refused or not by the key's own rule).
     assert!(!error("[camera]\nfov = 3e38\n").contains("not a finite number"));
 }
+
+#[test]
+fn keyframes_parse_in_order_and_mistakes_are_named() {
+    let keys = "[[keyframes]]\nframe = 0\nposition = [0, 0, 4]\n\n[[keyframes]]\nframe = 10\nposition = [2, 0, 4]\nyaw = 90\n";
+    let scene = parse(keys).unwrap();
+    assert_eq!(scene.keyframes.iter().map(|k| k.frame).collect::<Vec<_>>(), [0, 10]);
+    assert_eq!(scene.camera, None, "keyframes are not the still camera");
+    let middle = scene.camera_at(5.0).unwrap();
+    assert!((middle.yaw.to_degrees() - 45.0).abs() < 1e-4);
+    assert!(
+        middle.position.abs_diff_eq(super::super::model_to_lab(Vec3::new(1.0, 0.0, 4.0)), 1e-6)
+    );
+    assert_eq!(
+        error("[[keyframes]]\nposition = [0, 0, 4]\n"),
+        "test.toml:1:1: a keyframe needs its frame (a whole number)"
+    );
+    assert_eq!(
+        error(
+            "[[keyframes]]\nframe = 3\nposition = [0, 0, 4]\n[[keyframes]]\nframe = 3\nposition = [0, 0, 5]\n"
+        ),
+        "test.toml:4:1: keyframe 3: keyframes must be in order of frame, each once"
+    );
+    assert_eq!(
+        error("[camera]\nframe = 1\nposition = [0, 0, 4]\n"),
+        "test.toml:1:1: camera: frame belongs in [[keyframes]]"
+    );
+    assert!(
+        error("[[keyframes]]\nframe = 0\nposition = [0, 0, 4]\n[[keyframes]]\nframe = 1\nposition = [0, 0, 5]\nfov_axis = \"y\"\n")
+            .ends_with("keyframes must all have the same fov_axis")
+    );
+    assert!(
+        error("[[keyframes]]\nframe = -1\nposition = [0, 0, 4]\n").starts_with("test.toml:2:9")
+    );
+}

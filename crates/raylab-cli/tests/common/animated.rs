@@ -1,0 +1,33 @@
+//! A scene with camera keyframes, for the tests of `--frames`.
+
+use std::path::Path;
+
+/// Mitsuba's box with camera keyframes: frame 0 is its own camera, frame 4 one moved and turned
+/// 15° (the box has no meshes, so the file may live anywhere).
+pub fn animated_box(dir: &Path) -> String {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/cornell-mitsuba.toml"
+    ))
+    .unwrap();
+    let keys = r#"
+[[keyframes]]
+frame = 0
+position = [0, 0, 3.9000000953674316]
+target = [0, 0, 2.9000000953674316]
+up = [0, 1, 0]
+fov = 39.3077
+fov_axis = "smaller"
+
+[[keyframes]]
+frame = 4
+position = [0.4, 0.1, 3.5]
+yaw = 15
+pitch = -5
+fov = 45
+fov_axis = "smaller"
+"#;
+    let path = dir.join("animated.toml");
+    std::fs::write(&path, format!("{text}\n{keys}")).unwrap();
+    path.display().to_string()
+}
