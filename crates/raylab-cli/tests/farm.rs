@@ -8,9 +8,9 @@ use std::time::{Duration, Instant};
 
 use raylab::parts::{self, PartKind};
 
-#[path = "common/animated.rs"]
-mod animated;
-use animated::animated_box;
+#[path = "common/farm.rs"]
+mod common;
+use common::{animated_box, bits};
 
 fn raylab(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_raylab")).args(args).current_dir(dir).output().expect("runs")
@@ -39,18 +39,6 @@ fn ok(dir: &Path, args: &[&str]) -> Output {
     let out = raylab(dir, args);
     assert!(out.status.success(), "raylab {args:?}: {}", text(&out.stderr));
     out
-}
-
-/// A file's channels as bits, with its sample count and region.
-fn bits(path: &Path) -> (Vec<(String, Vec<u32>)>, u32, raylab::Region) {
-    let part = parts::read_part(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert_eq!(part.header.kind, PartKind::Image);
-    let channels = part
-        .channels
-        .into_iter()
-        .map(|(name, values)| (name, values.into_iter().map(f32::to_bits).collect()))
-        .collect();
-    (channels, part.header.samples, part.header.region)
 }
 
 /// Tiles for several counts (27 rows: 2, 4 and 5 do not divide it) and a set of regions,

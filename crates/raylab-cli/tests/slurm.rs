@@ -10,10 +10,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-use raylab::parts::{self, PartKind};
 
-#[path = "common/animated.rs"]
-mod animated;
+#[path = "common/farm.rs"]
+mod common;
+use common::bits;
 
 fn farm(script: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../farm").join(script)
@@ -93,20 +93,8 @@ impl Drop for Cluster {
     }
 }
 
-/// A file's channels as bits, and its sample count.
-fn bits(path: &Path) -> (Vec<(String, Vec<u32>)>, u32) {
-    let part = parts::read_part(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert_eq!(part.header.kind, PartKind::Image);
-    let channels = part
-        .channels
-        .into_iter()
-        .map(|(name, values)| (name, values.into_iter().map(f32::to_bits).collect()))
-        .collect();
-    (channels, part.header.samples)
-}
-
 /// The single render to compare with.
-fn single(dir: &Path, name: &str, args: &[&str]) -> (Vec<(String, Vec<u32>)>, u32) {
+fn single(dir: &Path, name: &str, args: &[&str]) -> (Vec<(String, Vec<u32>)>, u32, raylab::Region) {
     let scene = mitsuba_box();
     let mut all = vec!["render", scene.as_str(), "-o", name];
     all.extend_from_slice(args);
@@ -141,7 +129,7 @@ fn a_slurm_job_array_renders_tiles_that_merge_to_the_single_render() {
     assert_eq!(bits(&d.join("full.exr")), single(d, "single.exr", &options));
 
     // An animation, one array task per frame, equals the frames rendered in one process.
-    let animated = animated::animated_box(d);
+    let animated = common::animated_box(d);
     let options = ["--size", "32x24", "--spp", "4"];
     let mut args = vec!["--wait", "1", "3", "frames/f_%02d.exr", animated.as_str()];
     args.extend_from_slice(&options);

@@ -1,6 +1,20 @@
-//! A scene with camera keyframes, for the tests of `--frames`.
+//! What the farm tests share: reading a part's pixels as bits, and a scene with camera keyframes.
 
 use std::path::Path;
+
+use raylab::parts::{self, PartKind};
+
+/// A part's channels as bits, with its sample count and region.
+pub fn bits(path: &Path) -> (Vec<(String, Vec<u32>)>, u32, raylab::Region) {
+    let part = parts::read_part(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(part.header.kind, PartKind::Image);
+    let channels = part
+        .channels
+        .into_iter()
+        .map(|(name, values)| (name, values.into_iter().map(f32::to_bits).collect()))
+        .collect();
+    (channels, part.header.samples, part.header.region)
+}
 
 /// Mitsuba's box with camera keyframes: frame 0 is its own camera, frame 4 one moved and turned
 /// 15° (the box has no meshes, so the file may live anywhere).
