@@ -125,9 +125,14 @@ fn merge_refuses_parts_that_do_not_fit() {
     let bytes = std::fs::read(d.join("b.exr")).unwrap();
     std::fs::write(d.join("b-truncated.exr"), &bytes[..bytes.len() / 2]).unwrap();
     std::fs::write(d.join("b-text.exr"), "not an image").unwrap();
+    // Eight bytes flipped in the middle of the compressed pixels.
+    let mut corrupt = bytes.clone();
+    let middle = corrupt.len() / 2;
+    corrupt[middle..middle + 8].iter_mut().for_each(|b| *b ^= 0xFF);
+    std::fs::write(d.join("b-corrupt.exr"), corrupt).unwrap();
     let film = raylab::Film::from_pixels(16, 4, vec![glam::Vec3::ONE; 64]);
     raylab::image_io::save_exr_layers(&d.join("b-plain.exr"), &film, &[]).unwrap();
-    let cases: [(&[&str], &str); 12] = [
+    let cases: [(&[&str], &str); 13] = [
         (
             &["a.exr", "b-spp.exr"],
             "b-spp.exr does not belong with a.exr: other settings (spp=3 against spp=64)",
@@ -150,6 +155,7 @@ fn merge_refuses_parts_that_do_not_fit() {
         (&["a.exr", "b.exr", "b.exr"], "b.exr: given twice"),
         (&["a.exr", "b-truncated.exr"], "b-truncated.exr"),
         (&["a.exr", "b-text.exr"], "b-text.exr"),
+        (&["a.exr", "b-corrupt.exr"], "b-corrupt.exr"),
         (
             &["a.exr", "b-plain.exr"],
             "b-plain.exr: no raylab.kind attribute: not a part raylab wrote",
