@@ -210,7 +210,10 @@ fn load_scene(name: &str) -> Result<(Scene, bool)> {
     for warning in &loaded.warnings {
         eprintln!("raylab: warning: {warning}");
     }
-    Ok((Scene::from_mesh(&loaded.mesh), true))
+    let mut scene = Scene::from_mesh(&loaded.mesh);
+    // A file with its own camera (glTF) is seen through it; other models are framed.
+    scene.camera = loaded.camera;
+    Ok((scene, loaded.camera.is_none()))
 }
 
 /// A vector as `(x, y, z)` with [`tidy`] numbers.

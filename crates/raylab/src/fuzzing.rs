@@ -49,6 +49,15 @@ pub fn ply(data: &[u8]) {
     }
 }
 
+/// A glTF file, JSON or binary (external buffers are looked for in a folder that does not
+/// exist).
+pub fn gltf(data: &[u8]) {
+    let path = Path::new("/nonexistent/raylab/fuzz.glb");
+    if let Ok(loaded) = crate::scene::gltf::parse_gltf(path, data) {
+        use_mesh(&loaded);
+    }
+}
+
 /// A TOML scene file (meshes it names are looked for in a folder that does not exist).
 pub fn scene_file(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else { return };

@@ -34,6 +34,26 @@ fn ply_inputs() {
 }
 
 #[test]
+fn gltf_inputs() {
+    run_all("gltf", raylab::fuzzing::gltf);
+}
+
+/// The first crash the glTF fuzzer found: a primitive's POSITION names an accessor that does not
+/// exist, which made the `gltf` crate's validation index out of bounds. Now a one-line error.
+#[test]
+fn a_missing_position_accessor_is_an_error() {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/gltf");
+    let crash =
+        std::fs::read(folder.join("crash-d6171484682aa3215dba3db05fb03870392e6053")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("crash.gltf");
+    std::fs::write(&path, crash).unwrap();
+    let message = raylab::scene::load_mesh(&path).unwrap_err().to_string();
+    assert!(message.contains("does not exist"), "{message}");
+    assert!(message.starts_with(&path.display().to_string()) && !message.contains('\n'));
+}
+
+#[test]
 fn scene_file_inputs() {
     run_all("scene_file", raylab::fuzzing::scene_file);
 }

@@ -34,7 +34,7 @@ use super::{obj, ply};
 use crate::mesh::Mesh;
 
 /// The file name endings [`load_mesh`] accepts, in any case.
-pub const SUPPORTED_EXTENSIONS: &[&str] = &[".obj", ".obj.gz", ".ply", ".ply.gz"];
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[".obj", ".obj.gz", ".ply", ".ply.gz", ".gltf", ".glb"];
 
 /// A mesh as loaded, with the warnings the loader has for the caller.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -44,6 +44,8 @@ pub struct LoadedMesh {
     /// Problems that did not stop the load, one line each, each naming the file (and the line
     /// where there is one), e.g. `spider.obj: line 3: material library spider.mtl ignored: …`.
     pub warnings: Vec<String>,
+    /// The file's camera (glTF), in the lab's frame.
+    pub camera: Option<super::CameraSettings>,
 }
 
 /// A place in a file.
@@ -148,6 +150,7 @@ pub enum LoadError {
 enum Format {
     Obj,
     Ply,
+    Gltf,
 }
 
 /// The format and whether the file is gzip-compressed, from the file name's ending (any case).
@@ -161,6 +164,8 @@ fn format_of(path: &Path) -> Option<(Format, bool)> {
         Some((Format::Obj, gzip))
     } else if stem.ends_with(".ply") {
         Some((Format::Ply, gzip))
+    } else if !gzip && (stem.ends_with(".gltf") || stem.ends_with(".glb")) {
+        Some((Format::Gltf, false))
     } else {
         None
     }
@@ -182,6 +187,7 @@ pub fn load_mesh(path: &Path) -> Result<LoadedMesh, LoadError> {
     let loaded = match format {
         Format::Obj => obj::parse_obj(path, &bytes)?,
         Format::Ply => ply::parse_ply(path, &bytes)?,
+        Format::Gltf => super::gltf::parse_gltf(path, &bytes)?,
     };
     if loaded.mesh.triangles.is_empty() {
         return Err(LoadError::NoTriangles { path: path.into() });

@@ -12,6 +12,7 @@
 mod cornell;
 mod file;
 mod finite;
+pub(crate) mod gltf;
 mod keyframes;
 mod model;
 pub(crate) mod obj;

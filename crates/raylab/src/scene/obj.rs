@@ -195,7 +195,7 @@ pub(crate) fn parse_obj_with(
     }
     mesh.materials = materials;
     let warnings = warnings.into_iter().map(|w| format!("{}: {w}", path.display())).collect();
-    Ok(LoadedMesh { mesh, warnings })
+    Ok(LoadedMesh { mesh, warnings, camera: None })
 }
 
 /// What tobj's error means, as "expected …".

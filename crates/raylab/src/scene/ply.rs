@@ -199,7 +199,7 @@ pub(crate) fn parse_ply(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadErr
         warnings.push(format!("skipped {} faces with fewer than 3 vertices", builder.short_faces));
     }
     let warnings = warnings.into_iter().map(|w| format!("{}: {w}", path.display())).collect();
-    Ok(LoadedMesh { mesh: builder.finish(mesh_name(path)), warnings })
+    Ok(LoadedMesh { mesh: builder.finish(mesh_name(path)), warnings, camera: None })
 }
 
 /// The header's lines, each without its line ending, with their numbers and the offset after.
