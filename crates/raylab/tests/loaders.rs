@@ -456,7 +456,7 @@ fn file_level_errors_name_the_path() {
     assert!(
         message.ends_with(
             "teapot.stl: unknown mesh file type; the supported extensions are .obj, .obj.gz, .ply, \
-             .ply.gz (in any case)"
+             .ply.gz, .gltf, .glb (in any case)"
         ),
         "{message}"
     );
