@@ -8,7 +8,8 @@
 # Needs Debian's slurm-wlm and munge packages (slurmctld/slurmd 22.05, munge 0.5). Nothing is
 # installed or changed outside DIR: the cluster has its own munge key and socket, its own ports
 # (26817 and 26818 unless SLURMCTLD_PORT / SLURMD_PORT say otherwise) and runs as the current
-# user. No systemd needed.
+# user. No systemd needed. A requeued job starts again after CRED_EXPIRE seconds (10 here;
+# Slurm's default, on real clusters, is 120).
 set -euo pipefail
 
 usage() { echo "usage: $0 start|stop DIR" >&2; exit 2; }
@@ -19,6 +20,12 @@ conf=$dir/slurm.conf
 
 stop() {
     local pid_file pid
+    # Jobs first (their steps would outlive the daemons), then an orderly shutdown; the pid
+    # files below catch whatever is left.
+    if [ -s "$dir/slurmctld.pid" ] && kill -0 "$(cat "$dir/slurmctld.pid")" 2>/dev/null; then
+        SLURM_CONF=$conf timeout 10 scancel --user="$(id -un)" 2>/dev/null || true
+        SLURM_CONF=$conf timeout 10 scontrol shutdown 2>/dev/null || true
+    fi
     for pid_file in "$dir/slurmd.pid" "$dir/slurmctld.pid" "$dir/munge/munged.pid"; do
         [ -s "$pid_file" ] || continue
         pid=$(cat "$pid_file")
@@ -31,6 +38,8 @@ stop() {
 }
 
 start() {
+    # Whatever fails from here on, the daemons already started are stopped again.
+    trap stop ERR
     for tool in munged slurmctld slurmd sbatch sinfo; do
         command -v "$tool" >/dev/null || {
             echo "$0: $tool is not installed (apt-get install slurm-wlm munge)" >&2
@@ -67,7 +76,8 @@ SlurmdPort=${SLURMD_PORT:-26818}
 SlurmUser=$user
 SlurmdUser=$user
 AuthType=auth/munge
-AuthInfo=socket=$dir/munge/munge.socket
+# A requeued job waits cred_expire seconds before it starts again (120 by default).
+AuthInfo=socket=$dir/munge/munge.socket,cred_expire=${CRED_EXPIRE:-10}
 CredType=cred/munge
 StateSaveLocation=$dir/state
 SlurmdSpoolDir=$dir/spool

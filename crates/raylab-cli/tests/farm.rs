@@ -173,8 +173,18 @@ fn merge_refuses_parts_that_do_not_fit() {
         assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
         assert!(!d.join("out.exr").exists(), "{inputs:?}: nothing written");
     }
+    // The output may not be one of the parts, whatever its name says.
+    let out = raylab(d, &["merge", "a.exr", "b.exr", "-o", "./b.exr"]);
+    assert!(text(&out.stderr).contains("the output would overwrite one of the parts"));
     // The good pair merges.
     ok(d, &["merge", "a.exr", "b.exr", "-o", "out.exr"]);
+    // Times too long for any clock are refused, not a panic.
+    for option in ["--checkpoint", "--time-limit"] {
+        let out = raylab(d, &["render", "-o", "t.exr", option, "1e30"]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains("1e30 seconds is more than a century"), "{stderr}");
+    }
     // A tile needs OpenEXR output, and tiles are numbered from 0.
     let out = raylab(d, &["render", "-o", "t.png", "--tile", "0/2"]);
     assert!(text(&out.stderr).contains("the output must end in .exr"));
@@ -247,9 +257,9 @@ fn an_interrupted_render_keeps_its_work_and_resumes_to_the_same_image() {
         };
         let stderr = text(&again.stderr);
         assert!(again.status.success(), "{stderr}");
+        let name = checkpoint.file_name().unwrap().to_str().unwrap();
         assert!(
-            stderr.contains(&format!("going on from {} at ", checkpoint.display()))
-                || stderr.contains("going on from"),
+            stderr.contains(&format!("going on from {name} at {reached} samples per pixel")),
             "{stderr}"
         );
         assert_eq!(bits(&d.join(output)), reference, "resumed after SIG{kill_with}");
