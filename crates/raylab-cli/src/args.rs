@@ -14,6 +14,17 @@ pub fn positive_f32(text: &str) -> Result<f32, String> {
     if value > 0.0 { Ok(value) } else { Err(format!("{text} must be greater than 0")) }
 }
 
+/// Parses a time in seconds, greater than zero and at most a century (a larger one would not fit
+/// a `Duration` and means "no limit" anyway).
+pub fn seconds(text: &str) -> Result<std::time::Duration, String> {
+    const CENTURY: f32 = 100.0 * 365.25 * 86400.0;
+    let value = positive_f32(text)?;
+    if value > CENTURY {
+        return Err(format!("{text} seconds is more than a century"));
+    }
+    std::time::Duration::try_from_secs_f32(value).map_err(|e| format!("{text}: {e}"))
+}
+
 /// Parses a finite number that is zero or more.
 pub fn non_negative_f32(text: &str) -> Result<f32, String> {
     let value = finite_f32(text)?;

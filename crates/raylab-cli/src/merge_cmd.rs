@@ -34,16 +34,21 @@ pub struct MergeArgs {
 
 pub fn run(args: &MergeArgs) -> Result<()> {
     let format = image_io::check_writable(&args.output)?;
-    if args.parts.iter().any(|p| p == &args.output) {
+    // By identity, not by name: `./a.exr` and `a.exr`, or a link, are the same file.
+    if let Ok(output) = std::fs::canonicalize(&args.output)
+        && args.parts.iter().any(|p| std::fs::canonicalize(p).is_ok_and(|p| p == output))
+    {
         bail!("{}: the output would overwrite one of the parts", args.output.display());
     }
     let parts = args.parts.iter().map(|p| parts::read_part(p)).collect::<Result<Vec<_>, _>>()?;
-    let (header, channels) = parts::merge(&parts)?;
+    let count = parts.len();
+    let (header, channels) = parts::merge(parts)?;
     let (width, height) = header.image;
-    let film = parts::beauty(&channels, width, height).context("parts have R, G and B")?;
     if format == ImageFormat::Exr {
-        parts::write_exr(&args.output, header.image, header.region, &channels, Some(&header))?;
+        parts::write_exr(&args.output, header.image, header.region, channels, Some(&header))?;
     } else {
+        let film = parts::beauty(&channels, width, height).context("parts have R, G and B")?;
+        drop(channels);
         // The lab's integrator shows linear values, the others sRGB-encoded.
         let srgb = !header.settings.contains("integrator=lab;");
         let display = Display { exposure: args.exposure, tone_map: args.tonemap, srgb };
@@ -52,7 +57,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let report = format!(
         "{}: {width}×{height} from {} parts, {} samples per pixel\n",
         args.output.display(),
-        parts.len(),
+        count,
         header.samples
     );
     match std::io::stdout().lock().write_all(report.as_bytes()) {

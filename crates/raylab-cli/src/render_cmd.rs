@@ -31,7 +31,9 @@ fn aov_kind(name: &str) -> AovKind {
 }
 
 #[derive(Args, Debug)]
-#[command(after_long_help = STAGES_HELP, allow_negative_numbers = true)]
+// An option given twice takes its last value, so that a script's defaults (the farm scripts'
+// --threads and --checkpoint) can be overridden by the options passed on to it.
+#[command(after_long_help = STAGES_HELP, allow_negative_numbers = true, args_override_self = true)]
 pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -82,8 +84,8 @@ pub struct RenderArgs {
 
     /// Render progressively for this long, then write the picture with the samples per pixel
     /// reached (at least one; at most --spp when it is given).
-    #[arg(long, value_name = "SECONDS", value_parser = args::positive_f32)]
-    time_limit: Option<f32>,
+    #[arg(long, value_name = "SECONDS", value_parser = args::seconds)]
+    time_limit: Option<Duration>,
 
     /// Brightness of .png/.ppm output in stops: radiance is multiplied by 2^EV.
     #[arg(long, value_name = "EV", default_value = "0", value_parser = args::finite_f32)]
@@ -107,8 +109,8 @@ pub struct RenderArgs {
     /// Write a checkpoint beside the output (NAME.checkpoint.exr) at most every SECONDS and on
     /// an interrupt. Run the same command again (or `--resume` the checkpoint) to go on from it
     /// to exactly the image of an uninterrupted render; a finished render deletes it.
-    #[arg(long, value_name = "SECONDS", value_parser = args::positive_f32)]
-    checkpoint: Option<f32>,
+    #[arg(long, value_name = "SECONDS", value_parser = args::seconds)]
+    checkpoint: Option<Duration>,
 
     /// Render frames A to B (both included; or one frame, N) of the animation the scene file's
     /// camera keyframes describe, each to the output name with its frame number in place of a
@@ -205,7 +207,7 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         (Some(_), None) => MAX_SPP,
         _ => args.spp.or(settings.spp).unwrap_or(if integrator_name == "lab" { 1 } else { 16 }),
     };
-    let deadline = args.time_limit.map(Duration::from_secs_f32);
+    let deadline = args.time_limit;
     let max_depth = match args.max_depth {
         Some(-1) => None,
         Some(d) => Some(d as u32),
@@ -242,6 +244,8 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         region_height,
     )?;
     let pool = setup.thread_pool()?;
+    // Installed once for every frame: SIGINT and SIGTERM from here on end the render cleanly.
+    let stop = &render_state::interrupt_flag()?;
 
     let start = Instant::now();
     let accel = pool.install(|| system::build_bvh(&scene.name, &scene.vertices()))?;
@@ -259,7 +263,7 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
     let aov;
     let integrator: &dyn Integrator = match (integrator_name.as_str(), &path) {
         ("lab", _) => {
-            lab = Lab::new(scene, &accel, stage);
+            lab = Lab::new(scene, &accel, stage).for_camera(camera);
             &lab
         }
         (_, Some(path)) => path,
@@ -292,10 +296,9 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
             settings: settings_text,
             command: command.as_ref().map(Command::to_json),
         };
-        // A frame of an animation that a previous run of the same command finished (a requeued
-        // job, a rerun after an interrupt) is not rendered again.
-        if args.frames.is_some()
-            && args.checkpoint.is_some()
+        // An image (a frame of an animation, a tile) that a previous run of the same command
+        // finished (a requeued job, a rerun after an interrupt) is not rendered again.
+        if args.checkpoint.is_some()
             && output.exists()
             && parts::read_part(output).is_ok_and(|done| {
                 let h = &done.header;
@@ -307,9 +310,8 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
             eprintln!("raylab: {} is already rendered", output.display());
             return Ok(());
         }
-        let checkpoint = args.checkpoint.map(|seconds| {
-            (render_state::checkpoint_path(output), Duration::from_secs_f32(seconds))
-        });
+        let checkpoint =
+            args.checkpoint.map(|every| (render_state::checkpoint_path(output), every));
         // A checkpoint to go on from: the one asked for, or this render's own from an earlier run.
         let state = match (state, &checkpoint) {
             (Some(part), _) => Some(part),
@@ -353,13 +355,14 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
             }
         };
         let first_sample = accumulator.samples();
-        let stop = render_state::interrupt_flag()?;
         let passes = spp.saturating_sub(first_sample) as u64;
         let progress = Progress::new(region_height as u64 * passes, region_width as u64, deadline);
         let start = Instant::now();
         let mut last_checkpoint = Instant::now();
         let mut checkpoint_time = Duration::ZERO;
-        let write_checkpoint = |accumulator: &Accumulator, path: &PathBuf| -> Result<Duration> {
+        // A checkpoint that cannot be written (a full disk, a vanished directory) is reported,
+        // and the render goes on: its work is not thrown away for want of a checkpoint.
+        let write_checkpoint = |accumulator: &Accumulator, path: &PathBuf| -> Duration {
             let start = Instant::now();
             let state = PartHeader {
                 kind: PartKind::Checkpoint,
@@ -367,13 +370,16 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
                 ..header.clone()
             };
             let sums = parts::film_channels(accumulator.sums(), &[]);
-            parts::write_exr(path, (width, height), region, &sums, Some(&state))?;
-            Ok(start.elapsed())
+            if let Err(error) = parts::write_exr(path, (width, height), region, sums, Some(&state))
+            {
+                eprintln!("raylab: warning: no checkpoint written: {error}");
+            }
+            start.elapsed()
         };
         let mut was_interrupted = false;
-        pool.install(|| -> Result<()> {
+        pool.install(|| {
             while accumulator.samples() < spp {
-                if render_state::interrupted(&stop) {
+                if render_state::interrupted(stop) {
                     was_interrupted = true;
                     break;
                 }
@@ -386,13 +392,16 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
                     && last_checkpoint.elapsed() >= *every
                     && accumulator.samples() < spp
                 {
-                    checkpoint_time += write_checkpoint(&accumulator, path)?;
+                    checkpoint_time += write_checkpoint(&accumulator, path);
                     last_checkpoint = Instant::now();
                 }
             }
-            Ok(())
-        })?;
-        was_interrupted |= render_state::interrupted(&stop);
+        });
+        was_interrupted |= render_state::interrupted(stop);
+        // The work so far is kept first: on a pre-empted node the time left may be short.
+        if was_interrupted && let Some((path, _)) = &checkpoint {
+            write_checkpoint(&accumulator, path);
+        }
         let spp = accumulator.samples();
         if spp == 0 {
             progress.finish();
@@ -408,9 +417,10 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
              radiance, e.g. from a degenerate triangle or normal) and count as black"
             );
         }
-        // The extra layers, over the same samples.
+        // The extra layers, over the same samples; an interrupted render leaves them out rather
+        // than spend another pass on them.
         let mut layers = Vec::new();
-        for name in &args.aov {
+        for name in args.aov.iter().filter(|_| !was_interrupted) {
             let aov = Aov::new(scene, &accel, aov_kind(name));
             let layer = pool.install(|| -> Result<Film> {
                 let mut accumulator = Accumulator::for_region(width, height, region)?;
@@ -430,15 +440,12 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         } else {
             Display { exposure: args.exposure, tone_map: args.tonemap, srgb: true }
         };
-        if was_interrupted && let Some((path, _)) = &checkpoint {
-            write_checkpoint(&accumulator, path)?;
-        }
         if format == image_io::ImageFormat::Exr {
             let layers: Vec<(&str, &Film)> =
                 layers.iter().map(|(name, film)| (*name, film)).collect();
             let channels = parts::film_channels(&film, &layers);
             let header = PartHeader { samples: spp, command: None, ..header.clone() };
-            parts::write_exr(output, (width, height), region, &channels, Some(&header))?;
+            parts::write_exr(output, (width, height), region, channels, Some(&header))?;
         } else {
             image_io::save_film(output, &film, &display)?;
         }
@@ -496,6 +503,22 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
             build.as_secs_f64() * 1e3,
             samples / elapsed.as_secs_f64().max(1e-9) / 1e6,
         );
+        let (texture_bytes, images) = scene.texture_bytes();
+        let textures = if images == 0 {
+            String::new()
+        } else {
+            format!(
+                ", {images} texture{} {}",
+                if images == 1 { "" } else { "s" },
+                raylab::film::format_bytes(texture_bytes)
+            )
+        };
+        report += &format!(
+            "scene loaded in {:.1} ms; memory: geometry {}, BVH {}{textures}\n",
+            setup.load.as_secs_f64() * 1e3,
+            raylab::film::format_bytes(scene.geometry.bytes()),
+            raylab::film::format_bytes(accel.stats().bytes() as u64),
+        );
         if integrator_name == "lab" {
             let light = scene.lab_light();
             report +=
@@ -520,6 +543,13 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
     };
     let mut state = state;
     for frame in first..=last {
+        if render_state::interrupted(stop) {
+            let report = format!(
+                "stopped before frame {frame}; frames {first} to {} are written",
+                frame - 1
+            );
+            return Err(Interrupted { report }.into());
+        }
         let output = args::frame_path(&args.output, frame)?;
         let settings = scene.camera_at(frame as f32);
         let camera = args.scene.camera(settings, scene, setup.is_model, width, height)?;

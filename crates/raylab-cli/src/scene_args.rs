@@ -96,12 +96,16 @@ pub struct Setup {
     pub threads: usize,
     /// Whether the scene is a model file (framed by the camera unless told otherwise).
     pub is_model: bool,
+    /// How long reading (or making) the scene took.
+    pub load: std::time::Duration,
 }
 
 impl SceneArgs {
     /// Loads and checks everything before any rendering, so that no work is lost to a bad value.
     pub fn setup(&self) -> Result<Setup> {
+        let start = std::time::Instant::now();
         let (mut scene, is_model) = load_scene(&self.scene)?;
+        let load = start.elapsed();
         let scene_camera = scene.camera;
         if let Some(position) = self.light {
             scene.point_light_mut().position = position;
@@ -123,7 +127,7 @@ impl SceneArgs {
             Some(n) if n > MAX_THREADS => bail!("--threads {n} is more than {MAX_THREADS}"),
             Some(n) => n,
         };
-        Ok(Setup { scene, camera, threads, is_model })
+        Ok(Setup { scene, camera, threads, is_model, load })
     }
 }
 
@@ -210,10 +214,8 @@ fn load_scene(name: &str) -> Result<(Scene, bool)> {
     for warning in &loaded.warnings {
         eprintln!("raylab: warning: {warning}");
     }
-    let mut scene = Scene::from_mesh(&loaded.mesh);
     // A file with its own camera (glTF) is seen through it; other models are framed.
-    scene.camera = loaded.camera;
-    Ok((scene, loaded.camera.is_none()))
+    Ok((Scene::from_loaded(&loaded), loaded.camera.is_none()))
 }
 
 /// A vector as `(x, y, z)` with [`tidy`] numbers.

@@ -544,3 +544,21 @@ fn a_time_limit_renders_progressively_until_then() {
     );
     assert!(text(&out.stdout).contains(", 3 samples per pixel"), "{}", text(&out.stdout));
 }
+
+/// A textured glTF renders from the command line, and the report says what the scene holds:
+/// its load time and the memory of its geometry, BVH and textures (the 211² logo with its
+/// mip-maps: 211² + 105² + 52² + … + 1 = 59,141 texels of 4 bytes, 236,564 bytes).
+#[test]
+fn the_report_gives_load_time_and_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../raylab/tests/data/meshes/BoxTextured/BoxTextured.gltf"
+    );
+    let out = raylab(dir.path(), &["render", model, "-o", "box.png", "--size", "32x32"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("scene loaded in "), "{stdout}");
+    assert!(stdout.contains("memory: geometry "), "{stdout}");
+    assert!(stdout.contains(", 1 texture 231.0 KiB"), "{stdout}");
+}

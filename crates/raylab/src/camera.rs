@@ -59,6 +59,13 @@ impl Camera {
         }
     }
 
+    /// The angle one pixel at the centre of the image subtends, in radians: a camera ray's
+    /// cone spreads by it (texture filtering, [`crate::texture`]).
+    #[inline]
+    pub fn pixel_spread(&self) -> f32 {
+        (1.0 / self.focal_length_px).atan()
+    }
+
     /// Whether the camera has a lens of some size (depth of field), rather than a pinhole.
     #[inline]
     pub fn has_lens(&self) -> bool {

@@ -4,7 +4,7 @@
 //! every crash input ever found through them.
 
 use std::io::Cursor;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::bvh::Bvh;
 use crate::scene::{LoadedMesh, Scene};
@@ -36,7 +36,8 @@ pub fn obj(data: &[u8]) {
     let Some((&split, rest)) = data.split_first() else { return };
     let at = rest.len() * split as usize / 256;
     let (obj, mtl) = rest.split_at(at);
-    let library = |name: &str| Ok((PathBuf::from(name), mtl.to_vec()));
+    // In a folder that does not exist, so that textures the library names are not found.
+    let library = |name: &str| Ok((Path::new("/nonexistent/raylab").join(name), mtl.to_vec()));
     if let Ok(loaded) = crate::scene::obj::parse_obj_with(Path::new("fuzz.obj"), obj, &library) {
         use_mesh(&loaded);
     }
@@ -69,6 +70,6 @@ pub fn scene_file(data: &[u8]) {
 /// An OpenEXR part as `raylab merge` reads it, merged with itself alone.
 pub fn exr_part(data: &[u8]) {
     if let Ok(part) = crate::parts::read_part_from(Path::new("fuzz.exr"), Cursor::new(data)) {
-        let _ = crate::parts::merge(std::slice::from_ref(&part));
+        let _ = crate::parts::merge(vec![part]);
     }
 }

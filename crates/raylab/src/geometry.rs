@@ -14,12 +14,13 @@
 //! its rounding-error bound, the normals, the texture coordinates and the material. Every
 //! integrator shades through it.
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Affine3A, Vec2, Vec3, Vec4};
 
 use crate::accel::Hit;
 use crate::float::gamma;
 use crate::mesh::Mesh;
 use crate::ray::{Ray, SurfacePoint};
+use crate::texture::TextureQuery;
 
 /// Which triangles of a [`Geometry`] one mesh added.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,11 +41,54 @@ pub struct Geometry {
     normals: Vec<Vec3>,
     /// Shading normals at each triangle's corners: empty when no mesh has any; a triangle without
     /// them has zero vectors.
-    shading_normals: Vec<[Vec3; 3]>,
+    shading_normals: CornerTable<Vec3>,
     /// Texture coordinates at each triangle's corners: empty when no mesh has any.
-    uvs: Vec<[Vec2; 3]>,
+    uvs: CornerTable<Vec2>,
+    /// Tangents (w: the bitangent's sign) at each triangle's corners: empty when no mesh has
+    /// any; a triangle without them has zero vectors.
+    tangents: CornerTable<Vec4>,
     material_ids: Vec<u32>,
     meshes: Vec<MeshRange>,
+}
+
+/// Values at triangles' corners, indexed as the meshes give them: each value stored once
+/// however many corners share it (a normal per vertex costs 12 bytes a vertex, not 36 a
+/// triangle).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct CornerTable<T> {
+    values: Vec<T>,
+    /// Each triangle's three indices into `values`; empty when no mesh has the attribute.
+    corners: Vec<[u32; 3]>,
+}
+
+impl<T: Copy> CornerTable<T> {
+    /// Triangle `i`'s three values, if the table has them.
+    #[inline]
+    fn get(&self, i: usize) -> Option<[T; 3]> {
+        let corners = self.corners.get(i)?;
+        Some(corners.map(|k| self.values[k as usize]))
+    }
+
+    /// Gives every triangle before `until` that has no values the corners `fill`.
+    fn pad(&mut self, until: usize, fill: [T; 3]) {
+        if self.corners.len() < until {
+            let base = self.values.len() as u32;
+            self.values.extend(fill);
+            self.corners.resize(until, [base, base + 1, base + 2]);
+        }
+    }
+
+    /// Appends a mesh's values and its triangles' indices into them.
+    fn append(&mut self, values: impl IntoIterator<Item = T>, corners: &[[u32; 3]]) {
+        let base = self.values.len() as u32;
+        self.values.extend(values);
+        self.corners.extend(corners.iter().map(|c| c.map(|k| base + k)));
+    }
+
+    fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.values.as_slice())
+            + std::mem::size_of_val(self.corners.as_slice())
+    }
 }
 
 /// What a ray sees where it hits a surface.
@@ -60,6 +104,9 @@ pub struct SurfaceInteraction {
     /// How the point moves with `u`: the shading frame's tangent direction (before it is made
     /// perpendicular to the shading normal), as Mitsuba's `dp_du`; without UVs, `v1 − v0`.
     pub dp_du: Vec3,
+    /// The interpolated tangent for normal maps (w: the bitangent's sign); zero where the mesh
+    /// has none.
+    pub tangent: Vec4,
     /// Index into the scene's materials.
     pub material: u32,
     /// The triangle hit.
@@ -88,8 +135,12 @@ impl Geometry {
         put(&mut self.positions.iter().flat_map(bits));
         put(&mut self.triangles.iter().flatten().copied());
         put(&mut self.normals.iter().flat_map(bits));
-        put(&mut self.shading_normals.iter().flatten().flat_map(bits));
-        put(&mut self.uvs.iter().flatten().flat_map(|v| v.to_array().map(f32::to_bits)));
+        put(&mut self.shading_normals.values.iter().flat_map(bits));
+        put(&mut self.shading_normals.corners.iter().flatten().copied());
+        put(&mut self.uvs.values.iter().flat_map(|v| v.to_array().map(f32::to_bits)));
+        put(&mut self.uvs.corners.iter().flatten().copied());
+        put(&mut self.tangents.values.iter().flat_map(|v| v.to_array().map(f32::to_bits)));
+        put(&mut self.tangents.corners.iter().flatten().copied());
         put(&mut self.material_ids.iter().copied());
         hasher.update(&buffer);
     }
@@ -127,32 +178,38 @@ impl Geometry {
         );
         // Normals transform by the inverse transpose.
         let normal_matrix = transform.matrix3.inverse().transpose();
+        let all = self.triangles.len();
         if let Some(normals) = normals {
-            self.shading_normals.resize(first, [Vec3::ZERO; 3]);
-            self.shading_normals.extend(normals.triangles.iter().map(|t| {
-                t.map(|i| (normal_matrix * normals.values[i as usize]).normalize_or_zero())
-            }));
-        } else if !self.shading_normals.is_empty() {
-            self.shading_normals.resize(self.triangles.len(), [Vec3::ZERO; 3]);
+            self.shading_normals.pad(first, [Vec3::ZERO; 3]);
+            let values = normals.values.iter().map(|&n| (normal_matrix * n).normalize_or_zero());
+            self.shading_normals.append(values, &normals.triangles);
+        } else if !self.shading_normals.corners.is_empty() {
+            self.shading_normals.pad(all, [Vec3::ZERO; 3]);
+        }
+        if let Some(tangents) = &mesh.tangents {
+            // Tangents lie in the surface: they turn with the transform; a mirror flips the
+            // bitangent's side.
+            let sign = transform.matrix3.determinant().signum();
+            self.tangents.pad(first, [Vec4::ZERO; 3]);
+            let values = tangents
+                .values
+                .iter()
+                .map(|v| (transform.matrix3 * v.truncate()).normalize_or_zero().extend(v.w * sign));
+            self.tangents.append(values, &tangents.triangles);
+        } else if !self.tangents.corners.is_empty() {
+            self.tangents.pad(all, [Vec4::ZERO; 3]);
         }
         if let Some(uvs) = uvs {
-            let default = self.default_uvs(first);
-            self.uvs.extend(default);
-            self.uvs.extend(uvs.triangles.iter().map(|t| t.map(|i| uvs.values[i as usize])));
-        } else if !self.uvs.is_empty() {
-            let missing = self.triangles.len() - self.uvs.len();
-            self.uvs.extend(std::iter::repeat_n(DEFAULT_UVS, missing));
+            self.uvs.pad(first, DEFAULT_UVS);
+            self.uvs.append(uvs.values.iter().copied(), &uvs.triangles);
+        } else if !self.uvs.corners.is_empty() {
+            self.uvs.pad(all, DEFAULT_UVS);
         }
         self.meshes.push(MeshRange {
             name: name.clone(),
             first: first as u32,
             count: triangles.len() as u32,
         });
-    }
-
-    /// The default texture coordinates for the triangles before `first` that have none.
-    fn default_uvs(&self, first: usize) -> Vec<[Vec2; 3]> {
-        vec![DEFAULT_UVS; first - self.uvs.len()]
     }
 
     /// Appends triangles given by their corners (no shared vertices), each with its material.
@@ -173,6 +230,19 @@ impl Geometry {
         let mesh =
             Mesh { name: name.to_string(), positions, triangles: indices, ..Mesh::default() };
         self.add_mesh(&mesh, &Affine3A::IDENTITY, |i| materials[i]);
+    }
+
+    /// The bytes its tables take (their lengths, not their spare capacity).
+    pub fn bytes(&self) -> u64 {
+        use std::mem::size_of_val;
+        let bytes = size_of_val(self.positions.as_slice())
+            + size_of_val(self.triangles.as_slice())
+            + size_of_val(self.normals.as_slice())
+            + self.shading_normals.bytes()
+            + self.uvs.bytes()
+            + self.tangents.bytes()
+            + size_of_val(self.material_ids.as_slice());
+        bytes as u64
     }
 
     /// The number of triangles.
@@ -298,18 +368,68 @@ impl Geometry {
         }
         // Without UVs, the barycentric parametrization: uv = (b1, b2) and dp/du = v1 − v0.
         let (uv, dp_du) = match self.uvs.get(i) {
-            Some(&t) => (b0 * t[0] + b1 * t[1] + b2 * t[2], dp_du([v0, v1, v2], t)),
+            Some(t) => (b0 * t[0] + b1 * t[1] + b2 * t[2], dp_du([v0, v1, v2], t)),
             None => (Vec2::new(b1, b2), v1 - v0),
+        };
+        let tangent = match self.tangents.get(i) {
+            Some(t) => b0 * t[0] + b1 * t[1] + b2 * t[2],
+            None => Vec4::ZERO,
         };
         SurfaceInteraction {
             point,
             shading_normal,
             uv,
             dp_du,
+            tangent,
             material: self.material_ids[i],
             triangle: hit.triangle,
             t: hit.t,
         }
+    }
+}
+
+impl SurfaceInteraction {
+    /// Where textures are read here, at a point (footprint 0): the path tracer's lookups.
+    #[inline]
+    pub fn texture_query(&self) -> TextureQuery {
+        TextureQuery { uv: self.uv, p: self.point.p, footprint: 0.0 }
+    }
+}
+
+impl Geometry {
+    /// How many texture-coordinate units a unit of length spans on triangle `i`:
+    /// `sqrt(uv area / area)` (0 for a triangle without area or without texture area).
+    #[inline]
+    pub fn uv_per_length(&self, i: usize) -> f32 {
+        let [v0, v1, v2] = self.triangle(i);
+        let area = (v1 - v0).cross(v2 - v0).length();
+        let [t0, t1, t2] = self.uvs.get(i).unwrap_or(DEFAULT_UVS);
+        let uv_area = (t1 - t0).perp_dot(t2 - t0).abs();
+        let ratio = (uv_area / area).sqrt();
+        if ratio.is_finite() { ratio } else { 0.0 }
+    }
+
+    /// Where textures are read for `ray` at `hit`, with the footprint of a ray cone that
+    /// spreads by `spread` radians from the ray's origin (see [`crate::texture`]): `d · spread`
+    /// across at distance `d`, `1/|cos θ|` longer on a slanted surface, in texture units.
+    #[inline]
+    pub fn texture_query(&self, ray: &Ray, hit: &Hit, spread: f32) -> TextureQuery {
+        let i = hit.triangle as usize;
+        let [v0, v1, v2] = self.triangle(i);
+        let (b0, b1, b2) = (hit.b0(), hit.b1, hit.b2);
+        let uv = match self.uvs.get(i) {
+            Some(t) => b0 * t[0] + b1 * t[1] + b2 * t[2],
+            None => Vec2::new(b1, b2),
+        };
+        let p = b0 * v0 + b1 * v1 + b2 * v2;
+        let footprint = if spread > 0.0 {
+            let length = ray.direction.length();
+            let cos = (self.normals[i].dot(ray.direction) / length).abs().max(1e-4);
+            hit.t * length * spread / cos * self.uv_per_length(i)
+        } else {
+            0.0
+        };
+        TextureQuery { uv, p, footprint }
     }
 }
 

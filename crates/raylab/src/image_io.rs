@@ -221,7 +221,7 @@ pub fn save_exr_layers(
 ) -> Result<(), ImageIoError> {
     let (width, height) = (beauty.width(), beauty.height());
     let channels = crate::parts::film_channels(beauty, layers);
-    crate::parts::write_exr(path, (width, height), Region::full(width, height), &channels, None)
+    crate::parts::write_exr(path, (width, height), Region::full(width, height), channels, None)
 }
 
 /// Reads every channel of an OpenEXR file's first layer by name, row by row from the top.

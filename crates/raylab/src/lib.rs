@@ -138,12 +138,14 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod parts;
+mod quiet_panic;
 pub mod ray;
 pub mod ray_sets;
 pub mod region;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod texture;
 pub mod triangle;
 
 pub use accel::{Accelerator, BruteForce, Hit};

@@ -1,5 +1,5 @@
 //! The fuzz targets' inputs in the normal test run: every crash input the fuzzers ever found
-//! (none so far; each one goes into `tests/data/fuzz/TARGET/` as `crash-*`), a sample of their
+//! (each one goes into `tests/data/fuzz/TARGET/` as `crash-*`), a sample of their
 //! corpora (`corpus-*`) and hand-made hostile files, through the very entry points the fuzz
 //! targets call (`raylab::fuzzing`). Each must return: no panic, no abort, no allocation beyond
 //! the declared limits. See `fuzz/README.md`.
@@ -50,6 +50,24 @@ fn a_missing_position_accessor_is_an_error() {
     std::fs::write(&path, crash).unwrap();
     let message = raylab::scene::load_mesh(&path).unwrap_err().to_string();
     assert!(message.contains("does not exist"), "{message}");
+    assert!(message.starts_with(&path.display().to_string()) && !message.contains('\n'));
+}
+
+/// The second: TEXCOORD_0 (two floats, 8 bytes) in a buffer view whose stride is 4 bytes, which
+/// made the `gltf` crate's reader assert. Now a one-line error naming the accessor.
+#[test]
+fn a_stride_shorter_than_its_elements_is_an_error() {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/gltf");
+    let crash =
+        std::fs::read(folder.join("crash-284651b5b2de06e3a4a61ef4336617960504869a")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("crash.gltf");
+    std::fs::write(&path, crash).unwrap();
+    let message = raylab::scene::load_mesh(&path).unwrap_err().to_string();
+    assert!(
+        message.contains("TexCoords(0): accessor 3's buffer view has a stride of 4 bytes"),
+        "{message}"
+    );
     assert!(message.starts_with(&path.display().to_string()) && !message.contains('\n'));
 }
 

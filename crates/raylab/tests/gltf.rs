@@ -158,3 +158,137 @@ fn the_file_camera_is_the_same_view() {
     assert!((c.roll.to_degrees() + 30.0).abs() < 1e-3, "{}", c.roll.to_degrees());
     assert!(c.yaw.abs() < 1e-5 && c.pitch.abs() < 1e-5);
 }
+
+/// sRGB to linear (IEC 61966-2-1), written out here apart from the library's.
+fn srgb_decode(code: u8) -> f32 {
+    let c = f32::from(code) / 255.0;
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// The textured box seen face on: every pixel whose hit lies inside a patch of one colour in
+/// the PNG (read here by the `image` crate apart from raylab's textures) shows that colour,
+/// the right way round. The front face reads u ∈ [3, 4] of an image that wraps MIRRORED_REPEAT
+/// in s: read with REPEAT it would show mirrored, so the sun would be on the left.
+#[test]
+fn the_textured_box_shows_its_texels_the_right_way_round() {
+    use raylab::{Accelerator, Aov, AovKind, BruteForce, Camera, Integrator, Scene};
+    let path = data("BoxTextured/BoxTextured.gltf");
+    let scene = Scene::from_mesh(&load_mesh(&path).unwrap().mesh);
+    let accel = BruteForce::new(&scene.vertices());
+    let aov = Aov::new(&scene, &accel, AovKind::Albedo);
+    let png = image::open(data("BoxTextured/CesiumLogoFlat.png")).unwrap().to_rgba8();
+    let (w, h) = png.dimensions();
+    // The face (glTF z = 0.5, the lab's z = −0.5) seen from (0, 0, −3): the middle 90 % of
+    // it fills a 96² image.
+    let mut camera = Camera::lab(96, 96);
+    camera.focal_length_px = 96.0 * 2.5 / 0.9;
+    let mut sampler =
+        raylab::sampling::Sampler::new(raylab::SamplerKind::Independent, 0, (0, 0), 0);
+    let (mut checked, mut sun_right, mut sun_left) = (0, 0, 0);
+    for y in 0..96 {
+        for x in 0..96 {
+            let ray = camera.pixel_ray(x, y);
+            let hit = accel.closest_hit(&ray).expect("the face fills the view");
+            let p = ray.at(hit.t);
+            assert!((p.z + 0.5).abs() < 1e-5, "the front face");
+            // Lab x to the right and y down: s = x + ½, t = y + ½ (t = 0 the image's top).
+            let (s, t) = (p.x + 0.5, p.y + 0.5);
+            let (tx, ty) = ((s * w as f32) as i64, (t * h as f32) as i64);
+            // Only where the texel's 3×3 neighbourhood is one colour (bilinear = the texel).
+            let texel = |dx: i64, dy: i64| {
+                let (x, y) = ((tx + dx).clamp(0, w as i64 - 1), (ty + dy).clamp(0, h as i64 - 1));
+                png.get_pixel(x as u32, y as u32).0
+            };
+            let centre = texel(0, 0);
+            if (-1..=1).any(|dy| (-1..=1).any(|dx| texel(dx, dy) != centre)) {
+                continue;
+            }
+            let expected =
+                Vec3::new(srgb_decode(centre[0]), srgb_decode(centre[1]), srgb_decode(centre[2]));
+            let got = aov.radiance(&ray, &mut sampler);
+            assert!(got.abs_diff_eq(expected, 1e-5), "pixel ({x}, {y}): {got} against {expected}");
+            checked += 1;
+            // The sun: the white disc in the sky, right of the middle in the PNG.
+            let white = centre[..3].iter().all(|&c| c > 250);
+            if white && t < 0.32 {
+                if s > 0.5 { sun_right += 1 } else { sun_left += 1 }
+            }
+        }
+    }
+    assert!(checked > 96 * 96 / 2, "{checked} pixels checked");
+    assert!(sun_right > 10 && sun_left == 0, "sun at right {sun_right}, at left {sun_left}");
+}
+
+/// The metallic-roughness factors become the `Pbr` BSDF, transmission makes glass of the file's
+/// index, and `KHR_lights_punctual` point lights light the scene (intensity in candela: power
+/// 4π·I), in the lab's frame; a directional light and a missing image are warnings.
+#[test]
+fn materials_and_punctual_lights_map_to_raylab() {
+    use raylab::material::{Bsdf, Dielectric, Pbr};
+    let (_dir, path) = broken_box(|json| {
+        *json = json
+            .replace(
+                r#""metallicFactor": 0.0"#,
+                r#""metallicFactor": 0.25, "roughnessFactor": 0.5, "baseColorFactor": [0.5, 0.6, 0.7, 0.9]"#,
+            )
+            .replace(r#""name": "Texture""#, r#""name": "Texture", "alphaMode": "MASK", "alphaCutoff": 0.3"#)
+            .replace(
+                r#""scene": 0,"#,
+                r#""scene": 0,
+                "extensionsUsed": ["KHR_lights_punctual"],
+                "extensions": {"KHR_lights_punctual": {"lights": [
+                    {"type": "point", "color": [1, 0.5, 0.25], "intensity": 10},
+                    {"type": "directional"}]}},"#,
+            )
+            .replacen(
+                "\"nodes\": [\n                0\n            ]",
+                "\"nodes\": [0, 2, 3]",
+                1,
+            )
+            .replace(
+                "            \"mesh\": 0\n        }\n    ],",
+                "            \"mesh\": 0\n        },
+                {\"translation\": [1, 2, 3], \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}},
+                {\"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}}\n    ],",
+            );
+    });
+    let loaded = load_mesh(&path).unwrap();
+    // (The copy has no PNG beside it: a missing image is a warning, and the model loads.)
+    assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
+    assert!(
+        loaded.warnings[0].contains("material \"Texture\": its base colour texture is ignored")
+    );
+    assert!(loaded.warnings[0].contains("CesiumLogoFlat.png: cannot read it"));
+    assert!(loaded.warnings[1].contains("node 3: light 1: directional lights are not supported"));
+    let scene = raylab::Scene::from_loaded(&loaded);
+    // alphaMode MASK: cut out below the cutoff, the factor's alpha kept.
+    let mask = scene.materials[0].textures.alpha_mask;
+    assert_eq!(mask, Some(raylab::material::AlphaMask { cutoff: 0.3, factor: 0.9 }));
+    let Bsdf::Pbr(pbr) = &scene.materials[0].bsdf else {
+        panic!("{:?}", scene.materials[0].bsdf);
+    };
+    assert_eq!(*pbr, Pbr { base_color: Vec3::new(0.5, 0.6, 0.7), metallic: 0.25, roughness: 0.5 });
+    let points: Vec<raylab::PointLight> = scene
+        .lights
+        .iter()
+        .filter_map(|l| if let raylab::Light::Point(p) = l { Some(*p) } else { None })
+        .collect();
+    let power = 4.0 * std::f32::consts::PI * 10.0 * Vec3::new(1.0, 0.5, 0.25);
+    assert_eq!(points, [raylab::PointLight { position: Vec3::new(1.0, -2.0, -3.0), power }]);
+
+    // Transmission: glass of the file's index (smooth at roughness 0).
+    let (_dir, path) = broken_box(|json| {
+        *json = json
+            .replace(r#""metallicFactor": 0.0"#, r#""metallicFactor": 0.0, "roughnessFactor": 0.0"#)
+            .replace(
+                r#""name": "Texture""#,
+                r#""name": "Texture", "alphaMode": "BLEND", "extensions": {
+                    "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                    "KHR_materials_ior": {"ior": 1.33}}"#,
+            );
+    });
+    let loaded = load_mesh(&path).unwrap();
+    assert!(loaded.warnings.iter().any(|w| w.contains("alphaMode BLEND is rendered opaque")));
+    let scene = raylab::Scene::from_loaded(&loaded);
+    assert_eq!(scene.materials[0].bsdf, Bsdf::Dielectric(Dielectric { eta: 1.33 }));
+}

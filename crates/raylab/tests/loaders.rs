@@ -132,7 +132,8 @@ fn cornell_box_with_its_four_materials() {
 #[test]
 fn spider_with_materials_texture_coordinates_and_normals() {
     let loaded = load(&data("spider/spider.obj"));
-    // The library's texture paths (`map_Kd .\SpiderTex.jpg`) are not read and do no harm.
+    // The library's texture paths have Windows separators (`map_Kd .\SpiderTex.jpg`): every
+    // one is found and decoded.
     assert_eq!(loaded.warnings, Vec::<String>::new());
     let mesh = &loaded.mesh;
     assert_counts_and_bounds(
@@ -165,6 +166,62 @@ fn spider_with_materials_texture_coordinates_and_normals() {
         first_line("vn ")
     );
     assert_eq!(uvs.values[uvs.triangles[0][0] as usize].to_array().to_vec(), first_line("vt "));
+    // Each material's `map_Kd`, at the size the JPEG's header gives (`file`), shared where two
+    // materials name one file.
+    let texture = |m: usize| match &mesh.materials[m].textures.base_color {
+        Some(raylab::texture::Texture::Image(t)) => (t.image.name.clone(), t.image.size()),
+        other => panic!("material {m}: {other:?}"),
+    };
+    let expected = [
+        ("wal67ar_small.jpg", (250, 250)),
+        ("wal69ar_small.jpg", (250, 250)),
+        ("SpiderTex.jpg", (249, 250)),
+        ("drkwood2.jpg", (768, 768)),
+        ("engineflare1.jpg", (128, 128)),
+    ];
+    for (m, (name, size)) in expected.into_iter().enumerate() {
+        assert_eq!(texture(m), (name.to_string(), size));
+    }
+}
+
+/// `map_Kd` options and file names as the MTL specification writes them, and textures that
+/// cannot be read: a warning naming the library, its line and the material, never an error.
+#[test]
+fn mtl_textures_with_options_and_missing_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::copy(data("spider/SpiderTex.jpg"), d.join("a b.jpg")).unwrap();
+    std::fs::write(d.join("broken.jpg"), b"not a jpeg").unwrap();
+    std::fs::write(
+        d.join("m.mtl"),
+        "newmtl scaled\nKd 1 1 1\nmap_Kd -s 2 3 -o 0.5 0.25 -clamp on -bm 1 a b.jpg\n\
+         newmtl missing\nmap_Kd gone.png\nnewmtl broken\nmap_Kd broken.jpg\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         usemtl scaled\nf 1/1 2/2 3/3\nusemtl missing\nf 1/1 2/2 3/3\n\
+         usemtl broken\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    let loaded = load(&d.join("m.obj"));
+    let Some(raylab::texture::Texture::Image(t)) = &loaded.mesh.materials[0].textures.base_color
+    else {
+        panic!("the scaled texture loads");
+    };
+    assert_eq!(t.image.size(), (249, 250));
+    assert_eq!(t.wrap, [raylab::texture::Wrap::Clamp; 2]);
+    // (u, v) scaled, offset, then flipped to the image's rows: (s, t) = (2u + ½, 1 − (3v + ¼)).
+    let st = t.transform.transform_point2(glam::Vec2::new(0.25, 0.5));
+    assert!(st.abs_diff_eq(glam::Vec2::new(1.0, -0.75), 1e-6), "{st}");
+    assert!(loaded.mesh.materials[1].textures.base_color.is_none());
+    assert!(loaded.mesh.materials[2].textures.base_color.is_none());
+    assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("m.mtl:5: the texture of material \"missing\" is ignored"));
+    assert!(loaded.warnings[0].contains("gone.png"));
+    assert!(loaded.warnings[1].contains("m.mtl:7: the texture of material \"broken\" is ignored"));
+    assert!(loaded.warnings[1].contains("not a PNG or JPEG image"), "{}", loaded.warnings[1]);
 }
 
 #[test]

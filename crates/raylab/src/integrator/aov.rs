@@ -42,14 +42,17 @@ impl<'a, A: Accelerator + ?Sized> Aov<'a, A> {
 
 impl<A: Accelerator + ?Sized> Integrator for Aov<'_, A> {
     fn radiance(&self, ray: &Ray, _sampler: &mut Sampler) -> Vec3 {
-        let Some(hit) = self.accel.closest_hit(ray) else {
+        let Some(hit) = super::closest_opaque_hit(self.scene, self.accel, ray) else {
             return Vec3::ZERO;
         };
         let interaction = self.scene.interaction(ray, &hit);
         match self.kind {
-            AovKind::Albedo => self.scene.material(&interaction).bsdf.albedo(),
+            AovKind::Albedo => {
+                self.scene.material(&interaction).albedo_at(&interaction.texture_query())
+            }
             AovKind::Normals => {
-                let n = interaction.shading_normal;
+                let n =
+                    self.scene.material(&interaction).shading_normal(&interaction, -ray.direction);
                 if n.dot(ray.direction) > 0.0 { -n } else { n }
             }
             AovKind::Depth => Vec3::splat(hit.t * ray.direction.length()),

@@ -18,6 +18,7 @@ use glam::Vec3;
 
 use super::Integrator;
 use crate::accel::{Accelerator, Hit};
+use crate::camera::Camera;
 use crate::float::gamma;
 use crate::light::PointLight;
 use crate::ray::{Ray, step_away};
@@ -104,13 +105,41 @@ pub struct Lab<'a, A: ?Sized> {
     pub light: PointLight,
     /// The constant indirect light `N` of eq. (30).
     pub ambient: Vec3,
+    /// The angle one pixel subtends, in radians ([`Camera::pixel_spread`]): textures are
+    /// filtered over the ray cone it gives (see [`crate::texture`]), so that one sample per
+    /// pixel does not alias. 0 reads them at a point.
+    pub pixel_spread: f32,
 }
 
 impl<'a, A: Accelerator + ?Sized> Lab<'a, A> {
     /// The lab's model at `stage`, with the scene's [`lab_light`](Scene::lab_light) and the lab's
     /// ambient light `N = 0.5`.
     pub fn new(scene: &'a Scene, accel: &'a A, stage: Stage) -> Self {
-        Lab { scene, accel, stage, light: scene.lab_light(), ambient: Vec3::splat(0.5) }
+        Lab {
+            scene,
+            accel,
+            stage,
+            light: scene.lab_light(),
+            ambient: Vec3::splat(0.5),
+            pixel_spread: 0.0,
+        }
+    }
+
+    /// Reads textures over the ray cone of a camera's pixels ([`pixel_spread`](Self::pixel_spread)).
+    pub fn for_camera(mut self, camera: &Camera) -> Self {
+        self.pixel_spread = camera.pixel_spread();
+        self
+    }
+
+    /// The colour of material `id` where `ray` meets `hit`.
+    #[inline]
+    fn albedo(&self, ray: &Ray, hit: &Hit, id: u32) -> Vec3 {
+        let material = &self.scene.materials[id as usize];
+        if material.textures.is_empty() {
+            material.bsdf.albedo()
+        } else {
+            material.albedo_at(&self.scene.geometry.texture_query(ray, hit, self.pixel_spread))
+        }
     }
 }
 
@@ -194,16 +223,18 @@ impl TileShading {
         let mut direction = [[0.0f32; TILE]; 3];
         let (mut b1, mut b2) = ([0.0f32; TILE], [0.0f32; TILE]);
         let mut hit_mask = [false; TILE];
-        // Neighbouring hits mostly share a material: its albedo is looked up once for them.
-        let mut material = (u32::MAX, Vec3::ZERO);
+        // Neighbouring hits mostly share a material: its albedo is looked up once for them
+        // (unless it has a texture).
+        let mut material = (u32::MAX, Vec3::ZERO, false);
         for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
             let Some(hit) = hit else { continue };
             let triangle = hit.triangle as usize;
             let id = geometry.material_id(triangle);
             if id != material.0 {
-                material = (id, lab.scene.materials[id as usize].bsdf.albedo());
+                let m = &lab.scene.materials[id as usize];
+                material = (id, m.bsdf.albedo(), !m.textures.is_empty());
             }
-            let albedo = material.1;
+            let albedo = if material.2 { lab.albedo(ray, hit, id) } else { material.1 };
             let vertices = geometry.triangle(triangle);
             let n = geometry.normal(triangle);
             for axis in 0..3 {
@@ -306,8 +337,7 @@ impl<A: Accelerator + ?Sized> Lab<'_, A> {
         };
         // The lab needs the point, its normal and the colour: not the whole interaction.
         let geometry = &self.scene.geometry;
-        let material = geometry.material_id(hit.triangle as usize) as usize;
-        let albedo = self.scene.materials[material].bsdf.albedo();
+        let albedo = self.albedo(ray, &hit, geometry.material_id(hit.triangle as usize));
         if self.stage == Stage::Flat {
             return Shading { albedo, direct: Vec3::ZERO, shadow_ray: None };
         }
@@ -347,9 +377,11 @@ impl<A: Accelerator + ?Sized> Lab<'_, A> {
 
 impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
     fn radiance(&self, ray: &Ray, _sampler: &mut Sampler) -> Vec3 {
-        let hit = self.accel.closest_hit(ray);
+        let hit = super::closest_opaque_hit(self.scene, self.accel, ray);
         let shading = self.shade(ray, hit);
-        let occluded = shading.shadow_ray.is_some_and(|shadow| self.accel.occluded(&shadow));
+        let occluded = shading
+            .shadow_ray
+            .is_some_and(|shadow| super::occluded_opaque(self.scene, self.accel, &shadow));
         self.finish(hit.is_some(), &shading, occluded)
     }
 
@@ -358,6 +390,13 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
     fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
         assert_eq!(rays.len(), out.len(), "one colour per ray");
         assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
+        // Cut-out holes are passed ray by ray.
+        if self.scene.has_cut_outs() {
+            for ((ray, sampler), colour) in rays.iter().zip(samplers).zip(out) {
+                *colour = self.radiance(ray, sampler);
+            }
+            return;
+        }
         // A tile at a time, in arrays on the stack: no allocation per tile.
         for (rays, out) in rays.chunks(TILE).zip(out.chunks_mut(TILE)) {
             let n = rays.len();

@@ -18,8 +18,47 @@ pub use aov::{Aov, AovKind};
 pub use lab::{Lab, Stage};
 pub use path::{Path, PathSettings};
 
+use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;
 use crate::sampling::{Sampler, SamplerKind};
+use crate::scene::Scene;
+
+/// The most cut-out holes a ray passes through; behind more, it is taken as blocked.
+const MAX_HOLES: u32 = 256;
+
+/// The first hit along `ray` on a surface that is there: the holes of alpha-masked materials
+/// (glTF's `alphaMode: MASK`) are passed through, by tracing the same ray again from just past
+/// each (its `t_min`), so hits keep their `t` along `ray`.
+#[inline]
+pub fn closest_opaque_hit<A: Accelerator + ?Sized>(
+    scene: &Scene,
+    accel: &A,
+    ray: &Ray,
+) -> Option<Hit> {
+    let mut hit = accel.closest_hit(ray)?;
+    if !scene.has_cut_outs() {
+        return Some(hit);
+    }
+    let mut ray = *ray;
+    for _ in 0..MAX_HOLES {
+        if !scene.is_cut_out(&ray, &hit) {
+            return Some(hit);
+        }
+        ray.t_min = hit.t.next_up();
+        hit = accel.closest_hit(&ray)?;
+    }
+    Some(hit)
+}
+
+/// Whether something that is there (not a cut-out hole) blocks the segment `ray`.
+#[inline]
+pub fn occluded_opaque<A: Accelerator + ?Sized>(scene: &Scene, accel: &A, ray: &Ray) -> bool {
+    if scene.has_cut_outs() {
+        closest_opaque_hit(scene, accel, ray).is_some()
+    } else {
+        accel.occluded(ray)
+    }
+}
 
 /// Computes the colour seen along a camera ray.
 pub trait Integrator: Sync {

@@ -152,7 +152,7 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
                     power_heuristic(previous_pdf, light_pdf)
                 }
             };
-            let Some(hit) = self.accel.closest_hit(&ray) else {
+            let Some(hit) = super::closest_opaque_hit(self.scene, self.accel, &ray) else {
                 let (environment, light_pdf) = self.lights.environment(ray.direction.normalize());
                 if environment != Vec3::ZERO {
                     let weight = found(depth, previous_delta, previous_pdf, light_pdf);
@@ -230,10 +230,11 @@ impl<A: Accelerator + ?Sized> Path<'_, A> {
         let material = self.scene.material(interaction);
         // Only anisotropic BSDFs care which way the tangent points: they get Mitsuba's (dp/du);
         // the rest the cheaper basis of the normal alone (the same distribution of directions).
+        let normal = material.shading_normal(interaction, -ray.direction);
         let frame = if material.bsdf.is_anisotropic() {
-            Frame::new(interaction.shading_normal, interaction.dp_du)
+            Frame::new(normal, interaction.dp_du)
         } else {
-            Frame::about(interaction.shading_normal)
+            Frame::about(normal)
         };
         let mut wi = frame.to_local(-ray.direction.normalize());
         // Two-sided materials scatter on both sides: mirror the directions into the front.
@@ -248,7 +249,7 @@ impl<A: Accelerator + ?Sized> Path<'_, A> {
             }
             local
         };
-        let bsdf = &material.bsdf;
+        let bsdf = &*material.bsdf_at(&interaction.texture_query());
 
         // Next-event estimation.
         let u_light = sampler.next_1d();
@@ -258,7 +259,8 @@ impl<A: Accelerator + ?Sized> Path<'_, A> {
         {
             let wo = to_local(light.direction);
             let f = bsdf.eval(wi, wo);
-            if f != Vec3::ZERO && !self.accel.occluded(&light.shadow_ray) {
+            if f != Vec3::ZERO && !super::occluded_opaque(self.scene, self.accel, &light.shadow_ray)
+            {
                 let weight =
                     if light.delta { 1.0 } else { power_heuristic(light.pdf, bsdf.pdf(wi, wo)) };
                 *radiance += throughput * f * light.radiance * (weight / light.pdf);

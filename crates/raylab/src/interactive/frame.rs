@@ -233,7 +233,7 @@ impl FrameRenderer {
         let (_, _, picture) = self.picture.as_mut().expect("a picture was just made");
         match view.mode {
             ViewMode::Lab(stage) => {
-                let mut lab = Lab::new(scene, accel, stage);
+                let mut lab = Lab::new(scene, accel, stage).for_camera(&camera);
                 lab.light.position = view.pose.light;
                 picture.add_sample(&camera, &lab);
             }

@@ -17,9 +17,12 @@ mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
+mod pbr;
 mod plastic;
 mod rough_conductor;
 mod rough_dielectric;
+
+use std::borrow::Cow;
 
 use glam::{Vec2, Vec3};
 
@@ -27,9 +30,13 @@ pub use conductor::{Conductor, METALS};
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use microfacet::Ggx;
+pub use pbr::Pbr;
 pub use plastic::Plastic;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
+
+use crate::geometry::SurfaceInteraction;
+use crate::texture::{Texture, TextureQuery};
 
 /// A surface's scattering, emission and sidedness.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,6 +49,59 @@ pub struct Material {
     pub two_sided: bool,
     /// Radiance emitted from the front side; zero for surfaces that do not emit.
     pub emission: Vec3,
+    /// Inputs that vary over the surface (none: the BSDF is the same everywhere).
+    pub textures: MaterialTextures,
+}
+
+/// A material's inputs that vary over the surface.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialTextures {
+    /// Multiplies the BSDF's colour (see [`Bsdf::tinted`]): glTF's `baseColorTexture`, MTL's
+    /// `map_Kd`. Its alpha is the surface's coverage.
+    pub base_color: Option<Texture>,
+    /// glTF's `metallicRoughnessTexture`: its green channel multiplies the [`Pbr`] roughness,
+    /// its blue channel the metallic factor (linear data).
+    pub metallic_roughness: Option<Texture>,
+    /// A tangent-space normal map (glTF's `normalTexture`).
+    pub normal: Option<NormalMap>,
+    /// The roughness, from the texture's red channel: α for the rough conductor and
+    /// dielectric (both axes), the perceptual roughness for [`Pbr`].
+    pub roughness: Option<Texture>,
+    /// Cut-out coverage (glTF's `alphaMode: MASK`): where the base colour's alpha is below the
+    /// cutoff, the surface is not there and rays pass through.
+    pub alpha_mask: Option<AlphaMask>,
+}
+
+/// Cut-out coverage: the alpha is `factor` times the base colour texture's alpha (where there is
+/// one); below `cutoff` the surface is a hole.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlphaMask {
+    /// glTF's `alphaCutoff` (0.5 unless it says otherwise).
+    pub cutoff: f32,
+    /// The base colour factor's alpha.
+    pub factor: f32,
+}
+
+/// A tangent-space normal map: each texel's RGB holds `(n + 1)/2` for a normal `n` in the frame
+/// of the surface's tangent `t` (x, toward +u), bitangent `b = w · n × t` (y) and normal (z),
+/// as glTF and MikkTSpace define them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalMap {
+    /// The normals (linear data).
+    pub texture: Texture,
+    /// Multiplies the x and y of each normal (glTF's `normalTexture.scale`): 0 flattens it.
+    pub scale: f32,
+}
+
+impl MaterialTextures {
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.base_color.is_none()
+            && self.metallic_roughness.is_none()
+            && self.normal.is_none()
+            && self.roughness.is_none()
+            && self.alpha_mask.is_none()
+    }
 }
 
 impl Material {
@@ -52,6 +112,79 @@ impl Material {
             bsdf: Bsdf::Diffuse(Diffuse { reflectance }),
             two_sided: false,
             emission: Vec3::ZERO,
+            textures: MaterialTextures::default(),
+        }
+    }
+
+    /// The BSDF at a point, its textured inputs read at `query` (the BSDF itself where it has
+    /// none).
+    #[inline]
+    pub fn bsdf_at(&self, query: &TextureQuery) -> Cow<'_, Bsdf> {
+        if self.textures.is_empty() {
+            return Cow::Borrowed(&self.bsdf);
+        }
+        let mut bsdf = match &self.textures.base_color {
+            None => self.bsdf.clone(),
+            Some(texture) => self.bsdf.tinted(texture.rgb(query)),
+        };
+        if let (Some(texture), Bsdf::Pbr(pbr)) = (&self.textures.metallic_roughness, &mut bsdf) {
+            let value = texture.eval(query);
+            pbr.roughness = (pbr.roughness * value.y).clamp(0.0, 1.0);
+            pbr.metallic = (pbr.metallic * value.z).clamp(0.0, 1.0);
+        }
+        if let Some(texture) = &self.textures.roughness {
+            let value = texture.eval(query).x;
+            let alpha = if value.is_finite() { value.clamp(1e-3, 1.0) } else { 1.0 };
+            match &mut bsdf {
+                Bsdf::RoughConductor(b) => b.distribution = Ggx::new(alpha, alpha),
+                Bsdf::RoughDielectric(b) => b.distribution = Ggx::new(alpha, alpha),
+                Bsdf::Pbr(b) => b.roughness = alpha,
+                _ => {}
+            }
+        }
+        Cow::Owned(bsdf)
+    }
+
+    /// Whether the surface is a hole at `query` (see [`AlphaMask`]).
+    #[inline]
+    pub fn is_cut_out(&self, query: &TextureQuery) -> bool {
+        let Some(mask) = self.textures.alpha_mask else { return false };
+        let alpha = match &self.textures.base_color {
+            Some(texture) => texture.eval(query).w,
+            None => 1.0,
+        };
+        mask.factor * alpha < mask.cutoff
+    }
+
+    /// The shading normal at `interaction`, bent by the normal map where the material has one
+    /// and the mesh has tangents. A mapped normal that would turn away from the viewer (toward
+    /// `-towards_viewer`) while the unmapped one faces it is not used: the surface would turn
+    /// black there.
+    #[inline]
+    pub fn shading_normal(&self, interaction: &SurfaceInteraction, towards_viewer: Vec3) -> Vec3 {
+        let n = interaction.shading_normal;
+        let (Some(map), tangent) = (&self.textures.normal, interaction.tangent) else {
+            return n;
+        };
+        // Gram-Schmidt: the tangent made perpendicular to the interpolated normal.
+        let t = (tangent.truncate() - n * n.dot(tangent.truncate())).normalize_or_zero();
+        if t == Vec3::ZERO {
+            return n;
+        }
+        let b = n.cross(t) * if tangent.w < 0.0 { -1.0 } else { 1.0 };
+        let texel = map.texture.eval(&interaction.texture_query()).truncate() * 2.0 - Vec3::ONE;
+        let local = Vec3::new(texel.x * map.scale, texel.y * map.scale, texel.z);
+        let mapped = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
+        let facing = |v: Vec3| v.dot(towards_viewer) > 0.0;
+        if mapped == Vec3::ZERO || (facing(n) && !facing(mapped)) { n } else { mapped }
+    }
+
+    /// The colour flat renderings show at a point ([`Bsdf::albedo`], textured).
+    #[inline]
+    pub fn albedo_at(&self, query: &TextureQuery) -> Vec3 {
+        match &self.textures.base_color {
+            None => self.bsdf.albedo(),
+            Some(texture) => self.bsdf.tinted(texture.rgb(query)).albedo(),
         }
     }
 
@@ -106,6 +239,8 @@ pub enum Bsdf {
     RoughDielectric(RoughDielectric),
     /// A diffuse base under a smooth coating (Mitsuba's `plastic`).
     Plastic(Plastic),
+    /// glTF's metallic-roughness material.
+    Pbr(Pbr),
 }
 
 /// Calls the same method on whichever BSDF it is.
@@ -118,6 +253,7 @@ macro_rules! each_bsdf {
             Bsdf::Dielectric($b) => $call,
             Bsdf::RoughDielectric($b) => $call,
             Bsdf::Plastic($b) => $call,
+            Bsdf::Pbr($b) => $call,
         }
     };
 }
@@ -133,6 +269,7 @@ impl Bsdf {
             Bsdf::RoughConductor(b) => b.eval(wi, wo),
             Bsdf::RoughDielectric(b) => b.eval(wi, wo),
             Bsdf::Plastic(b) => b.eval(wi, wo),
+            Bsdf::Pbr(b) => b.eval(wi, wo),
         }
     }
 
@@ -146,6 +283,7 @@ impl Bsdf {
             Bsdf::RoughConductor(b) => b.pdf(wi, wo),
             Bsdf::RoughDielectric(b) => b.pdf(wi, wo),
             Bsdf::Plastic(b) => b.pdf(wi, wo),
+            Bsdf::Pbr(b) => b.pdf(wi, wo),
         }
     }
 
@@ -173,6 +311,23 @@ impl Bsdf {
         }
     }
 
+    /// The BSDF with its colour multiplied by `colour` (clamped to `[0, 1]`): the diffuse
+    /// reflectance, the plastic's diffuse reflectance, the conductors' specular reflectance.
+    /// The dielectrics have no colour to tint.
+    pub fn tinted(&self, colour: Vec3) -> Bsdf {
+        let colour = colour.clamp(Vec3::ZERO, Vec3::ONE);
+        let mut bsdf = self.clone();
+        match &mut bsdf {
+            Bsdf::Diffuse(d) => d.reflectance *= colour,
+            Bsdf::Conductor(c) => c.specular_reflectance *= colour,
+            Bsdf::RoughConductor(r) => r.conductor.specular_reflectance *= colour,
+            Bsdf::Plastic(p) => p.diffuse_reflectance *= colour,
+            Bsdf::Pbr(p) => p.base_color *= colour,
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) => {}
+        }
+        bsdf
+    }
+
     /// The colour a surface shows in flat renderings (the lab's ρ, the albedo AOV): the diffuse
     /// reflectance, or the lobe's tint.
     pub fn albedo(&self) -> Vec3 {
@@ -182,6 +337,7 @@ impl Bsdf {
             Bsdf::RoughConductor(r) => r.conductor.reflectance(1.0),
             Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) => Vec3::ONE,
             Bsdf::Plastic(p) => p.diffuse_reflectance,
+            Bsdf::Pbr(p) => p.base_color,
         }
     }
 
@@ -223,6 +379,9 @@ impl Bsdf {
             Bsdf::RoughConductor(r) => conductor(&r.conductor).and(roughness(&r.distribution)),
             Bsdf::Dielectric(d) => positive_ior(d.eta),
             Bsdf::RoughDielectric(r) => positive_ior(r.eta).and(roughness(&r.distribution)),
+            Bsdf::Pbr(p) => unit_interval("base_color", p.base_color)
+                .and(unit_interval("metallic", Vec3::splat(p.metallic)))
+                .and(unit_interval("roughness", Vec3::splat(p.roughness))),
             Bsdf::Plastic(p) => positive_ior(p.eta)
                 .and(unit_interval("diffuse_reflectance", p.diffuse_reflectance))
                 .and(unit_interval("specular_reflectance", p.specular_reflectance)),

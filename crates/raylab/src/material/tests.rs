@@ -56,6 +56,22 @@ pub(crate) fn bsdfs() -> Vec<(&'static str, Bsdf)> {
             "plastic nonlinear",
             Bsdf::Plastic(Plastic::new(Vec3::new(0.9, 0.3, 0.1), Vec3::ONE, 1.49, true)),
         ),
+        (
+            "pbr dielectric 0.5",
+            Bsdf::Pbr(Pbr { base_color: Vec3::new(0.8, 0.4, 0.1), metallic: 0.0, roughness: 0.5 }),
+        ),
+        (
+            "pbr metal 0.3",
+            Bsdf::Pbr(Pbr { base_color: Vec3::new(1.0, 0.8, 0.3), metallic: 1.0, roughness: 0.3 }),
+        ),
+        (
+            "pbr half metal 0.8",
+            Bsdf::Pbr(Pbr { base_color: Vec3::new(0.2, 0.9, 0.5), metallic: 0.5, roughness: 0.8 }),
+        ),
+        (
+            "pbr dielectric 0.1",
+            Bsdf::Pbr(Pbr { base_color: Vec3::new(0.9, 0.9, 0.9), metallic: 0.0, roughness: 0.1 }),
+        ),
     ]
 }
 

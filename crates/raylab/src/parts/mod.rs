@@ -193,14 +193,14 @@ pub fn write_exr(
     path: &Path,
     image: (u32, u32),
     region: Region,
-    channels: &[Channel],
+    channels: Vec<Channel>,
     header: Option<&PartHeader>,
 ) -> Result<(), ImageIoError> {
     let list: Vec<AnyChannel<FlatSamples>> = channels
-        .iter()
+        .into_iter()
         .map(|(name, values)| {
             assert_eq!(values.len() as u64, region.pixels(), "{name}: a value per pixel");
-            AnyChannel::new(name.as_str(), FlatSamples::F32(values.clone()))
+            AnyChannel::new(name.as_str(), FlatSamples::F32(values))
         })
         .collect();
     let mut attributes = LayerAttributes::named("rgb");
@@ -383,17 +383,23 @@ pub fn read_part_from(
 
 /// Runs an OpenEXR decoding step, turning a panic inside the decoder (a damaged file it does
 /// not expect) into an error.
+///
+/// The panic is not printed: the caller reports the error in one line. (Decoding runs on this
+/// thread only, `non_parallel`, so the hook's per-thread switch covers it.)
 fn guarded<T>(decode: impl FnOnce() -> exr::error::Result<T>) -> Result<T, String> {
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(decode)) {
-        Ok(result) => result.map_err(|e| e.to_string()),
-        Err(_) => Err("damaged beyond what the OpenEXR decoder can read".into()),
+    match crate::quiet_panic::catch_quietly(decode) {
+        Some(result) => result.map_err(|e| e.to_string()),
+        None => Err("damaged beyond what the OpenEXR decoder can read".into()),
     }
 }
 
 /// Puts parts together into the whole image's channels (row by row over the image), checking
 /// that they belong together, do not overlap and leave no hole (see the module documentation).
 /// Returns the header the whole image shares (its region the whole image) and the channels.
-pub fn merge(parts: &[Part]) -> Result<(PartHeader, Vec<Channel>), PartError> {
+///
+/// Each part is dropped as soon as its pixels are copied, so that the parts and the whole image
+/// are not all in memory at once.
+pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<Channel>), PartError> {
     let first = parts.first().ok_or(PartError::NoParts)?;
     let mismatch = |part: &Part, problem: String| PartError::Mismatch {
         path: part.path.clone(),
@@ -401,7 +407,7 @@ pub fn merge(parts: &[Part]) -> Result<(PartHeader, Vec<Channel>), PartError> {
         problem,
     };
     let names: Vec<&String> = first.channels.iter().map(|c| &c.0).collect();
-    for part in parts {
+    for part in &parts {
         let (h, f) = (&part.header, &first.header);
         if h.kind != PartKind::Image {
             return Err(PartError::NotAPart {
@@ -524,16 +530,17 @@ pub fn merge(parts: &[Part]) -> Result<(PartHeader, Vec<Channel>), PartError> {
         values.resize(total as usize, 0.0);
         channels.push(((*name).clone(), values));
     }
+    let header = PartHeader { region: Region::full(width, height), ..first.header.clone() };
     for part in parts {
         let r = part.header.region;
         for ((_, whole), (_, values)) in channels.iter_mut().zip(&part.channels) {
             for (row, y) in values.chunks_exact(r.width() as usize).zip(r.y0..r.y1) {
-                let start = (y * width + r.x0) as usize;
+                // In usize: an image may hold more than 2³² pixels.
+                let start = y as usize * width as usize + r.x0 as usize;
                 whole[start..start + row.len()].copy_from_slice(row);
             }
         }
     }
-    let header = PartHeader { region: Region::full(width, height), ..first.header.clone() };
     Ok((header, channels))
 }
 

@@ -45,7 +45,8 @@ fn a_part_reads_back_as_written() {
         written.header.command = Some(r#"{"arguments":["é"]}"#.into());
         written.channels[0].1[3] = f32::NAN;
         written.channels[1].1[1] = f32::from_bits(1); // a subnormal: bits survive
-        write_exr(&written.path, (5, 4), r, &written.channels, Some(&written.header)).unwrap();
+        write_exr(&written.path, (5, 4), r, written.channels.clone(), Some(&written.header))
+            .unwrap();
         let read = read_part(&written.path).unwrap();
         assert_eq!(read.header, written.header);
         let bits = |p: &Part| -> Vec<(String, Vec<u32>)> {
@@ -73,7 +74,7 @@ fn parts_merge_into_place() {
         part("a", region(0, 0, 2, 3), 2),
         part("b", region(2, 0, 5, 3), 2),
     ];
-    let (merged, channels) = merge(&parts).unwrap();
+    let (merged, channels) = merge(parts.to_vec()).unwrap();
     assert_eq!(merged.region, Region::full(5, 4));
     let whole = part("whole", Region::full(5, 4), 2);
     assert_eq!(channels, whole.channels);
@@ -83,7 +84,7 @@ fn parts_merge_into_place() {
 fn parts_that_do_not_fit_are_refused() {
     let a = part("a", region(0, 0, 5, 2), 2);
     let b = part("b", region(0, 2, 5, 4), 2);
-    let fails = |parts: &[Part]| merge(parts).unwrap_err().to_string();
+    let fails = |parts: &[Part]| merge(parts.to_vec()).unwrap_err().to_string();
     assert_eq!(fails(&[]), "no parts to merge");
     let mut fewer = b.clone();
     fewer.header.samples = 1;

@@ -46,6 +46,8 @@ pub struct LoadedMesh {
     pub warnings: Vec<String>,
     /// The file's camera (glTF), in the lab's frame.
     pub camera: Option<super::CameraSettings>,
+    /// The file's point lights (glTF's `KHR_lights_punctual`), in the lab's frame.
+    pub lights: Vec<crate::light::PointLight>,
 }
 
 /// A place in a file.

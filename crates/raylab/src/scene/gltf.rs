@@ -12,13 +12,19 @@
 //! (points, lines, strips are refused, not guessed at), an accessor whose data lies outside its
 //! buffer, an index beyond the vertices, a missing buffer file, a truncated `.glb`.
 
+use std::collections::HashMap;
+use std::f32::consts::PI;
 use std::path::Path;
+use std::sync::Arc;
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Affine2, Mat3, Mat4, Vec2, Vec3, Vec4};
 
-use super::file::{LoadError, LoadedMesh, mesh_name};
+use super::file::{LoadError, LoadedMesh, mesh_name, quoted};
 use super::{CameraSettings, FovAxis, model_to_lab};
-use crate::mesh::{CornerAttribute, Mesh, MeshMaterial};
+use crate::light::PointLight;
+use crate::material::{AlphaMask, MaterialTextures, NormalMap};
+use crate::mesh::{CornerAttribute, Mesh, MeshMaterial, PbrParameters};
+use crate::texture::{ImageTexture, Texture, TextureImage, Wrap, decode_texture, load_texture};
 
 /// Reads the glTF file `bytes`, found at `path` (external buffers are read beside it).
 pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadError> {
@@ -39,6 +45,22 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
             }
         }
     }
+    // Images the `gltf` crate's `Image::source` would unwrap on (found by fuzzing): a buffer
+    // view without a MIME type, or neither a buffer view nor a URI.
+    let mut broken_images = HashMap::new();
+    for (i, image) in root.images.iter().enumerate() {
+        let problem = match (&image.buffer_view, &image.uri, &image.mime_type) {
+            (Some(view), _, _) if view.value() >= root.buffer_views.len() => {
+                Some(format!("image {i}: buffer view {} does not exist", view.value()))
+            }
+            (Some(_), _, None) => Some(format!("image {i}: a buffer view without a mimeType")),
+            (None, None, _) => Some(format!("image {i}: neither a uri nor a buffer view")),
+            _ => None,
+        };
+        if let Some(problem) = problem {
+            broken_images.insert(i, problem);
+        }
+    }
     drop(unchecked);
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| invalid(describe(e)))?;
     let folder = path.parent().unwrap_or(Path::new("."));
@@ -52,21 +74,77 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
 
     let mut builder = Builder::default();
     builder.mesh.name = mesh_name(path);
+    let mut images =
+        Images { folder, buffers: &buffers, decoded: HashMap::new(), broken: broken_images };
+    let mut warnings = Vec::new();
     builder.mesh.materials = document
         .materials()
         .map(|m| {
             let pbr = m.pbr_metallic_roughness();
-            let [r, g, b, _] = pbr.base_color_factor();
+            let [r, g, b, a] = pbr.base_color_factor();
             let strength = m.emissive_strength().unwrap_or(1.0);
+            let name = m
+                .name()
+                .map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
+            let mut textures = MaterialTextures::default();
+            let mut read = |info: Option<gltf::texture::Info>, what: &str, srgb: bool| {
+                let info = info?;
+                let transform = info.texture_transform();
+                match images.texture(&info.texture(), info.tex_coord(), transform, srgb) {
+                    Ok(texture) => Some(texture),
+                    Err(error) => {
+                        warnings.push(format!(
+                            "{}: material {}: its {what} texture is ignored: {error}",
+                            path.display(),
+                            quoted(&name)
+                        ));
+                        None
+                    }
+                }
+            };
+            textures.base_color = read(pbr.base_color_texture(), "base colour", true);
+            textures.metallic_roughness =
+                read(pbr.metallic_roughness_texture(), "metallic-roughness", false);
+            match m.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => {}
+                gltf::material::AlphaMode::Mask => {
+                    let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+                    textures.alpha_mask = Some(AlphaMask { cutoff, factor: a });
+                }
+                gltf::material::AlphaMode::Blend => warnings.push(format!(
+                    "{}: material {}: alphaMode BLEND is rendered opaque (MASK cuts out)",
+                    path.display(),
+                    quoted(&name)
+                )),
+            }
+            if let Some(normal) = m.normal_texture() {
+                let texture = images.texture(&normal.texture(), normal.tex_coord(), None, false);
+                match texture {
+                    Ok(texture) => {
+                        textures.normal = Some(NormalMap { texture, scale: normal.scale() })
+                    }
+                    Err(error) => warnings.push(format!(
+                        "{}: material {}: its normal texture is ignored: {error}",
+                        path.display(),
+                        quoted(&name)
+                    )),
+                }
+            }
             MeshMaterial {
-                name: m
-                    .name()
-                    .map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string),
                 diffuse: Vec3::new(r, g, b),
                 emission: Vec3::from_array(m.emissive_factor()) * strength,
+                textures,
+                pbr: Some(PbrParameters {
+                    metallic: pbr.metallic_factor(),
+                    roughness: pbr.roughness_factor(),
+                    transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
+                    ior: m.ior().unwrap_or(1.5),
+                }),
+                name,
             }
         })
         .collect();
+    let mut lights = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4)> =
         scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect::<Vec<_>>();
     stack.reverse();
@@ -88,6 +166,28 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
         {
             builder.camera = Some(camera_settings(&world, p.yfov()));
         }
+        if let Some(light) = node.light() {
+            let colour = Vec3::from_array(light.color()) * light.intensity();
+            let position = model_to_lab(world.transform_point3(Vec3::ZERO));
+            let place =
+                format!("{}: node {}: light {}", path.display(), node.index(), light.index());
+            match light.kind() {
+                // glTF gives a point light's intensity in candela (lm/sr): a point light of power
+                // P radiates P/(4π) per steradian.
+                gltf::khr_lights_punctual::Kind::Point => {
+                    lights.push(PointLight { position, power: 4.0 * PI * colour })
+                }
+                gltf::khr_lights_punctual::Kind::Spot { .. } => {
+                    warnings.push(format!(
+                        "{place}: a spot light, lit as a point light (its cone is ignored)"
+                    ));
+                    lights.push(PointLight { position, power: 4.0 * PI * colour });
+                }
+                gltf::khr_lights_punctual::Kind::Directional => {
+                    warnings.push(format!("{place}: directional lights are not supported; ignored"))
+                }
+            }
+        }
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
                 let place = format!("mesh {} primitive {}", mesh.index(), primitive.index());
@@ -99,8 +199,164 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
         let children: Vec<_> = node.children().map(|c| (c, world)).collect();
         stack.extend(children.into_iter().rev());
     }
-    let (mesh, camera) = builder.finish();
-    Ok(LoadedMesh { mesh, warnings: Vec::new(), camera })
+    let (mut mesh, camera) = builder.finish();
+    // Normal maps need tangents: MikkTSpace's, as glTF asks, where the file gives none.
+    let mapped = mesh.materials.iter().any(|m| m.textures.normal.is_some());
+    if mapped && mesh.tangents.is_none() && !mesh.generate_tangents() {
+        warnings.push(format!(
+            "{}: normal maps are ignored: no tangents could be made (the mesh needs texture \
+             coordinates)",
+            path.display()
+        ));
+    }
+    if let Some(bad) = lights
+        .iter()
+        .find(|l| !(l.position.is_finite() && l.power.is_finite() && l.power.min_element() >= 0.0))
+    {
+        return Err(invalid(format!(
+            "a light at {} of power {} is not finite and positive",
+            bad.position, bad.power
+        )));
+    }
+    Ok(LoadedMesh { mesh, warnings, camera, lights })
+}
+
+/// The file's images, decoded as materials ask for them, each once per colour space.
+struct Images<'a> {
+    /// Where relative URIs point.
+    folder: &'a Path,
+    buffers: &'a [gltf::buffer::Data],
+    decoded: HashMap<(usize, bool), Arc<TextureImage>>,
+    /// Images found broken before the `gltf` crate reads them, with the reason.
+    broken: HashMap<usize, String>,
+}
+
+impl Images<'_> {
+    /// A material's texture: its image (sRGB colour or linear data), sampler and transform.
+    fn texture(
+        &mut self,
+        texture: &gltf::Texture,
+        tex_coord: u32,
+        transform: Option<gltf::texture::TextureTransform>,
+        srgb: bool,
+    ) -> Result<Texture, String> {
+        let tex_coord = transform.as_ref().and_then(|t| t.tex_coord()).unwrap_or(tex_coord);
+        if tex_coord != 0 {
+            return Err(format!("it reads TEXCOORD_{tex_coord}, and only TEXCOORD_0 is read"));
+        }
+        let source = texture.source();
+        let key = (source.index(), srgb);
+        let image = match self.decoded.get(&key) {
+            Some(image) => image.clone(),
+            None => {
+                let image = Arc::new(self.decode(&source, srgb)?);
+                self.decoded.insert(key, image.clone());
+                image
+            }
+        };
+        let sampler = texture.sampler();
+        let wrap = |mode| match mode {
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        };
+        let mut texture = ImageTexture::new(image);
+        texture.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+        if let Some(t) = transform {
+            texture.transform = texture_transform(t.offset(), t.rotation(), t.scale());
+            if !texture.transform.is_finite() {
+                return Err("its KHR_texture_transform is not finite".into());
+            }
+        }
+        Ok(Texture::Image(texture))
+    }
+
+    /// Decodes image `source` from its buffer view, data URI or file.
+    fn decode(&self, source: &gltf::Image, srgb: bool) -> Result<TextureImage, String> {
+        if let Some(problem) = self.broken.get(&source.index()) {
+            return Err(problem.clone());
+        }
+        let name =
+            source.name().map_or_else(|| format!("image {}", source.index()), str::to_string);
+        match source.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = self.buffers.get(view.buffer().index()).ok_or("no buffer")?;
+                let bytes = buffer
+                    .0
+                    .get(view.offset()..view.offset().saturating_add(view.length()))
+                    .ok_or_else(|| format!("{name}: its buffer view lies outside its buffer"))?;
+                decode_texture(&name, bytes, srgb).map_err(|e| format!("{name}: {e}"))
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                if let Some(data) = uri.strip_prefix("data:") {
+                    let (_, encoded) = data
+                        .split_once(";base64,")
+                        .ok_or_else(|| format!("{name}: a data URI that is not base64"))?;
+                    let bytes = base64::decode(encoded)
+                        .map_err(|e| format!("{name}: its base64 data is broken: {e}"))?;
+                    return decode_texture(&name, &bytes, srgb).map_err(|e| format!("{name}: {e}"));
+                }
+                let relative = urlencoding::decode(uri).map_err(|e| format!("{uri}: {e}"))?;
+                load_texture(&self.folder.join(relative.as_ref()), srgb)
+            }
+        }
+    }
+}
+
+/// Checks what the `gltf` crate's readers take for granted (and panic on otherwise, found by
+/// fuzzing): each attribute read has the type and component types the specification gives it,
+/// and its buffer view's stride is no shorter than one element.
+fn check_accessors(primitive: &gltf::Primitive) -> Result<(), String> {
+    use gltf::accessor::{DataType as T, Dimensions as D};
+    let float = &[T::F32][..];
+    let expected: [(gltf::Semantic, D, &[T]); 4] = [
+        (gltf::Semantic::Positions, D::Vec3, float),
+        (gltf::Semantic::Normals, D::Vec3, float),
+        (gltf::Semantic::Tangents, D::Vec4, float),
+        (gltf::Semantic::TexCoords(0), D::Vec2, &[T::F32, T::U8, T::U16]),
+    ];
+    let used = expected
+        .iter()
+        .filter_map(|(semantic, d, t)| {
+            Some((format!("{semantic:?}"), primitive.get(semantic)?, *d, *t))
+        })
+        .chain(
+            primitive
+                .indices()
+                .map(|a| ("indices".to_string(), a, D::Scalar, &[T::U8, T::U16, T::U32][..])),
+        );
+    for (name, accessor, dimensions, types) in used {
+        if accessor.dimensions() != dimensions || !types.contains(&accessor.data_type()) {
+            return Err(format!(
+                "{name}: accessor {} is {:?} of {:?}, not {dimensions:?} of {types:?}",
+                accessor.index(),
+                accessor.dimensions(),
+                accessor.data_type()
+            ));
+        }
+        if let Some(stride) = accessor.view().and_then(|v| v.stride())
+            && stride < accessor.size()
+        {
+            return Err(format!(
+                "{name}: accessor {}'s buffer view has a stride of {stride} bytes, shorter than \
+                 its {}-byte elements",
+                accessor.index(),
+                accessor.size()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `KHR_texture_transform`'s matrix, translation × rotation × scale, with its rotation turning
+/// counter-clockwise in texture space (the extension's `[cos sin; −sin cos]`).
+fn texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
+    let (sin, cos) = rotation.sin_cos();
+    Affine2::from_cols(
+        Vec2::new(cos, -sin) * scale[0],
+        Vec2::new(sin, cos) * scale[1],
+        Vec2::from_array(offset),
+    )
 }
 
 /// One line from a `gltf` error (its messages can span lines).
@@ -112,6 +368,8 @@ fn describe(error: gltf::Error) -> String {
 struct Builder {
     mesh: Mesh,
     normals: CornerAttribute<Vec3>,
+    tangents: CornerAttribute<Vec4>,
+    has_tangents: bool,
     uvs: CornerAttribute<Vec2>,
     has_normals: bool,
     has_uvs: bool,
@@ -129,6 +387,7 @@ impl Builder {
         if primitive.mode() != gltf::mesh::Mode::Triangles {
             return Err(format!("mode {:?}: only triangles are supported", primitive.mode()));
         }
+        check_accessors(primitive)?;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let outside = |what: &str| format!("{what}: its accessor's data lies outside its buffer");
         let positions: Vec<Vec3> = reader
@@ -162,6 +421,16 @@ impl Builder {
                     .read_normals()
                     .ok_or_else(|| outside("NORMAL"))?
                     .map(Vec3::from_array)
+                    .collect(),
+            ),
+        };
+        let tangents: Option<Vec<Vec4>> = match primitive.get(&gltf::Semantic::Tangents) {
+            None => None,
+            Some(_) => Some(
+                reader
+                    .read_tangents()
+                    .ok_or_else(|| outside("TANGENT"))?
+                    .map(Vec4::from_array)
                     .collect(),
             ),
         };
@@ -213,6 +482,25 @@ impl Builder {
             None if self.has_normals => self.fill_missing_normals(self.mesh.triangles.len()),
             None => {}
         }
+        match tangents {
+            Some(tangents) if tangents.len() == count => {
+                self.fill_missing_tangents(first_triangle);
+                let start = self.tangents.values.len() as u32;
+                // In the surface: they turn with the node; a mirror flips the bitangent's side.
+                let linear = Mat3::from_mat4(*world);
+                let sign = if mirrored { -1.0 } else { 1.0 };
+                self.tangents.values.extend(tangents.iter().map(|t| {
+                    (linear * t.truncate()).normalize_or_zero().extend(t.w.signum() * sign)
+                }));
+                self.tangents.triangles.extend(local.iter().map(|t| t.map(|i| i + start)));
+                self.has_tangents = true;
+            }
+            Some(tangents) => {
+                return Err(format!("TANGENT has {} values for {count} vertices", tangents.len()));
+            }
+            None if self.has_tangents => self.fill_missing_tangents(self.mesh.triangles.len()),
+            None => {}
+        }
         match uvs {
             Some(uvs) => {
                 self.fill_missing_uvs(first_triangle);
@@ -230,6 +518,10 @@ impl Builder {
     /// The mesh, its corner attributes complete.
     fn finish(mut self) -> (Mesh, Option<CameraSettings>) {
         let n = self.mesh.triangles.len();
+        if self.has_tangents {
+            self.fill_missing_tangents(n);
+            self.mesh.tangents = Some(std::mem::take(&mut self.tangents));
+        }
         if self.has_normals {
             self.fill_missing_normals(n);
         }
@@ -239,6 +531,15 @@ impl Builder {
         self.mesh.normals = self.has_normals.then_some(self.normals);
         self.mesh.uvs = self.has_uvs.then_some(self.uvs);
         (self.mesh, self.camera)
+    }
+
+    /// Gives every triangle before `until` that has no tangents a zero tangent (none).
+    fn fill_missing_tangents(&mut self, until: usize) {
+        if self.tangents.triangles.len() < until {
+            let zero = self.tangents.values.len() as u32;
+            self.tangents.values.push(Vec4::ZERO);
+            self.tangents.triangles.resize(until, [zero; 3]);
+        }
     }
 
     /// Gives every triangle before `until` that has no normals a zero normal (none).

@@ -15,9 +15,11 @@ mod finite;
 pub(crate) mod gltf;
 mod keyframes;
 mod model;
+mod mtl;
 pub(crate) mod obj;
 pub(crate) mod ply;
 mod scene_file;
+pub mod terrain;
 
 use glam::Vec3;
 
@@ -45,6 +47,14 @@ pub enum SceneError {
         /// The name asked for.
         name: String,
     },
+    /// A built-in scene's parameters are out of range (`terrain:N`).
+    #[error("scene '{name}': {problem}")]
+    InvalidBuiltIn {
+        /// The name asked for.
+        name: String,
+        /// What is wrong with it.
+        problem: String,
+    },
     /// A material, a light or a triangle's material id is out of its range.
     #[error("scene '{scene}': {what}: {problem}")]
     Invalid {
@@ -68,7 +78,7 @@ pub enum SceneError {
 }
 
 /// Names accepted by [`Scene::built_in`].
-pub const BUILT_IN_SCENES: &[&str] = &["cornell"];
+pub const BUILT_IN_SCENES: &[&str] = &["cornell", "terrain", "terrain:N"];
 
 /// Geometry, materials, lights, and the camera and render settings a scene file gives.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -201,12 +211,14 @@ impl Scene {
         }
     }
 
-    /// A built-in scene by name: `cornell`, the lab's Cornell box.
+    /// A built-in scene by name: `cornell`, the lab's Cornell box; `terrain` or `terrain:N`, a
+    /// fractal landscape ([`terrain::terrain`]).
     pub fn built_in(name: &str) -> Result<Scene, SceneError> {
-        match name {
-            "cornell" => Ok(cornell_box()),
-            _ => Err(SceneError::UnknownScene { name: name.to_string() }),
+        if name == "cornell" {
+            return Ok(cornell_box());
         }
+        terrain::parse_terrain(name)
+            .unwrap_or_else(|| Err(SceneError::UnknownScene { name: name.to_string() }))
     }
 
     /// Every triangle's corners, in order: build an accelerator over them.
@@ -224,6 +236,47 @@ impl Scene {
     #[inline]
     pub fn material(&self, interaction: &SurfaceInteraction) -> &Material {
         &self.materials[interaction.material as usize]
+    }
+
+    /// The bytes its texture images take, each image counted once however many materials use
+    /// it, and how many images there are.
+    pub fn texture_bytes(&self) -> (u64, usize) {
+        use crate::texture::Texture;
+        let mut seen: Vec<*const crate::texture::TextureImage> = Vec::new();
+        let mut bytes = 0;
+        for material in &self.materials {
+            let t = &material.textures;
+            let normal = t.normal.as_ref().map(|n| &n.texture);
+            for texture in [&t.base_color, &t.metallic_roughness, &t.roughness]
+                .into_iter()
+                .flatten()
+                .chain(normal)
+            {
+                if let Texture::Image(image) = texture {
+                    let pointer = std::sync::Arc::as_ptr(&image.image);
+                    if !seen.contains(&pointer) {
+                        seen.push(pointer);
+                        bytes += image.image.bytes();
+                    }
+                }
+            }
+        }
+        (bytes, seen.len())
+    }
+
+    /// Whether some material has cut-out holes (an alpha mask): rays must then be traced past
+    /// them ([`crate::integrator::closest_opaque_hit`]).
+    #[inline]
+    pub fn has_cut_outs(&self) -> bool {
+        self.materials.iter().any(|m| m.textures.alpha_mask.is_some())
+    }
+
+    /// Whether `hit` (found by `ray`) is on a hole of its material's alpha mask.
+    #[inline]
+    pub fn is_cut_out(&self, ray: &Ray, hit: &Hit) -> bool {
+        let material = &self.materials[self.geometry.material_id(hit.triangle as usize) as usize];
+        material.textures.alpha_mask.is_some()
+            && material.is_cut_out(&self.geometry.texture_query(ray, hit, 0.0))
     }
 
     /// The bounding box `(min, max)` of every triangle, or `None` for an empty scene.
@@ -355,7 +408,10 @@ mod tests {
     fn built_in_names_resolve_and_unknown_names_are_listed() {
         assert_eq!(Scene::built_in("cornell").unwrap().geometry.len(), 30);
         let err = Scene::built_in("sponza").unwrap_err();
-        assert_eq!(err.to_string(), "unknown scene 'sponza': the built-in scenes are cornell");
+        assert_eq!(
+            err.to_string(),
+            "unknown scene 'sponza': the built-in scenes are cornell, terrain, terrain:N"
+        );
     }
 
     #[test]

@@ -11,6 +11,7 @@ use glam::Vec3;
 use glam::Affine3A;
 
 use super::Scene;
+use super::file::LoadedMesh;
 use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};
@@ -33,11 +34,8 @@ impl Scene {
     /// a triangle names none), emitting its `Ke`. Lit by [`Scene::default_light`] unless some
     /// material emits.
     pub fn from_mesh(mesh: &Mesh) -> Scene {
-        let mut materials: Vec<Material> = mesh
-            .materials
-            .iter()
-            .map(|m| Material { emission: m.emission, ..Material::diffuse(&m.name, m.diffuse) })
-            .collect();
+        let mut materials: Vec<Material> =
+            mesh.materials.iter().map(MeshMaterial::to_material).collect();
         let default = materials.len() as u32;
         materials.push(Material::diffuse("default", MeshMaterial::DEFAULT_DIFFUSE));
         let mut geometry = Geometry::new();
@@ -48,6 +46,18 @@ impl Scene {
         let mut scene = Scene { name: mesh.name.clone(), geometry, materials, ..Scene::default() };
         if !scene.has_area_lights() {
             scene.lights.push(Light::Point(scene.default_light()));
+        }
+        scene
+    }
+
+    /// A loaded model file as a scene ([`from_mesh`](Self::from_mesh)) with the file's camera
+    /// and, where it has some, its point lights instead of the default light.
+    pub fn from_loaded(loaded: &LoadedMesh) -> Scene {
+        let mut scene = Scene::from_mesh(&loaded.mesh);
+        scene.camera = loaded.camera;
+        if !loaded.lights.is_empty() {
+            scene.lights.retain(|light| !matches!(light, Light::Point(_)));
+            scene.lights.extend(loaded.lights.iter().copied().map(Light::Point));
         }
         scene
     }

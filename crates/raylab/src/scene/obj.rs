@@ -40,6 +40,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::file::{LoadError, LoadedMesh, Location, mesh_name, quoted, read_bytes};
+use super::mtl::{TextureFiles, parse_mtl};
 use crate::mesh::{CornerAttribute, Mesh, MeshMaterial};
 
 /// The largest material library we read. Real ones are a few kilobytes.
@@ -74,6 +75,7 @@ pub(crate) fn parse_obj_with(
         failure: RefCell::new(None),
         materials: RefCell::new(Vec::new()),
         warnings: RefCell::new(Vec::new()),
+        textures: RefCell::new(TextureFiles::default()),
         library_missing: Cell::new(false),
     };
     let mut lines = ObjLines::new(path, text, &shared);
@@ -195,7 +197,7 @@ pub(crate) fn parse_obj_with(
     }
     mesh.materials = materials;
     let warnings = warnings.into_iter().map(|w| format!("{}: {w}", path.display())).collect();
-    Ok(LoadedMesh { mesh, warnings, camera: None })
+    Ok(LoadedMesh { mesh, warnings, camera: None, lights: Vec::new() })
 }
 
 /// What tobj's error means, as "expected …".
@@ -227,6 +229,8 @@ struct Shared<'a> {
     /// Every library's materials, in the order tobj numbers them.
     materials: RefCell<Vec<MeshMaterial>>,
     warnings: RefCell<Vec<String>>,
+    /// The texture files read so far.
+    textures: RefCell<TextureFiles>,
     /// Whether some library could not be read (then unknown material names are expected).
     library_missing: Cell<bool>,
 }
@@ -277,7 +281,22 @@ impl Shared<'_> {
 
     fn add_library(&self, (path, bytes): (PathBuf, Vec<u8>), result: &mut tobj::MTLLoadResult) {
         match parse_mtl(&bytes) {
-            Ok(materials) => {
+            Ok(library) => {
+                let mut materials = Vec::with_capacity(library.len());
+                for (mut material, texture) in library {
+                    if let Some(line) = texture {
+                        match self.textures.borrow_mut().load(&path, &line) {
+                            Ok(texture) => material.textures.base_color = Some(texture),
+                            Err(error) => self.warnings.borrow_mut().push(format!(
+                                "{}:{}: the texture of material {} is ignored: {error}",
+                                path.display(),
+                                line.line,
+                                quoted(&material.name)
+                            )),
+                        }
+                    }
+                    materials.push(material);
+                }
                 if let Ok((list, names)) = result {
                     for material in &materials {
                         names.insert(material.name.clone(), list.len());
@@ -294,57 +313,6 @@ impl Shared<'_> {
                 self.failure.borrow_mut().get_or_insert(error);
             }
         }
-    }
-}
-
-/// The materials of an MTL file, in file order: `newmtl`, `Kd` and `Ke`; the rest is ignored.
-/// An error is the line number and what was wrong.
-fn parse_mtl(text: &[u8]) -> Result<Vec<MeshMaterial>, (u64, String)> {
-    let mut materials: Vec<MeshMaterial> = Vec::new();
-    for (index, raw) in text.split(|&b| b == b'\n').enumerate() {
-        let number = index as u64 + 1;
-        let line = String::from_utf8_lossy(raw);
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("newmtl") => {
-                let name = line.trim().get("newmtl".len()..).unwrap_or("").trim();
-                if name.is_empty() {
-                    return Err((number, "expected a material name after `newmtl`".into()));
-                }
-                materials.push(MeshMaterial {
-                    name: name.into(),
-                    diffuse: MeshMaterial::DEFAULT_DIFFUSE,
-                    emission: Vec3::ZERO,
-                });
-            }
-            Some(keyword @ ("Kd" | "Ke")) => {
-                let Some(material) = materials.last_mut() else {
-                    return Err((number, format!("`{keyword}` before any `newmtl`")));
-                };
-                let colour = parse_colour(keyword, words).map_err(|message| (number, message))?;
-                match keyword {
-                    "Kd" => material.diffuse = colour,
-                    _ => material.emission = colour,
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok(materials)
-}
-
-/// `r g b`, or `r` alone for grey, as finite numbers.
-fn parse_colour<'a>(keyword: &str, words: impl Iterator<Item = &'a str>) -> Result<Vec3, String> {
-    let words: Vec<&str> = words.collect();
-    let numbers: Option<Vec<f32>> =
-        words.iter().map(|w| w.parse::<f32>().ok().filter(|v| v.is_finite())).collect();
-    match numbers.as_deref() {
-        Some(&[grey]) => Ok(Vec3::splat(grey)),
-        Some(&[r, g, b]) => Ok(Vec3::new(r, g, b)),
-        _ => Err(format!(
-            "expected `{keyword} r g b` (or `{keyword} r` for grey) with finite numbers, found {}",
-            quoted(&words.join(" "))
-        )),
     }
 }
 

@@ -199,7 +199,8 @@ pub(crate) fn parse_ply(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadErr
         warnings.push(format!("skipped {} faces with fewer than 3 vertices", builder.short_faces));
     }
     let warnings = warnings.into_iter().map(|w| format!("{}: {w}", path.display())).collect();
-    Ok(LoadedMesh { mesh: builder.finish(mesh_name(path)), warnings, camera: None })
+    let mesh = builder.finish(mesh_name(path));
+    Ok(LoadedMesh { mesh, warnings, camera: None, lights: Vec::new() })
 }
 
 /// The header's lines, each without its line ending, with their numbers and the offset after.
@@ -541,6 +542,7 @@ impl Builder {
             triangles: self.triangles,
             normals,
             uvs,
+            tangents: None,
             material_ids: Vec::new(),
             materials: Vec::new(),
         }

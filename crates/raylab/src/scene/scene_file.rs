@@ -289,7 +289,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                 let Some(file) = &doc.file else {
                     return self.error(
                         shape.span(),
-                        "a mesh needs `file = \"…\"` (.obj, .ply, optionally .gz)",
+                        "a mesh needs `file = \"…\"` (.obj, .ply, optionally .gz; .gltf, .glb)",
                     );
                 };
                 let mesh_path = self.folder.join(file.get_ref());
@@ -298,15 +298,12 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                 if material.is_none() {
                     // The file's own materials, as diffuse with their Kd and Ke.
                     let base = materials.len() as u32;
-                    materials.extend(loaded.mesh.materials.iter().map(|m| Material {
-                        emission: m.emission,
-                        ..Material::diffuse(&m.name, m.diffuse)
-                    }));
+                    materials.extend(
+                        loaded.mesh.materials.iter().map(crate::mesh::MeshMaterial::to_material),
+                    );
                     let default = materials.len() as u32;
-                    materials.push(Material::diffuse(
-                        "default",
-                        crate::mesh::MeshMaterial::DEFAULT_DIFFUSE,
-                    ));
+                    let grey = crate::mesh::MeshMaterial::DEFAULT_DIFFUSE;
+                    materials.push(Material::diffuse("default", grey));
                     let ids = &loaded.mesh.material_ids;
                     geometry.add_mesh(&loaded.mesh, &transform, |i| {
                         ids.get(i).copied().flatten().map_or(default, |m| base + m)
@@ -592,6 +589,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
 /// Mitsuba's `rectangle`: `[−1, 1]²` in the plane z = 0, facing +z.
 mod materials;
 mod shapes;
+mod textures;
 
 use materials::MaterialDoc;
 use shapes::{cube, rectangle, sphere};

@@ -6,16 +6,18 @@ use std::ops::Range;
 use glam::Vec3;
 use serde::Deserialize;
 
+use super::textures::{ColourDoc, ScalarDoc};
 use super::{Builder, Result, SceneFileError};
 use crate::material::{
-    Bsdf, Conductor, Dielectric, Ggx, METALS, Material, Plastic, RoughConductor, RoughDielectric,
+    Bsdf, Conductor, Dielectric, Ggx, METALS, Material, MaterialTextures, Pbr, Plastic,
+    RoughConductor, RoughDielectric,
 };
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
 pub(super) enum MaterialDoc {
     Diffuse {
-        reflectance: [f32; 3],
+        reflectance: ColourDoc,
     },
     Conductor {
         #[serde(flatten)]
@@ -38,7 +40,7 @@ pub(super) enum MaterialDoc {
         roughness: RoughnessDoc,
     },
     Plastic {
-        diffuse_reflectance: Option<[f32; 3]>,
+        diffuse_reflectance: Option<ColourDoc>,
         specular_reflectance: Option<[f32; 3]>,
         int_ior: Option<IorDoc>,
         ext_ior: Option<IorDoc>,
@@ -47,6 +49,12 @@ pub(super) enum MaterialDoc {
     },
     Twosided {
         bsdf: Box<MaterialDoc>,
+    },
+    /// glTF's metallic-roughness material.
+    Pbr {
+        base_color: Option<ColourDoc>,
+        metallic: Option<f32>,
+        roughness: Option<ScalarDoc>,
     },
 }
 
@@ -62,7 +70,7 @@ pub(super) struct MetalDoc {
 #[derive(Deserialize)]
 pub(super) struct RoughnessDoc {
     distribution: Option<String>,
-    alpha: Option<f32>,
+    alpha: Option<ScalarDoc>,
     alpha_u: Option<f32>,
     alpha_v: Option<f32>,
 }
@@ -149,14 +157,28 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         })
     }
 
-    fn roughness(&self, doc: &RoughnessDoc, span: &Range<usize>) -> Result<Ggx> {
+    /// The distribution; a textured `alpha` goes to `textures.roughness`.
+    fn roughness(
+        &self,
+        doc: &RoughnessDoc,
+        textures: &mut MaterialTextures,
+        span: &Range<usize>,
+    ) -> Result<Ggx> {
         if let Some(name) = &doc.distribution
             && name != "ggx"
         {
             return self
                 .error(span.clone(), format!("distribution '{name}' is not supported: only ggx"));
         }
-        let (u, v) = match (doc.alpha, doc.alpha_u, doc.alpha_v) {
+        let alpha = match &doc.alpha {
+            Some(alpha) => {
+                let (a, texture) = self.scalar(alpha, 0.1, span)?;
+                textures.roughness = texture;
+                Some(a)
+            }
+            None => None,
+        };
+        let (u, v) = match (alpha, doc.alpha_u, doc.alpha_v) {
             (Some(a), None, None) => (a, a),
             (None, Some(u), Some(v)) => (u, v),
             // Mitsuba's default roughness.
@@ -176,37 +198,38 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         doc: &MaterialDoc,
         span: Range<usize>,
     ) -> Result<Material> {
-        let with = |bsdf| Material {
+        let mut textures = MaterialTextures::default();
+        let with = |bsdf, textures| Material {
             name: name.to_string(),
             bsdf,
             two_sided: false,
             emission: Vec3::ZERO,
+            textures,
         };
         let material = match doc {
             MaterialDoc::Diffuse { reflectance } => {
-                Material::diffuse(name, Vec3::from_array(*reflectance))
+                let (reflectance, texture) = self.colour(reflectance, &span)?;
+                textures.base_color = texture;
+                with(Bsdf::Diffuse(crate::material::Diffuse { reflectance }), textures)
             }
             MaterialDoc::Conductor { metal } => {
-                with(Bsdf::Conductor(self.conductor(metal, &span)?))
+                with(Bsdf::Conductor(self.conductor(metal, &span)?), textures)
             }
             MaterialDoc::Roughconductor { metal, roughness } => {
-                with(Bsdf::RoughConductor(RoughConductor {
-                    conductor: self.conductor(metal, &span)?,
-                    distribution: self.roughness(roughness, &span)?,
-                }))
+                let distribution = self.roughness(roughness, &mut textures, &span)?;
+                let conductor = self.conductor(metal, &span)?;
+                with(Bsdf::RoughConductor(RoughConductor { conductor, distribution }), textures)
             }
             MaterialDoc::Dielectric { int_ior, ext_ior } => {
                 let eta =
                     self.ior(int_ior, 1.5046, &span)? / self.ior(ext_ior, 1.000_277, &span)?;
-                with(Bsdf::Dielectric(Dielectric { eta }))
+                with(Bsdf::Dielectric(Dielectric { eta }), textures)
             }
             MaterialDoc::Roughdielectric { int_ior, ext_ior, roughness } => {
                 let eta =
                     self.ior(int_ior, 1.5046, &span)? / self.ior(ext_ior, 1.000_277, &span)?;
-                with(Bsdf::RoughDielectric(RoughDielectric {
-                    eta,
-                    distribution: self.roughness(roughness, &span)?,
-                }))
+                let distribution = self.roughness(roughness, &mut textures, &span)?;
+                with(Bsdf::RoughDielectric(RoughDielectric { eta, distribution }), textures)
             }
             MaterialDoc::Plastic {
                 diffuse_reflectance,
@@ -216,12 +239,36 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                 nonlinear,
             } => {
                 let eta = self.ior(int_ior, 1.49, &span)? / self.ior(ext_ior, 1.000_277, &span)?;
-                with(Bsdf::Plastic(Plastic::new(
-                    Vec3::from_array(diffuse_reflectance.unwrap_or([0.5; 3])),
-                    Vec3::from_array(specular_reflectance.unwrap_or([1.0; 3])),
-                    eta,
-                    *nonlinear,
-                )))
+                let diffuse = match diffuse_reflectance {
+                    Some(doc) => {
+                        let (colour, texture) = self.colour(doc, &span)?;
+                        textures.base_color = texture;
+                        colour
+                    }
+                    None => Vec3::splat(0.5),
+                };
+                let specular = Vec3::from_array(specular_reflectance.unwrap_or([1.0; 3]));
+                with(Bsdf::Plastic(Plastic::new(diffuse, specular, eta, *nonlinear)), textures)
+            }
+            MaterialDoc::Pbr { base_color, metallic, roughness } => {
+                let base_color = match base_color {
+                    Some(doc) => {
+                        let (colour, texture) = self.colour(doc, &span)?;
+                        textures.base_color = texture;
+                        colour
+                    }
+                    None => Vec3::ONE,
+                };
+                let roughness = match roughness {
+                    Some(doc) => {
+                        let (value, texture) = self.scalar(doc, 1.0, &span)?;
+                        textures.roughness = texture;
+                        value
+                    }
+                    None => 1.0,
+                };
+                let metallic = metallic.unwrap_or(0.0);
+                with(Bsdf::Pbr(Pbr { base_color, metallic, roughness }), textures)
             }
             MaterialDoc::Twosided { bsdf } => {
                 Material { two_sided: true, ..self.material(name, bsdf, span.clone())? }

@@ -344,3 +344,82 @@ fn keyframes_parse_in_order_and_mistakes_are_named() {
         error("[[keyframes]]\nframe = -1\nposition = [0, 0, 4]\n").starts_with("test.toml:2:9")
     );
 }
+
+#[test]
+fn colour_and_roughness_inputs_take_textures() {
+    use crate::texture::{Pattern, Texture, TextureQuery};
+    let scene = parse(
+        r#"
+[materials.floor]
+type = "diffuse"
+reflectance = { texture = "marble", scale = 4, colors = [[0.9, 0.9, 0.9], [0.1, 0.1, 0.1]] }
+
+[materials.brushed]
+type = "roughconductor"
+material = "Al"
+alpha = { texture = "clouds", scale = 8, range = [0.05, 0.4], seed = 3 }
+
+[materials.wood]
+type = "pbr"
+base_color = { texture = "wood", turbulence = 0.3 }
+roughness = 0.4
+"#,
+    )
+    .unwrap();
+    let named = |name: &str| scene.materials.iter().find(|m| m.name == name).unwrap();
+    let [floor, brushed, wood] = ["floor", "brushed", "wood"].map(named);
+    let Some(Texture::Noise(marble)) = &floor.textures.base_color else { panic!("{floor:?}") };
+    assert_eq!((marble.pattern, marble.scale, marble.octaves), (Pattern::Marble, 4.0, 6));
+    let Some(Texture::Noise(clouds)) = &brushed.textures.roughness else { panic!("{brushed:?}") };
+    assert_eq!(clouds.colors, [Vec3::splat(0.05), Vec3::splat(0.4)]);
+    // The inputs vary over space: the BSDF read at two points differs.
+    let at = |x: f32| TextureQuery { p: Vec3::new(x, 0.3, 0.7), ..TextureQuery::default() };
+    let albedos: Vec<Vec3> = (0..20).map(|i| floor.albedo_at(&at(i as f32 * 0.1))).collect();
+    assert!(albedos.iter().any(|a| a.x > 0.6) && albedos.iter().any(|a| a.x < 0.4));
+    let alphas: Vec<f32> = (0..50)
+        .map(|i| match &*brushed.bsdf_at(&at(i as f32 * 0.05)) {
+            Bsdf::RoughConductor(r) => r.distribution.alpha_u,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert!(alphas.iter().all(|a| (0.05..=0.4).contains(a)), "{alphas:?}");
+    assert!(alphas.iter().any(|&a| a > alphas[0] + 0.02 || a < alphas[0] - 0.02));
+    assert!(matches!(wood.bsdf, Bsdf::Pbr(_)) && wood.textures.base_color.is_some());
+    // Mistakes are named with their place.
+    let cases = [
+        ("reflectance = { texture = \"plaid\" }", "unknown texture 'plaid'"),
+        ("reflectance = { texture = \"wood\", octaves = 0 }", "octaves 0"),
+        ("reflectance = { texture = \"wood\", range = [0, 1] }", "takes `colors`"),
+        ("reflectance = { texture = \"wood\", scale = -2 }", "scale -2"),
+        ("reflectance = { texture = \"missing.png\" }", "missing.png"),
+        ("reflectance = { texture = \"a.png\", wrap = \"tile\" }", "unknown wrap 'tile'"),
+    ];
+    for (line, message) in cases {
+        let e = error(&format!("[materials.a]\ntype = \"diffuse\"\n{line}\n"));
+        assert!(e.starts_with("test.toml:") && e.contains(message), "{line}: {e}");
+    }
+}
+
+/// A glTF model is a shape like any mesh: its metallic-roughness materials and textures come
+/// with it, and the scene's transform places it.
+#[test]
+fn a_gltf_model_is_a_mesh_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/BoxTextured");
+    for file in ["BoxTextured.gltf", "BoxTextured0.bin", "CesiumLogoFlat.png"] {
+        std::fs::copy(data.join(file), dir.path().join(file)).unwrap();
+    }
+    let scene_path = dir.path().join("s.toml");
+    std::fs::write(
+        &scene_path,
+        "[[shapes]]\ntype = \"mesh\"\nfile = \"BoxTextured.gltf\"\nscale = 2\n",
+    )
+    .unwrap();
+    let scene = load_scene_file(&scene_path).unwrap();
+    assert_eq!(scene.geometry.len(), 12);
+    let (lo, hi) = scene.bounds().unwrap();
+    assert!(lo.abs_diff_eq(Vec3::splat(-1.0), 1e-6) && hi.abs_diff_eq(Vec3::ONE, 1e-6));
+    let material = &scene.materials[scene.geometry.material_id(0) as usize];
+    assert!(matches!(material.bsdf, Bsdf::Pbr(_)), "{:?}", material.bsdf);
+    assert!(material.textures.base_color.is_some());
+}

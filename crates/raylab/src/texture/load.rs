@@ -1,0 +1,104 @@
+//! Decoding texture files: PNG (8 and 16 bits, grey or colour, with or without alpha) and JPEG,
+//! through the `image` crate, with the size checked from the header before any texel is
+//! allocated.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use super::image::{TextureImage, srgb_to_linear};
+
+/// The longest side a texture may have, in texels.
+pub const MAX_TEXTURE_SIDE: u32 = 16_384;
+
+/// The most texels a texture may have (8192², 256 MiB at 8 bits; a 16-bit image is held as
+/// floats, four times that).
+pub const MAX_TEXTURE_TEXELS: u64 = 1 << 26;
+
+/// Decodes an image file's bytes; `srgb` says whether its colour is sRGB-encoded (colour
+/// textures) or linear (normal maps, roughness). `name` is for messages. Errors are one line,
+/// without the name (the caller says where the texture comes from).
+pub fn decode_texture(name: &str, bytes: &[u8], srgb: bool) -> Result<TextureImage, String> {
+    let reader = image::ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read it: {e}"))?;
+    if reader.format().is_none() {
+        return Err("not a PNG or JPEG image".into());
+    }
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_TEXTURE_SIDE);
+    limits.max_image_height = Some(MAX_TEXTURE_SIDE);
+    // The decoded image at 16 bits per channel, RGBA, and the decoder's own buffers.
+    limits.max_alloc = Some(MAX_TEXTURE_TEXELS * 8 + (64 << 20));
+    let mut reader = reader;
+    reader.limits(limits);
+    let decoder = reader.into_decoder().map_err(|e| describe(&e))?;
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    check_size(width, height)?;
+    let decoded = image::DynamicImage::from_decoder(decoder).map_err(|e| describe(&e))?;
+    use image::DynamicImage as D;
+    Ok(match decoded {
+        D::ImageLuma8(_) | D::ImageLumaA8(_) | D::ImageRgb8(_) | D::ImageRgba8(_) => {
+            let rgba = decoded.into_rgba8();
+            let texels = rgba.as_raw().chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+            TextureImage::from_rgba8(name, width, height, texels, srgb)
+        }
+        D::ImageRgb32F(_) | D::ImageRgba32F(_) => {
+            let rgba = decoded.into_rgba32f();
+            let texels = rgba.as_raw().chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+            TextureImage::from_rgba_f32(name, width, height, texels)
+        }
+        // 16 bits (and whatever comes next): decoded to linear floats.
+        _ => {
+            let rgba = decoded.into_rgba16();
+            let colour = |v: u16| {
+                let v = f32::from(v) / 65535.0;
+                if srgb { srgb_to_linear(v) } else { v }
+            };
+            let texels = rgba
+                .as_raw()
+                .chunks_exact(4)
+                .map(|c| [colour(c[0]), colour(c[1]), colour(c[2]), f32::from(c[3]) / 65535.0])
+                .collect();
+            TextureImage::from_rgba_f32(name, width, height, texels)
+        }
+    })
+}
+
+/// Reads and decodes an image file (see [`decode_texture`]); errors name the file.
+pub fn load_texture(path: &Path, srgb: bool) -> Result<TextureImage, String> {
+    let bytes =
+        std::fs::read(path).map_err(|e| format!("{}: cannot read it: {e}", path.display()))?;
+    let name =
+        path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
+    decode_texture(&name, &bytes, srgb).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Refuses sizes beyond [`MAX_TEXTURE_SIDE`] and [`MAX_TEXTURE_TEXELS`], and empty images.
+pub fn check_size(width: u32, height: u32) -> Result<(), String> {
+    let texels = u64::from(width) * u64::from(height);
+    if width == 0 || height == 0 {
+        return Err(format!("an empty {width}×{height} image"));
+    }
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE || texels > MAX_TEXTURE_TEXELS {
+        return Err(format!(
+            "{width}×{height} texels is over the texture size limit ({MAX_TEXTURE_SIDE} a side, \
+             {} texels in all)",
+            MAX_TEXTURE_TEXELS
+        ));
+    }
+    Ok(())
+}
+
+/// One line from an `image` error.
+fn describe(error: &image::ImageError) -> String {
+    match error {
+        image::ImageError::Limits(_) => format!(
+            "over the texture size limit ({MAX_TEXTURE_SIDE} a side, {MAX_TEXTURE_TEXELS} texels \
+             in all)"
+        ),
+        other => {
+            let text = other.to_string();
+            format!("a damaged image: {}", text.lines().next().unwrap_or("cannot decode it"))
+        }
+    }
+}
