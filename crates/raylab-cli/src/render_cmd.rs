@@ -248,7 +248,7 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
     let stop = &render_state::interrupt_flag()?;
 
     let start = Instant::now();
-    let accel = pool.install(|| system::build_bvh(&scene.name, &scene.vertices()))?;
+    let accel = pool.install(|| system::build_bvh(&scene.name, &scene.geometry))?;
     let build = start.elapsed();
     let stage = args.scene.stage;
     let lab;
@@ -513,11 +513,18 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
                 raylab::film::format_bytes(texture_bytes)
             )
         };
+        let geometry = &scene.geometry;
+        let instances = if geometry.is_instanced() {
+            let placed = geometry.instances().iter().filter(|x| x.placement.is_some()).count();
+            format!(" ({} triangles stored; {placed} instances)", geometry.stored_len())
+        } else {
+            String::new()
+        };
         report += &format!(
-            "scene loaded in {:.1} ms; memory: geometry {}, BVH {}{textures}\n",
+            "scene loaded in {:.1} ms; memory: geometry {}{instances}, BVH {}{textures}\n",
             setup.load.as_secs_f64() * 1e3,
-            raylab::film::format_bytes(scene.geometry.bytes()),
-            raylab::film::format_bytes(accel.stats().bytes() as u64),
+            raylab::film::format_bytes(geometry.bytes()),
+            raylab::film::format_bytes(accel.bytes() as u64),
         );
         if integrator_name == "lab" {
             let light = scene.lab_light();

@@ -50,6 +50,12 @@ pub struct SceneArgs {
     #[arg(long, value_name = "DEG", value_parser = args::fov_deg)]
     pub fov: Option<f32>,
 
+    /// Draw every copy of a mesh the model uses in several places (glTF nodes sharing a mesh)
+    /// as triangles of its own, in one BVH, instead of storing the mesh once under a two-level
+    /// BVH: more memory, the same picture; for comparisons.
+    #[arg(long)]
+    pub flatten: bool,
+
     /// Point-light position [default: the lab's (0, -0.5, -0.7); for a model, above it, to the
     /// right and in front].
     #[arg(long, value_name = "X,Y,Z", value_parser = args::vec3, allow_hyphen_values = true)]
@@ -104,7 +110,7 @@ impl SceneArgs {
     /// Loads and checks everything before any rendering, so that no work is lost to a bad value.
     pub fn setup(&self) -> Result<Setup> {
         let start = std::time::Instant::now();
-        let (mut scene, is_model) = load_scene(&self.scene)?;
+        let (mut scene, is_model) = load_scene(&self.scene, self.flatten)?;
         let load = start.elapsed();
         let scene_camera = scene.camera;
         if let Some(position) = self.light {
@@ -176,7 +182,7 @@ impl SceneArgs {
         if camera.has_lens() && self.focus_distance.is_none() && settings.is_none() {
             // Focus on what the image's centre sees.
             let centre = camera.ray(width as f32 / 2.0, height as f32 / 2.0);
-            let bvh = system::build_bvh(&scene.name, &scene.vertices())?;
+            let bvh = system::build_bvh(&scene.name, &scene.geometry)?;
             if let Some(hit) = raylab::Accelerator::closest_hit(&bvh, &centre) {
                 camera.focus_distance = (hit.t * centre.direction.dot(camera.forward())).max(1e-6);
             }
@@ -195,9 +201,9 @@ impl Setup {
     }
 }
 
-/// A built-in scene by name, or a model file (anything that looks like a path). The flag says
-/// whether it is a model.
-fn load_scene(name: &str) -> Result<(Scene, bool)> {
+/// A built-in scene by name, or a model file (anything that looks like a path), its instances
+/// placed as copies if `flatten`. The flag says whether it is a model.
+fn load_scene(name: &str, flatten: bool) -> Result<(Scene, bool)> {
     let path = std::path::Path::new(name);
     let looks_like_a_file = path.exists() || name.contains('/') || name.contains('.');
     match Scene::built_in(name) {
@@ -210,7 +216,11 @@ fn load_scene(name: &str) -> Result<(Scene, bool)> {
     if lower.ends_with(".toml") {
         return Ok((raylab::scene::load_scene_file(path)?, false));
     }
-    let loaded = raylab::scene::load_mesh(path)?;
+    let mut loaded = raylab::scene::load_mesh(path)?;
+    if flatten {
+        loaded.mesh = loaded.flattened();
+        loaded.instanced.clear();
+    }
     for warning in &loaded.warnings {
         eprintln!("raylab: warning: {warning}");
     }

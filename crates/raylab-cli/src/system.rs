@@ -30,9 +30,10 @@ pub fn check_memory(bytes: u64, width: u32, height: u32) -> anyhow::Result<()> {
 
 /// The BVH over a scene's triangles, or one line saying why not: more triangles than a BVH
 /// holds, or more memory for the build than the machine has available. `name` names the scene.
-pub fn build_bvh(name: &str, vertices: &[[glam::Vec3; 3]]) -> anyhow::Result<raylab::Bvh> {
-    check_bvh_memory(name, vertices.len(), available_memory_bytes())?;
-    raylab::Bvh::try_new(vertices).map_err(|e| anyhow::anyhow!("{name}: {e}"))
+pub fn build_bvh(name: &str, geometry: &raylab::Geometry) -> anyhow::Result<raylab::SceneBvh> {
+    // A mesh drawn in several places is built over once.
+    check_bvh_memory(name, geometry.stored_len(), available_memory_bytes())?;
+    raylab::SceneBvh::build(geometry).map_err(|e| anyhow::anyhow!("{name}: {e}"))
 }
 
 /// Whether a BVH over `triangles` fits in `available` bytes (unknown: assumed to fit).

@@ -12,7 +12,7 @@ use clap::Args;
 use raylab::interactive::{
     Controller, FrameRenderer, Motion, Pose, View, ViewMode, rgb8_from_0rgb,
 };
-use raylab::{Bvh, Film, PathSettings, SampleSettings, Scene, image_io};
+use raylab::{Film, PathSettings, SampleSettings, Scene, SceneBvh, image_io};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs, Setup};
 use crate::{stats, system, view_window};
@@ -81,7 +81,7 @@ pub struct ViewArgs {
 /// What the window needs to start.
 pub struct Session<'a> {
     pub scene: &'a Scene,
-    pub accel: &'a Bvh,
+    pub accel: &'a SceneBvh,
     pub pool: &'a rayon::ThreadPool,
     pub controller: Controller,
     pub view: View,
@@ -115,7 +115,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     }
     let Setup { scene, camera, .. } = &setup;
     let pool = setup.thread_pool()?;
-    let accel = pool.install(|| system::build_bvh(&scene.name, &scene.vertices()))?;
+    let accel = pool.install(|| system::build_bvh(&scene.name, &scene.geometry))?;
     let home = Pose {
         position: camera.position,
         yaw: camera.yaw,

@@ -23,7 +23,7 @@ fn meshes() -> Vec<(&'static str, PathBuf)> {
 fn bvh(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     for (name, path) in meshes() {
-        let mesh: Mesh = raylab::scene::load_mesh(&path).expect("loads").mesh;
+        let mesh: Mesh = raylab::scene::load_mesh(&path).expect("loads").flattened();
         let triangles: Vec<_> = mesh.triangle_vertices().collect();
 
         let mut build = c.benchmark_group(format!("bvh_build_{name}"));

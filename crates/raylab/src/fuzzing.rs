@@ -6,7 +6,6 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use crate::bvh::Bvh;
 use crate::scene::{LoadedMesh, Scene};
 
 /// Meshes up to this many triangles are also built into a BVH and asked a ray.
@@ -26,7 +25,7 @@ fn use_scene(scene: &Scene) {
         return;
     }
     let _ = scene.content_hash();
-    let bvh = Bvh::new(&scene.vertices());
+    let Ok(bvh) = crate::bvh::SceneBvh::build(&scene.geometry) else { return };
     let ray = crate::ray::Ray::new(glam::Vec3::new(0.1, 0.2, -5.0), glam::Vec3::Z);
     let _ = crate::accel::Accelerator::closest_hit(&bvh, &ray);
 }

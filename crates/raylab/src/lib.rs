@@ -18,7 +18,7 @@
 //! use raylab::{Accelerator, Bvh, Ray};
 //!
 //! let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/meshes/bunny_lowres.obj");
-//! let mesh = raylab::scene::load_mesh(std::path::Path::new(file))?.mesh;
+//! let mesh = raylab::scene::load_mesh(std::path::Path::new(file))?.flattened();
 //! let triangles: Vec<[Vec3; 3]> = mesh.triangle_vertices().collect();
 //! let bvh = Bvh::new(&triangles);
 //!
@@ -149,7 +149,7 @@ pub mod texture;
 pub mod triangle;
 
 pub use accel::{Accelerator, BruteForce, Hit};
-pub use bvh::{BuildSettings, Bvh};
+pub use bvh::{BuildSettings, Bvh, SceneBvh};
 pub use camera::{Camera, RayGenerator};
 pub use film::{Film, FilmError};
 pub use geometry::{Geometry, SurfaceInteraction};

@@ -121,6 +121,35 @@ impl Mesh {
         self.triangles.iter().map(|t| t.map(|v| self.positions[v as usize]))
     }
 
+    /// Appends `other`'s triangles moved by `transform`, with their materials (indices into
+    /// the same table) and corner attributes (normals and tangents turned with the transform);
+    /// a side that lacks an attribute the other has gets zeros (zero normals and tangents are
+    /// "none"). A mirroring transform turns the corners so that the front side stays outside.
+    pub fn append_transformed(&mut self, other: &Mesh, transform: &glam::Affine3A) {
+        let mirrored = transform.matrix3.determinant() < 0.0;
+        let turn = |[a, b, c]: [u32; 3]| if mirrored { [a, c, b] } else { [a, b, c] };
+        let before = self.triangles.len();
+        let base = self.positions.len() as u32;
+        self.positions.extend(other.positions.iter().map(|&p| transform.transform_point3(p)));
+        self.triangles.extend(other.triangles.iter().map(|&t| turn(t).map(|v| base + v)));
+        if !(self.material_ids.is_empty() && other.material_ids.is_empty()) {
+            self.material_ids.resize(before, None);
+            self.material_ids.extend(
+                (0..other.triangles.len()).map(|i| other.material_ids.get(i).copied().flatten()),
+            );
+        }
+        let span = (before, self.triangles.len());
+        let normal_matrix = glam::Mat3::from(transform.matrix3).inverse().transpose();
+        append_corners(&mut self.normals, other.normals.as_ref(), span, turn, |n| {
+            (normal_matrix * n).normalize_or_zero()
+        });
+        append_corners(&mut self.uvs, other.uvs.as_ref(), span, turn, |uv| uv);
+        let sign = if mirrored { -1.0 } else { 1.0 };
+        append_corners(&mut self.tangents, other.tangents.as_ref(), span, turn, |t: Vec4| {
+            (transform.matrix3 * t.truncate()).normalize_or_zero().extend(t.w * sign)
+        });
+    }
+
     /// The bounding box `(min, max)` of the vertices that some triangle uses, or `None` for a
     /// mesh without triangles.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
@@ -214,6 +243,36 @@ impl Mesh {
     pub fn zero_area_triangles(&self) -> usize {
         self.triangle_vertices().filter(|&t| crate::triangle::is_degenerate(t)).count()
     }
+}
+
+/// Appends the corner values `other` has for the triangles `before..after` just appended
+/// (zeros where it has none but `own` has some), mapping each value by `map` and each
+/// triangle's corners by `turn`.
+fn append_corners<T: Copy + Default>(
+    own: &mut Option<CornerAttribute<T>>,
+    other: Option<&CornerAttribute<T>>,
+    (before, after): (usize, usize),
+    turn: impl Fn([u32; 3]) -> [u32; 3],
+    map: impl Fn(T) -> T,
+) {
+    if own.is_none() && other.is_none() {
+        return;
+    }
+    let own = own.get_or_insert_with(CornerAttribute::default);
+    let pad = |own: &mut CornerAttribute<T>, until: usize| {
+        if own.triangles.len() < until {
+            let zero = own.values.len() as u32;
+            own.values.push(T::default());
+            own.triangles.resize(until, [zero; 3]);
+        }
+    };
+    pad(own, before);
+    if let Some(other) = other {
+        let base = own.values.len() as u32;
+        own.values.extend(other.values.iter().map(|&v| map(v)));
+        own.triangles.extend(other.triangles.iter().map(|&t| turn(t).map(|k| base + k)));
+    }
+    pad(own, after);
 }
 
 /// The bounding box `(min, max)` of some points, or `None` for none.

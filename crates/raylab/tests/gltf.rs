@@ -15,11 +15,12 @@ fn data(name: &str) -> PathBuf {
 #[test]
 fn the_engine_loads_with_its_known_triangles_and_bounds() {
     let loaded = load_mesh(&data("2CylinderEngine/2CylinderEngine.glb")).unwrap();
-    let mesh = &loaded.mesh;
-    assert_eq!(mesh.triangles.len(), 121_496);
-    assert_eq!(mesh.materials.len(), 34);
-    assert!(mesh.material_ids.iter().all(|id| id.is_some_and(|i| i < 34)));
-    let (lo, hi) = mesh.bounds().unwrap();
+    assert_eq!(loaded.triangle_count(), 121_496);
+    assert_eq!(loaded.mesh.materials.len(), 34);
+    let meshes = std::iter::once(&loaded.mesh).chain(loaded.instanced.iter().map(|m| &m.mesh));
+    let mut ids = meshes.flat_map(|m| m.material_ids.iter());
+    assert!(ids.all(|id| id.is_some_and(|i| i < 34)));
+    let (lo, hi) = loaded.bounds().unwrap();
     let expected_lo = Vec3::new(-371.692_26, -180.971_56, -139.999_99);
     let expected_hi = Vec3::new(371.692_17, 92.041_56, 128.0);
     assert!(lo.abs_diff_eq(expected_lo, 2e-3), "{lo}");

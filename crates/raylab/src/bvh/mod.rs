@@ -48,6 +48,7 @@ mod packet_kernels;
 mod packet_rays;
 mod packet_setup;
 mod refit;
+mod scene;
 mod sweep;
 mod traverse;
 #[cfg(target_arch = "x86_64")]
@@ -58,6 +59,7 @@ use glam::Vec3;
 
 pub use bounds::{Bounds, Frustum, RayBoxTest};
 pub use refit::RefitError;
+pub use scene::SceneBvh;
 pub use traverse::TraversalStats;
 
 use crate::accel::{Accelerator, Hit};

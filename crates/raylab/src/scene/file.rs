@@ -39,8 +39,11 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[".obj", ".obj.gz", ".ply", ".ply.gz"
 /// A mesh as loaded, with the warnings the loader has for the caller.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadedMesh {
-    /// The triangles, in file order.
+    /// The triangles drawn once, in file order, in the model's space; its `materials` are the
+    /// file's, for these and for [`instanced`](Self::instanced).
     pub mesh: Mesh,
+    /// Meshes the file draws in several places (glTF nodes that share a mesh), each once.
+    pub instanced: Vec<InstancedMesh>,
     /// Problems that did not stop the load, one line each, each naming the file (and the line
     /// where there is one), e.g. `spider.obj: line 3: material library spider.mtl ignored: …`.
     pub warnings: Vec<String>,
@@ -48,6 +51,59 @@ pub struct LoadedMesh {
     pub camera: Option<super::CameraSettings>,
     /// The file's point lights (glTF's `KHR_lights_punctual`), in the lab's frame.
     pub lights: Vec<crate::light::PointLight>,
+}
+
+/// A mesh a model draws in several places: its triangles once, in its own space, and where
+/// each copy goes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InstancedMesh {
+    /// The triangles in the mesh's own space. Its material ids index the loaded mesh's
+    /// materials ([`LoadedMesh::mesh`]); its own `materials` are empty.
+    pub mesh: Mesh,
+    /// Each copy's transform, from the mesh's space into the model's.
+    pub transforms: Vec<glam::Affine3A>,
+}
+
+impl LoadedMesh {
+    /// The number of triangles drawn, each copy of an instanced mesh counted.
+    pub fn triangle_count(&self) -> usize {
+        let copies = self.instanced.iter().map(|m| m.mesh.triangles.len() * m.transforms.len());
+        self.mesh.triangles.len() + copies.sum::<usize>()
+    }
+
+    /// The number of triangles stored: an instanced mesh's once.
+    pub fn stored_triangle_count(&self) -> usize {
+        let instanced = self.instanced.iter().map(|m| m.mesh.triangles.len());
+        self.mesh.triangles.len() + instanced.sum::<usize>()
+    }
+
+    /// Every triangle drawn, each copy placed, as one mesh in the model's space (with the
+    /// file's materials): what a loader that does not instance gives. A mirroring copy has its
+    /// corners turned so that its front side stays outside.
+    pub fn flattened(&self) -> Mesh {
+        let mut mesh = self.mesh.clone();
+        for part in &self.instanced {
+            for transform in &part.transforms {
+                mesh.append_transformed(&part.mesh, transform);
+            }
+        }
+        mesh
+    }
+
+    /// The bounding box of every triangle drawn, or `None` without triangles.
+    pub fn bounds(&self) -> Option<(glam::Vec3, glam::Vec3)> {
+        let placed = self.instanced.iter().flat_map(|part| {
+            part.transforms.iter().flat_map(move |t| {
+                part.mesh
+                    .triangles
+                    .iter()
+                    .flatten()
+                    .map(move |&v| t.transform_point3(part.mesh.positions[v as usize]))
+            })
+        });
+        let own = self.mesh.triangles.iter().flatten().map(|&v| self.mesh.positions[v as usize]);
+        crate::mesh::bounds_of(own.chain(placed))
+    }
 }
 
 /// A place in a file.
@@ -191,7 +247,7 @@ pub fn load_mesh(path: &Path) -> Result<LoadedMesh, LoadError> {
         Format::Ply => ply::parse_ply(path, &bytes)?,
         Format::Gltf => super::gltf::parse_gltf(path, &bytes)?,
     };
-    if loaded.mesh.triangles.is_empty() {
+    if loaded.triangle_count() == 0 {
         return Err(LoadError::NoTriangles { path: path.into() });
     }
     Ok(loaded)

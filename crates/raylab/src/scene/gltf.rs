@@ -17,9 +17,9 @@ use std::f32::consts::PI;
 use std::path::Path;
 use std::sync::Arc;
 
-use glam::{Affine2, Mat3, Mat4, Vec2, Vec3, Vec4};
+use glam::{Affine2, Affine3A, Mat3, Mat4, Vec2, Vec3, Vec4};
 
-use super::file::{LoadError, LoadedMesh, mesh_name, quoted};
+use super::file::{InstancedMesh, LoadError, LoadedMesh, mesh_name, quoted};
 use super::{CameraSettings, FovAxis, model_to_lab};
 use crate::light::PointLight;
 use crate::material::{AlphaMask, MaterialTextures, NormalMap};
@@ -145,6 +145,8 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
         })
         .collect();
     let mut lights = Vec::new();
+    // Each node that draws a mesh: the mesh and the node's world transform.
+    let mut draws: Vec<(gltf::Mesh, Mat4)> = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4)> =
         scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect::<Vec<_>>();
     stack.reverse();
@@ -189,20 +191,57 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
             }
         }
         if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                let place = format!("mesh {} primitive {}", mesh.index(), primitive.index());
-                builder
-                    .add(&primitive, &buffers, &world)
-                    .map_err(|problem| invalid(format!("{place}: {problem}")))?;
-            }
+            draws.push((mesh, world));
         }
         let children: Vec<_> = node.children().map(|c| (c, world)).collect();
         stack.extend(children.into_iter().rev());
     }
+    // A mesh that several nodes draw is stored once, in its own space, with each node's
+    // transform (instancing); one drawn once is placed into the model's space.
+    let mut uses: HashMap<usize, usize> = HashMap::new();
+    for (mesh, _) in &draws {
+        *uses.entry(mesh.index()).or_default() += 1;
+    }
+    let add = |builder: &mut Builder, mesh: &gltf::Mesh, world: &Mat4| {
+        for primitive in mesh.primitives() {
+            let place = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+            builder
+                .add(&primitive, &buffers, world)
+                .map_err(|problem| invalid(format!("{place}: {problem}")))?;
+        }
+        Ok::<(), LoadError>(())
+    };
+    let mut instanced: Vec<(usize, InstancedMesh)> = Vec::new();
+    for (mesh, world) in &draws {
+        if uses[&mesh.index()] == 1 {
+            add(&mut builder, mesh, world)?;
+            continue;
+        }
+        let transform = Affine3A::from_mat4(*world);
+        if let Some((_, part)) = instanced.iter_mut().find(|(i, _)| *i == mesh.index()) {
+            part.transforms.push(transform);
+            continue;
+        }
+        let mut part = Builder::default();
+        part.mesh.name =
+            mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
+        add(&mut part, mesh, &Mat4::IDENTITY)?;
+        let mesh_of_part = part.finish().0;
+        instanced.push((
+            mesh.index(),
+            InstancedMesh { mesh: mesh_of_part, transforms: vec![transform] },
+        ));
+    }
     let (mut mesh, camera) = builder.finish();
     // Normal maps need tangents: MikkTSpace's, as glTF asks, where the file gives none.
     let mapped = mesh.materials.iter().any(|m| m.textures.normal.is_some());
-    if mapped && mesh.tangents.is_none() && !mesh.generate_tangents() {
+    let mut instanced: Vec<InstancedMesh> = instanced.into_iter().map(|(_, part)| part).collect();
+    let meshes = std::iter::once(&mut mesh).chain(instanced.iter_mut().map(|part| &mut part.mesh));
+    let untangled = meshes
+        .filter(|m| !m.triangles.is_empty())
+        .map(|m| mapped && m.tangents.is_none() && !m.generate_tangents())
+        .fold(false, |any, failed| any | failed);
+    if untangled {
         warnings.push(format!(
             "{}: normal maps are ignored: no tangents could be made (the mesh needs texture \
              coordinates)",
@@ -218,7 +257,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
             bad.position, bad.power
         )));
     }
-    Ok(LoadedMesh { mesh, warnings, camera, lights })
+    Ok(LoadedMesh { mesh, instanced, warnings, camera, lights })
 }
 
 /// The file's images, decoded as materials ask for them, each once per colour space.

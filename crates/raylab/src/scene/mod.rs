@@ -26,7 +26,8 @@ use glam::Vec3;
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
 pub(crate) use file::read_file_bytes;
 pub use file::{
-    LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh, read_limit_bytes,
+    InstancedMesh, LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh,
+    read_limit_bytes,
 };
 pub use keyframes::Keyframe;
 pub use model::model_to_lab;
@@ -390,7 +391,7 @@ impl Scene {
             .collect();
         Scene {
             name: format!("{} ×{factor}", self.name),
-            geometry: self.geometry.map_positions(|p| p * factor),
+            geometry: self.geometry.scaled(factor),
             materials: self.materials.clone(),
             lights,
             camera: self.camera,

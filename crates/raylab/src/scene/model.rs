@@ -11,7 +11,7 @@ use glam::Vec3;
 use glam::Affine3A;
 
 use super::Scene;
-use super::file::LoadedMesh;
+use super::file::{InstancedMesh, LoadedMesh};
 use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};
@@ -34,15 +34,18 @@ impl Scene {
     /// a triangle names none), emitting its `Ke`. Lit by [`Scene::default_light`] unless some
     /// material emits.
     pub fn from_mesh(mesh: &Mesh) -> Scene {
+        Scene::from_meshes(mesh, &[])
+    }
+
+    /// [`from_mesh`](Self::from_mesh) with meshes drawn in several places, each stored once.
+    fn from_meshes(mesh: &Mesh, instanced: &[InstancedMesh]) -> Scene {
         let mut materials: Vec<Material> =
             mesh.materials.iter().map(MeshMaterial::to_material).collect();
         let default = materials.len() as u32;
         materials.push(Material::diffuse("default", MeshMaterial::DEFAULT_DIFFUSE));
         let mut geometry = Geometry::new();
         let to_lab = model_to_lab_transform();
-        geometry.add_mesh(mesh, &to_lab, |i| {
-            mesh.material_ids.get(i).copied().flatten().unwrap_or(default)
-        });
+        geometry.add_model(mesh, instanced, &to_lab, |id| id.unwrap_or(default));
         let mut scene = Scene { name: mesh.name.clone(), geometry, materials, ..Scene::default() };
         if !scene.has_area_lights() {
             scene.lights.push(Light::Point(scene.default_light()));
@@ -50,10 +53,11 @@ impl Scene {
         scene
     }
 
-    /// A loaded model file as a scene ([`from_mesh`](Self::from_mesh)) with the file's camera
-    /// and, where it has some, its point lights instead of the default light.
+    /// A loaded model file as a scene ([`from_mesh`](Self::from_mesh), its instanced meshes
+    /// stored once) with the file's camera and, where it has some, its point lights instead of
+    /// the default light.
     pub fn from_loaded(loaded: &LoadedMesh) -> Scene {
-        let mut scene = Scene::from_mesh(&loaded.mesh);
+        let mut scene = Scene::from_meshes(&loaded.mesh, &loaded.instanced);
         scene.camera = loaded.camera;
         if !loaded.lights.is_empty() {
             scene.lights.retain(|light| !matches!(light, Light::Point(_)));
@@ -75,6 +79,30 @@ impl Scene {
         PointLight {
             position: centre + offset,
             power: Vec3::splat(4.0 * std::f32::consts::PI * r2),
+        }
+    }
+}
+
+impl Geometry {
+    /// Appends a loaded model through `transform`: `mesh`'s triangles, and each of `instanced`
+    /// stored once and drawn in each of its places; `material` maps a triangle's material in
+    /// the file (`None` where it names none) to the scene's.
+    pub fn add_model(
+        &mut self,
+        mesh: &Mesh,
+        instanced: &[InstancedMesh],
+        transform: &Affine3A,
+        material: impl Fn(Option<u32>) -> u32,
+    ) {
+        let ids = &mesh.material_ids;
+        self.add_mesh(mesh, transform, |i| material(ids.get(i).copied().flatten()));
+        for part in instanced {
+            let transforms: Vec<Affine3A> =
+                part.transforms.iter().map(|t| *transform * *t).collect();
+            let ids = &part.mesh.material_ids;
+            self.add_instanced_mesh(&part.mesh, &transforms, |i| {
+                material(ids.get(i).copied().flatten())
+            });
         }
     }
 }

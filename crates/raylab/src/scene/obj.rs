@@ -197,7 +197,7 @@ pub(crate) fn parse_obj_with(
     }
     mesh.materials = materials;
     let warnings = warnings.into_iter().map(|w| format!("{}: {w}", path.display())).collect();
-    Ok(LoadedMesh { mesh, warnings, camera: None, lights: Vec::new() })
+    Ok(LoadedMesh { mesh, warnings, ..LoadedMesh::default() })
 }
 
 /// What tobj's error means, as "expected …".

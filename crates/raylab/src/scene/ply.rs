@@ -200,7 +200,7 @@ pub(crate) fn parse_ply(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadErr
     }
     let warnings = warnings.into_iter().map(|w| format!("{}: {w}", path.display())).collect();
     let mesh = builder.finish(mesh_name(path));
-    Ok(LoadedMesh { mesh, warnings, camera: None, lights: Vec::new() })
+    Ok(LoadedMesh { mesh, warnings, ..LoadedMesh::default() })
 }
 
 /// The header's lines, each without its line ending, with their numbers and the offset after.

@@ -304,10 +304,14 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                     let default = materials.len() as u32;
                     let grey = crate::mesh::MeshMaterial::DEFAULT_DIFFUSE;
                     materials.push(Material::diffuse("default", grey));
-                    let ids = &loaded.mesh.material_ids;
-                    geometry.add_mesh(&loaded.mesh, &transform, |i| {
-                        ids.get(i).copied().flatten().map_or(default, |m| base + m)
+                    geometry.add_model(&loaded.mesh, &loaded.instanced, &transform, |id| {
+                        id.map_or(default, |m| base + m)
                     });
+                    return Ok(());
+                }
+                if let Some(material) = material {
+                    let mesh = Mesh { name: kind.to_string(), ..loaded.mesh };
+                    geometry.add_model(&mesh, &loaded.instanced, &transform, |_| material);
                     return Ok(());
                 }
                 loaded.mesh

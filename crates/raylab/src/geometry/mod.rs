@@ -10,11 +10,21 @@
 //! Mitsuba and pbrt. (The lab's `Triangle::normal` is the opposite vector; the lab integrator turns
 //! every normal toward the viewer, so both give the same pictures.)
 //!
+//! A mesh drawn in several places is stored once, with an [`Instance`] for each place (see
+//! [`instance`]): triangle indices everywhere else are the scene's, and the world corners of
+//! scene triangle `i` are [`Geometry::triangle(i)`](Geometry::triangle).
+//!
 //! [`Geometry::interaction`] turns a ray and its hit into a [`SurfaceInteraction`]: the point with
 //! its rounding-error bound, the normals, the texture coordinates and the material. Every
 //! integrator shades through it.
 
+mod corners;
+pub mod instance;
+
 use glam::{Affine3A, Vec2, Vec3, Vec4};
+
+use corners::CornerTable;
+pub use instance::{Instance, Placement};
 
 use crate::accel::Hit;
 use crate::float::gamma;
@@ -22,12 +32,12 @@ use crate::mesh::Mesh;
 use crate::ray::{Ray, SurfacePoint};
 use crate::texture::TextureQuery;
 
-/// Which triangles of a [`Geometry`] one mesh added.
+/// Which stored triangles of a [`Geometry`] one mesh added.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshRange {
     /// The mesh's name, for messages.
     pub name: String,
-    /// Its first triangle.
+    /// Its first stored triangle.
     pub first: u32,
     /// How many triangles it has.
     pub count: u32,
@@ -49,46 +59,13 @@ pub struct Geometry {
     tangents: CornerTable<Vec4>,
     material_ids: Vec<u32>,
     meshes: Vec<MeshRange>,
-}
-
-/// Values at triangles' corners, indexed as the meshes give them: each value stored once
-/// however many corners share it (a normal per vertex costs 12 bytes a vertex, not 36 a
-/// triangle).
-#[derive(Clone, Debug, Default, PartialEq)]
-struct CornerTable<T> {
-    values: Vec<T>,
-    /// Each triangle's three indices into `values`; empty when no mesh has the attribute.
-    corners: Vec<[u32; 3]>,
-}
-
-impl<T: Copy> CornerTable<T> {
-    /// Triangle `i`'s three values, if the table has them.
-    #[inline]
-    fn get(&self, i: usize) -> Option<[T; 3]> {
-        let corners = self.corners.get(i)?;
-        Some(corners.map(|k| self.values[k as usize]))
-    }
-
-    /// Gives every triangle before `until` that has no values the corners `fill`.
-    fn pad(&mut self, until: usize, fill: [T; 3]) {
-        if self.corners.len() < until {
-            let base = self.values.len() as u32;
-            self.values.extend(fill);
-            self.corners.resize(until, [base, base + 1, base + 2]);
-        }
-    }
-
-    /// Appends a mesh's values and its triangles' indices into them.
-    fn append(&mut self, values: impl IntoIterator<Item = T>, corners: &[[u32; 3]]) {
-        let base = self.values.len() as u32;
-        self.values.extend(values);
-        self.corners.extend(corners.iter().map(|c| c.map(|k| base + k)));
-    }
-
-    fn bytes(&self) -> usize {
-        std::mem::size_of_val(self.values.as_slice())
-            + std::mem::size_of_val(self.corners.as_slice())
-    }
+    /// Where the scene's triangles come from, in order: one for each mesh drawn once, one per
+    /// place for a mesh drawn in several.
+    instances: Vec<Instance>,
+    /// Whether some instance has a placement (else scene and stored indices are the same).
+    placed: bool,
+    /// The number of scene triangles.
+    scene_triangles: usize,
 }
 
 /// What a ray sees where it hits a surface.
@@ -142,6 +119,10 @@ impl Geometry {
         put(&mut self.tangents.values.iter().flat_map(|v| v.to_array().map(f32::to_bits)));
         put(&mut self.tangents.corners.iter().flatten().copied());
         put(&mut self.material_ids.iter().copied());
+        put(&mut self.instances.iter().flat_map(|instance| {
+            let placement = instance.placement.iter().flat_map(Placement::bits);
+            [instance.first, instance.stored_first, instance.count].into_iter().chain(placement)
+        }));
         hasher.update(&buffer);
     }
 
@@ -160,8 +141,56 @@ impl Geometry {
         &mut self,
         mesh: &Mesh,
         transform: &Affine3A,
+        material_of: impl FnMut(usize) -> u32,
+    ) {
+        let stored_first = self.store_mesh(mesh, transform, material_of);
+        self.push_instance(stored_first, mesh.triangles.len() as u32, None);
+    }
+
+    /// Appends a mesh drawn in several places: stored once, in its own space, and drawn through
+    /// each of `transforms` (see [`instance`]); otherwise as [`add_mesh`](Self::add_mesh). A
+    /// transform that is not invertible (a node scaled to nothing) draws a flattened copy.
+    ///
+    /// # Panics
+    /// As [`add_mesh`](Self::add_mesh).
+    pub fn add_instanced_mesh(
+        &mut self,
+        mesh: &Mesh,
+        transforms: &[Affine3A],
         mut material_of: impl FnMut(usize) -> u32,
     ) {
+        let placements: Vec<Option<Placement>> =
+            transforms.iter().map(|&t| Placement::new(t)).collect();
+        let count = mesh.triangles.len() as u32;
+        let stored = placements
+            .iter()
+            .any(Option::is_some)
+            .then(|| self.store_mesh(mesh, &Affine3A::IDENTITY, &mut material_of));
+        for (transform, placement) in transforms.iter().zip(placements) {
+            match (placement, stored) {
+                (Some(placement), Some(first)) => self.push_instance(first, count, Some(placement)),
+                _ => self.add_mesh(mesh, transform, &mut material_of),
+            }
+        }
+    }
+
+    fn push_instance(&mut self, stored_first: u32, count: u32, placement: Option<Placement>) {
+        if count == 0 {
+            return;
+        }
+        self.placed |= placement.is_some();
+        let first = self.scene_triangles as u32;
+        self.instances.push(Instance { first, stored_first, count, placement });
+        self.scene_triangles += count as usize;
+    }
+
+    /// Stores a mesh's triangles through `transform`; returns its first stored triangle.
+    fn store_mesh(
+        &mut self,
+        mesh: &Mesh,
+        transform: &Affine3A,
+        mut material_of: impl FnMut(usize) -> u32,
+    ) -> u32 {
         let (name, positions, triangles) = (&mesh.name, &mesh.positions, &mesh.triangles);
         let (normals, uvs) = (mesh.normals.as_ref(), mesh.uvs.as_ref());
         let base = self.positions.len() as u32;
@@ -210,6 +239,7 @@ impl Geometry {
             first: first as u32,
             count: triangles.len() as u32,
         });
+        first as u32
     }
 
     /// Appends triangles given by their corners (no shared vertices), each with its material.
@@ -241,25 +271,76 @@ impl Geometry {
             + self.shading_normals.bytes()
             + self.uvs.bytes()
             + self.tangents.bytes()
-            + size_of_val(self.material_ids.as_slice());
+            + size_of_val(self.material_ids.as_slice())
+            + size_of_val(self.instances.as_slice());
         bytes as u64
     }
 
-    /// The number of triangles.
+    /// The number of scene triangles (each instance's).
     #[inline]
     pub fn len(&self) -> usize {
-        self.triangles.len()
+        self.scene_triangles
     }
 
     /// Whether there are no triangles.
     pub fn is_empty(&self) -> bool {
-        self.triangles.is_empty()
+        self.scene_triangles == 0
     }
 
-    /// The three corners of triangle `i`.
+    /// The number of stored triangles: each mesh's once, however many places draw it.
+    pub fn stored_len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Where the scene's triangles come from, in order (see [`instance`]).
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    /// Whether some mesh is drawn through a placement (else scene triangle `i` is stored
+    /// triangle `i`, in world space).
+    pub fn is_instanced(&self) -> bool {
+        self.placed
+    }
+
+    /// Scene triangle `i`'s stored triangle and the placement that draws it.
+    #[inline]
+    fn locate(&self, i: usize) -> (usize, Option<&Placement>) {
+        if !self.placed {
+            return (i, None);
+        }
+        let k = self.instances.partition_point(|x| x.first as usize <= i) - 1;
+        let instance = &self.instances[k];
+        (
+            instance.stored_first as usize + (i - instance.first as usize),
+            instance.placement.as_ref(),
+        )
+    }
+
+    /// The three corners of stored triangle `s`, in its own space.
+    #[inline]
+    pub fn stored_triangle(&self, s: usize) -> [Vec3; 3] {
+        self.triangles[s].map(|v| self.positions[v as usize])
+    }
+
+    /// The three world corners of scene triangle `i`.
     #[inline]
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
-        self.triangles[i].map(|v| self.positions[v as usize])
+        let (s, placement) = self.locate(i);
+        let corners = self.stored_triangle(s);
+        placement.map_or(corners, |p| p.triangle(corners))
+    }
+
+    /// Values at stored triangle `s`'s corners, in the order of the scene triangle `placement`
+    /// draws.
+    #[inline]
+    fn corner_values<T: Copy>(
+        table: &CornerTable<T>,
+        s: usize,
+        placement: Option<&Placement>,
+    ) -> Option<[T; 3]> {
+        let values = table.get(s)?;
+        Some(placement.map_or(values, |p| p.corners(values)))
     }
 
     /// Every triangle's corners, in order: what accelerators are built from.
@@ -267,24 +348,27 @@ impl Geometry {
         (0..self.len()).map(|i| self.triangle(i)).collect()
     }
 
-    /// The unit geometric normal of triangle `i` (zero for a zero-area triangle).
+    /// The unit geometric normal of scene triangle `i` (zero for a zero-area triangle).
     #[inline]
     pub fn normal(&self, i: usize) -> Vec3 {
-        self.normals[i]
+        match self.locate(i) {
+            (s, None) => self.normals[s],
+            (s, Some(p)) => geometric_normal(p.triangle(self.stored_triangle(s))),
+        }
     }
 
-    /// The material of triangle `i`.
+    /// The material of scene triangle `i`.
     #[inline]
     pub fn material_id(&self, i: usize) -> u32 {
-        self.material_ids[i]
+        self.material_ids[self.locate(i).0]
     }
 
-    /// Every triangle's material, in order.
+    /// Every stored triangle's material, in order (every place that draws a mesh shares them).
     pub fn material_ids(&self) -> &[u32] {
         &self.material_ids
     }
 
-    /// Sets the material of every triangle (for scenes that restyle loaded meshes).
+    /// Sets the material of every stored triangle (for scenes that restyle loaded meshes).
     pub fn material_ids_mut(&mut self) -> &mut [u32] {
         &mut self.material_ids
     }
@@ -295,23 +379,37 @@ impl Geometry {
         0.5 * (v1 - v0).cross(v2 - v0).length()
     }
 
-    /// The meshes, in the order they were added.
+    /// The stored meshes, in the order they were added.
     pub fn meshes(&self) -> &[MeshRange] {
         &self.meshes
     }
 
-    /// The mesh that triangle `i` belongs to.
+    /// The mesh that scene triangle `i` belongs to.
     pub fn mesh_of(&self, i: u32) -> Option<&MeshRange> {
-        let index = self.meshes.partition_point(|m| m.first + m.count <= i);
+        if i as usize >= self.len() {
+            return None;
+        }
+        let s = self.locate(i as usize).0 as u32;
+        let index = self.meshes.partition_point(|m| m.first + m.count <= s);
         self.meshes.get(index)
     }
 
-    /// The vertex positions (some may be unused).
+    /// The stored vertex positions (some may be unused), an instanced mesh's in its own space.
     pub fn positions(&self) -> &[Vec3] {
         &self.positions
     }
 
-    /// The same geometry with every position moved by `f` (normals recomputed).
+    /// The same geometry scaled by `factor` about the origin, instances included.
+    pub fn scaled(&self, factor: f32) -> Geometry {
+        let mut geometry = self.map_positions(|p| p * factor);
+        for instance in &mut geometry.instances {
+            instance.placement = instance.placement.map(|p| p.scaled(factor));
+        }
+        geometry
+    }
+
+    /// The same geometry with every stored position moved by `f` (normals recomputed); an
+    /// instanced mesh's positions are in its own space.
     pub fn map_positions(&self, f: impl Fn(Vec3) -> Vec3) -> Geometry {
         let mut geometry = self.clone();
         for p in &mut geometry.positions {
@@ -323,8 +421,12 @@ impl Geometry {
         geometry
     }
 
-    /// The bounding box `(min, max)` of every triangle's corners, or `None` without triangles.
+    /// The bounding box `(min, max)` of every scene triangle's corners, or `None` without
+    /// triangles.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        if self.placed {
+            return crate::mesh::bounds_of((0..self.len()).flat_map(|i| self.triangle(i)));
+        }
         crate::mesh::bounds_of(self.triangles.iter().flatten().map(|&v| self.positions[v as usize]))
     }
 
@@ -332,33 +434,35 @@ impl Geometry {
     /// [`interaction`](Self::interaction) that the lab's light model needs.
     #[inline]
     pub fn surface_point(&self, hit: &Hit) -> SurfacePoint {
-        let i = hit.triangle as usize;
-        let [v0, v1, v2] = self.triangle(i);
+        let (s, placement) = self.locate(hit.triangle as usize);
+        let corners = self.stored_triangle(s);
+        let ([v0, v1, v2], normal) = match placement {
+            None => (corners, self.normals[s]),
+            Some(p) => {
+                let world = p.triangle(corners);
+                (world, geometric_normal(world))
+            }
+        };
         // PBR 4th ed. §6.8.5: interpolating the vertices errs by at most γ₇ Σ|bᵢ·pᵢ|.
         let (a, b, c) = (hit.b0() * v0, hit.b1 * v1, hit.b2 * v2);
-        SurfacePoint {
-            p: a + b + c,
-            error: gamma(7) * (a.abs() + b.abs() + c.abs()),
-            normal: self.normals[i],
-        }
+        SurfacePoint { p: a + b + c, error: gamma(7) * (a.abs() + b.abs() + c.abs()), normal }
     }
 
     /// Where `ray` meets the surface at `hit` (which an accelerator over [`vertices`](Self::vertices)
     /// found for it).
     #[inline]
     pub fn interaction(&self, _ray: &Ray, hit: &Hit) -> SurfaceInteraction {
-        let i = hit.triangle as usize;
-        let [v0, v1, v2] = self.triangle(i);
+        let point = self.surface_point(hit);
+        let (s, placement) = self.locate(hit.triangle as usize);
+        let [v0, v1, v2] = self.triangle(hit.triangle as usize);
         let (b0, b1, b2) = (hit.b0(), hit.b1, hit.b2);
-        // PBR 4th ed. §6.8.5: interpolating the vertices errs by at most γ₇ Σ|bᵢ·pᵢ|.
-        let (a, b, c) = (b0 * v0, b1 * v1, b2 * v2);
-        let normal = self.normals[i];
-        let point =
-            SurfacePoint { p: a + b + c, error: gamma(7) * (a.abs() + b.abs() + c.abs()), normal };
-        let mut shading_normal = normal;
-        if let Some(corners) = self.shading_normals.get(i)
+        let mut shading_normal = point.normal;
+        if let Some(mut corners) = Self::corner_values(&self.shading_normals, s, placement)
             && corners[0] != Vec3::ZERO
         {
+            if let Some(p) = placement {
+                corners = corners.map(|n| p.normal(n));
+            }
             let n = (b0 * corners[0] + b1 * corners[1] + b2 * corners[2]).normalize_or_zero();
             if n != Vec3::ZERO {
                 // As the mesh gives it (as Mitsuba keeps it), even against the winding: the
@@ -367,12 +471,15 @@ impl Geometry {
             }
         }
         // Without UVs, the barycentric parametrization: uv = (b1, b2) and dp/du = v1 − v0.
-        let (uv, dp_du) = match self.uvs.get(i) {
+        let (uv, dp_du) = match Self::corner_values(&self.uvs, s, placement) {
             Some(t) => (b0 * t[0] + b1 * t[1] + b2 * t[2], dp_du([v0, v1, v2], t)),
             None => (Vec2::new(b1, b2), v1 - v0),
         };
-        let tangent = match self.tangents.get(i) {
-            Some(t) => b0 * t[0] + b1 * t[1] + b2 * t[2],
+        let tangent = match Self::corner_values(&self.tangents, s, placement) {
+            Some(t) => {
+                let t = placement.map_or(t, |p| t.map(|t| p.tangent(t)));
+                b0 * t[0] + b1 * t[1] + b2 * t[2]
+            }
             None => Vec4::ZERO,
         };
         SurfaceInteraction {
@@ -381,7 +488,7 @@ impl Geometry {
             uv,
             dp_du,
             tangent,
-            material: self.material_ids[i],
+            material: self.material_ids[s],
             triangle: hit.triangle,
             t: hit.t,
         }
@@ -403,7 +510,8 @@ impl Geometry {
     pub fn uv_per_length(&self, i: usize) -> f32 {
         let [v0, v1, v2] = self.triangle(i);
         let area = (v1 - v0).cross(v2 - v0).length();
-        let [t0, t1, t2] = self.uvs.get(i).unwrap_or(DEFAULT_UVS);
+        let (s, placement) = self.locate(i);
+        let [t0, t1, t2] = Self::corner_values(&self.uvs, s, placement).unwrap_or(DEFAULT_UVS);
         let uv_area = (t1 - t0).perp_dot(t2 - t0).abs();
         let ratio = (uv_area / area).sqrt();
         if ratio.is_finite() { ratio } else { 0.0 }
@@ -416,15 +524,16 @@ impl Geometry {
     pub fn texture_query(&self, ray: &Ray, hit: &Hit, spread: f32) -> TextureQuery {
         let i = hit.triangle as usize;
         let [v0, v1, v2] = self.triangle(i);
+        let (s, placement) = self.locate(i);
         let (b0, b1, b2) = (hit.b0(), hit.b1, hit.b2);
-        let uv = match self.uvs.get(i) {
+        let uv = match Self::corner_values(&self.uvs, s, placement) {
             Some(t) => b0 * t[0] + b1 * t[1] + b2 * t[2],
             None => Vec2::new(b1, b2),
         };
         let p = b0 * v0 + b1 * v1 + b2 * v2;
         let footprint = if spread > 0.0 {
             let length = ray.direction.length();
-            let cos = (self.normals[i].dot(ray.direction) / length).abs().max(1e-4);
+            let cos = (self.normal(i).dot(ray.direction) / length).abs().max(1e-4);
             hit.t * length * spread / cos * self.uv_per_length(i)
         } else {
             0.0
@@ -456,86 +565,4 @@ pub fn geometric_normal([v0, v1, v2]: [Vec3; 3]) -> Vec3 {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mesh::CornerAttribute;
-
-    fn quad(name: &str) -> Mesh {
-        Mesh {
-            name: name.into(),
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-            ..Mesh::default()
-        }
-    }
-
-    #[test]
-    fn meshes_append_with_offsets_transforms_and_materials() {
-        let mut geometry = Geometry::new();
-        geometry.add_mesh(&quad("a"), &Affine3A::IDENTITY, |_| 0);
-        let moved = Affine3A::from_translation(Vec3::Z * 2.0);
-        geometry.add_mesh(&quad("b"), &moved, |i| i as u32 + 1);
-        assert_eq!(geometry.len(), 4);
-        assert_eq!(
-            geometry.triangle(3),
-            [Vec3::Z * 2.0, Vec3::new(1.0, 1.0, 2.0), Vec3::new(0.0, 1.0, 2.0)]
-        );
-        assert_eq!(geometry.material_ids(), &[0, 0, 1, 2]);
-        assert_eq!(geometry.normal(2), Vec3::Z, "counter-clockwise seen from +z");
-        assert_eq!(geometry.mesh_of(1).unwrap().name, "a");
-        assert_eq!(geometry.mesh_of(2).unwrap().name, "b");
-        assert!(geometry.mesh_of(4).is_none());
-        assert_eq!(geometry.bounds(), Some((Vec3::ZERO, Vec3::new(1.0, 1.0, 2.0))));
-        assert_eq!(geometry.area(0), 0.5);
-    }
-
-    #[test]
-    fn interactions_interpolate_normals_and_uvs() {
-        let normals = CornerAttribute {
-            values: vec![Vec3::Z, Vec3::new(1.0, 0.0, 1.0).normalize()],
-            triangles: vec![[0, 1, 0], [0, 0, 0]],
-        };
-        let uvs = CornerAttribute {
-            values: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
-            triangles: quad("").triangles,
-        };
-        let mut geometry = Geometry::new();
-        // A mesh without attributes first: it gets defaults when the second brings some.
-        geometry.add_mesh(&quad("plain"), &Affine3A::IDENTITY, |_| 7);
-        let scale = Affine3A::from_scale(Vec3::new(2.0, 1.0, 1.0));
-        let smooth = Mesh { normals: Some(normals), uvs: Some(uvs), ..quad("smooth") };
-        geometry.add_mesh(&smooth, &scale, |_| 3);
-        let ray = Ray::new(Vec3::new(2.0, 0.0, 1.0), -Vec3::Z);
-        // Triangle 2 is (0,0)-(2,0)-(2,1); the hit is its corner v1.
-        let hit = Hit { t: 1.0, triangle: 2, b1: 1.0, b2: 0.0 };
-        let si = geometry.interaction(&ray, &hit);
-        assert_eq!(si.point.p, Vec3::new(2.0, 0.0, 0.0));
-        assert_eq!(si.material, 3);
-        assert_eq!(si.uv, Vec2::X);
-        // u runs along x, over 2 units of the scaled quad: dp/du = (2, 0, 0).
-        assert!((si.dp_du - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-6, "{}", si.dp_du);
-        // (1, 0, 1) through the inverse transpose of diag(2, 1, 1): (0.5, 0, 1), normalized.
-        let expected = Vec3::new(0.5, 0.0, 1.0).normalize();
-        assert!((si.shading_normal - expected).length() < 1e-6, "{}", si.shading_normal);
-        // The plain mesh: geometric normal and barycentric uvs.
-        let si = geometry.interaction(&ray, &Hit { t: 1.0, triangle: 0, b1: 0.25, b2: 0.5 });
-        assert_eq!((si.shading_normal, si.uv, si.material), (Vec3::Z, Vec2::new(0.25, 0.5), 7));
-        // Without UVs, Mitsuba's dp/du: the first edge.
-        assert_eq!(si.dp_du, Vec3::X);
-        assert!(si.point.error.max_element() < 1e-6);
-    }
-
-    #[test]
-    fn shading_normals_are_kept_as_the_mesh_gives_them() {
-        let normals = CornerAttribute { values: vec![-Vec3::Z], triangles: vec![[0, 0, 0]; 2] };
-        let mut geometry = Geometry::new();
-        let flipped = Mesh { normals: Some(normals), ..quad("flipped") };
-        geometry.add_mesh(&flipped, &Affine3A::IDENTITY, |_| 0);
-        let si = geometry.interaction(
-            &Ray::new(Vec3::Z, -Vec3::Z),
-            &Hit { t: 1.0, triangle: 0, b1: 0.3, b2: 0.3 },
-        );
-        assert_eq!(si.shading_normal, -Vec3::Z);
-        assert_eq!(si.point.normal, Vec3::Z);
-    }
-}
+mod tests;

@@ -1,0 +1,500 @@
+//! A two-level accelerator: a top level over instances, a bottom level per stored mesh.
+//!
+//! A [`Geometry`] with instances (see [`crate::geometry::instance`]) stores a mesh drawn in
+//! several places once. [`TwoLevel`] builds one bottom-level accelerator per stored mesh, over
+//! its triangles in their own space, and one over every triangle stored in world space (the
+//! meshes drawn once), and a small binary tree over the instances' world boxes on top.
+//!
+//! A ray that reaches an instance's box is carried into the instance's space by its inverse
+//! placement, `o' = M⁻¹·o` and `d' = M⁻¹·d` (not renormalized, so `t` keeps its meaning and hits
+//! of different instances compare by `t` directly), and traced through the mesh's bottom level.
+//! The transformed ray is the same for every triangle of the instance, so the watertight test
+//! leaves no crack between them: the crack test holds through instances as it does on flat
+//! meshes. Hits at equal `t` still go to the lowest scene triangle index: within an instance
+//! the bottom level decides it (its local order is the scene order), across instances the
+//! top level lets a later instance's hit at exactly the best `t` through and keeps the first.
+//!
+//! The answers are those of the same bottom-level test made instance by instance, whatever the
+//! bottom accelerator: a [`TwoLevel<BruteForce>`](super::BruteForce) and a
+//! [`TwoLevel<Bvh>`](crate::Bvh) agree exactly (`tests/instancing.rs`).
+
+use std::collections::HashMap;
+
+use glam::{Affine3A, Vec3};
+
+use super::{Accelerator, Hit};
+use crate::bvh::{Bounds, Frustum, RayBoxTest};
+use crate::geometry::{Geometry, Placement};
+use crate::ray::Ray;
+
+/// Instances over per-mesh accelerators `A` (see the module documentation).
+pub struct TwoLevel<A> {
+    bottoms: Vec<Bottom<A>>,
+    placed: Vec<Placed>,
+    /// The top level, depth first: an inner node's left child follows it.
+    nodes: Vec<Node>,
+}
+
+/// One bottom-level accelerator and how its hits' indices become scene triangles.
+struct Bottom<A> {
+    accel: A,
+    /// Its triangle count.
+    triangles: usize,
+    /// For the bottom over world-space triangles: the scene index of each of its triangles.
+    /// Empty for a stored mesh (its instances add their first scene index).
+    scene_ids: Vec<u32>,
+}
+
+/// An instance as the top level sees it.
+struct Placed {
+    bottom: u32,
+    /// The scene index of the bottom's triangle 0 here.
+    first: u32,
+    /// How the bottom's triangles are placed, or `None` for world-space triangles.
+    placement: Option<Placement>,
+    bounds: Bounds,
+}
+
+struct Node {
+    bounds: Bounds,
+    /// A leaf's first entry in `placed`, or an inner node's right child.
+    index: u32,
+    /// A leaf's entry count; 0 for an inner node.
+    count: u32,
+}
+
+/// The most instances in a top-level leaf.
+const LEAF_SIZE: usize = 1;
+
+impl<A: Accelerator> TwoLevel<A> {
+    /// Builds over `geometry`'s instances, making each bottom level with `build` from triangles'
+    /// corners (in the mesh's own space for an instanced mesh).
+    pub fn build<E>(
+        geometry: &Geometry,
+        mut build: impl FnMut(&[[Vec3; 3]]) -> Result<A, E>,
+    ) -> Result<TwoLevel<A>, E> {
+        let mut bottoms = Vec::new();
+        let mut placed = Vec::new();
+        // Every triangle stored in world space goes into one bottom level.
+        let mut world = Vec::new();
+        let mut scene_ids = Vec::new();
+        for instance in geometry.instances().iter().filter(|x| x.placement.is_none()) {
+            for k in 0..instance.count {
+                world.push(geometry.stored_triangle((instance.stored_first + k) as usize));
+                scene_ids.push(instance.first + k);
+            }
+        }
+        if !world.is_empty() {
+            let bounds = world.iter().fold(Bounds::EMPTY, |b, &t| b.union(Bounds::of_triangle(t)));
+            placed.push(Placed { bottom: 0, first: 0, placement: None, bounds: padded(bounds) });
+            bottoms.push(Bottom { accel: build(&world)?, triangles: world.len(), scene_ids });
+        }
+        drop(world);
+        // One bottom level per stored mesh, shared by its instances.
+        let mut by_stored: HashMap<(u32, u32), (u32, Bounds)> = HashMap::new();
+        for instance in geometry.instances() {
+            let Some(placement) = &instance.placement else { continue };
+            let key = (instance.stored_first, instance.count);
+            let (bottom, local) = match by_stored.get(&key) {
+                Some(&entry) => entry,
+                None => {
+                    let triangles: Vec<[Vec3; 3]> = (0..instance.count)
+                        .map(|k| geometry.stored_triangle((instance.stored_first + k) as usize))
+                        .collect();
+                    let bounds = triangles
+                        .iter()
+                        .fold(Bounds::EMPTY, |b, &t| b.union(Bounds::of_triangle(t)));
+                    let accel = build(&triangles)?;
+                    let entry = (bottoms.len() as u32, bounds);
+                    bottoms.push(Bottom { accel, triangles: triangles.len(), scene_ids: vec![] });
+                    by_stored.insert(key, entry);
+                    entry
+                }
+            };
+            placed.push(Placed {
+                bottom,
+                first: instance.first,
+                placement: Some(*placement),
+                bounds: padded(transformed(&local, &placement.to_world)),
+            });
+        }
+        placed.retain(|p| !p.bounds.is_empty());
+        let mut nodes = Vec::new();
+        if !placed.is_empty() {
+            let n = placed.len();
+            build_top(&mut placed, 0, n, &mut nodes);
+        }
+        Ok(TwoLevel { bottoms, placed, nodes })
+    }
+
+    /// The triangles the bottom levels hold: each stored mesh's once, however many instances
+    /// draw it.
+    pub fn bottom_triangles(&self) -> usize {
+        self.bottoms.iter().map(|b| b.triangles).sum()
+    }
+
+    /// The number of bottom-level accelerators.
+    pub fn bottom_count(&self) -> usize {
+        self.bottoms.len()
+    }
+
+    /// The number of instances the top level holds.
+    pub fn instance_count(&self) -> usize {
+        self.placed.len()
+    }
+
+    /// The bottom-level accelerators.
+    pub fn bottoms(&self) -> impl Iterator<Item = &A> {
+        self.bottoms.iter().map(|b| &b.accel)
+    }
+
+    /// The bytes of the top level and the bottoms' index tables (not the bottom accelerators).
+    pub fn top_bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+            + std::mem::size_of_val(self.placed.as_slice())
+            + self.bottoms.iter().map(|b| 4 * b.scene_ids.len()).sum::<usize>()
+    }
+
+    /// The ray in `placed`'s space, limited to `t < t_max`.
+    #[inline]
+    fn local_ray(placed: &Placed, ray: &Ray, t_max: f32) -> Ray {
+        match &placed.placement {
+            None => Ray { t_max, ..*ray },
+            Some(p) => Ray {
+                origin: p.to_object.transform_point3(ray.origin),
+                direction: p.to_object.transform_vector3(ray.direction),
+                t_min: ray.t_min,
+                t_max,
+            },
+        }
+    }
+
+    /// A bottom level's hit as a hit on a scene triangle.
+    #[inline]
+    fn scene_hit(&self, placed: &Placed, hit: Hit) -> Hit {
+        let bottom = &self.bottoms[placed.bottom as usize];
+        if let Some(&id) = bottom.scene_ids.get(hit.triangle as usize) {
+            return Hit { triangle: id, ..hit };
+        }
+        let triangle = placed.first + hit.triangle;
+        match &placed.placement {
+            Some(p) => p.world_hit(hit, triangle),
+            None => Hit { triangle, ..hit },
+        }
+    }
+
+    /// Visits the top level's leaves that the ray may reach within the current `t_max` (which
+    /// `visit` may lower), nearest box first; `visit` returns `true` to stop.
+    #[inline]
+    fn walk(&self, ray: &Ray, mut visit: impl FnMut(&Placed) -> Option<f32>) {
+        if self.nodes.is_empty() || !ray.origin.is_finite() || !ray.direction.is_finite() {
+            return;
+        }
+        let test = RayBoxTest::new(ray);
+        let mut t_max = ray.t_max;
+        // The tree is balanced (median splits): its depth is below 64 for any instance count,
+        // and a stack holds at most one entry a level plus one.
+        let mut stack = [(0u32, 0f32); 66];
+        let mut len = 0;
+        if let Some(t) = test.enter(&self.nodes[0].bounds, t_max) {
+            stack[0] = (0, t);
+            len = 1;
+        }
+        while len > 0 {
+            len -= 1;
+            let (index, entry) = stack[len];
+            if entry > t_max {
+                continue;
+            }
+            let node = &self.nodes[index as usize];
+            if node.count > 0 {
+                let range = node.index as usize..(node.index + node.count) as usize;
+                for placed in &self.placed[range] {
+                    if test.enter(&placed.bounds, t_max).is_some() {
+                        match visit(placed) {
+                            Some(t) => t_max = t_max.min(t),
+                            None => return,
+                        }
+                    }
+                }
+                continue;
+            }
+            let (left, right) = (index + 1, node.index);
+            let near = test.enter(&self.nodes[left as usize].bounds, t_max);
+            let far = test.enter(&self.nodes[right as usize].bounds, t_max);
+            let mut push = |entry: (u32, f32)| {
+                stack[len] = entry;
+                len += 1;
+            };
+            match (near, far) {
+                (Some(a), Some(b)) if a <= b => {
+                    push((right, b));
+                    push((left, a));
+                }
+                (Some(a), Some(b)) => {
+                    push((left, a));
+                    push((right, b));
+                }
+                (Some(a), None) => push((left, a)),
+                (None, Some(b)) => push((right, b)),
+                (None, None) => {}
+            }
+        }
+    }
+}
+
+/// The most rays traced together through the top level: one bit each in a mask.
+const PACKET: usize = 64;
+
+impl<A: Accelerator> TwoLevel<A> {
+    /// Visits, for up to [`PACKET`] rays together, each top-level leaf with the mask of the rays
+    /// that may reach it (their boxes tested against `t_max(i)` at the time); `visit` gets the
+    /// instance and the mask.
+    fn walk_packet(
+        &self,
+        rays: &[Ray],
+        t_max: impl Fn(usize) -> f32,
+        mut visit: impl FnMut(&Placed, u64),
+    ) {
+        debug_assert!(rays.len() <= PACKET);
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut tests = [None; PACKET];
+        let mut live = 0u64;
+        for (i, ray) in rays.iter().enumerate() {
+            if ray.origin.is_finite() && ray.direction.is_finite() {
+                tests[i] = Some(RayBoxTest::new(ray));
+                live |= 1 << i;
+            }
+        }
+        // A bound on the whole packet where the rays share their directions' signs: a box it
+        // misses is missed by every ray, at the cost of one test.
+        let frustum = Frustum::of(tests[..rays.len()].iter().flatten().copied());
+        let packet_t_max = (0..rays.len())
+            .map(&t_max)
+            .fold(f32::NEG_INFINITY, |a, t| if t.is_nan() { f32::INFINITY } else { a.max(t) });
+        let reaching = |bounds: &Bounds, mask: u64| {
+            if let Some(frustum) = &frustum
+                && frustum.enter(bounds, packet_t_max).is_none()
+            {
+                return 0;
+            }
+            let mut out = 0u64;
+            let mut rest = mask;
+            while rest != 0 {
+                let i = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                if let Some(test) = &tests[i]
+                    && test.enter(bounds, t_max(i)).is_some()
+                {
+                    out |= 1 << i;
+                }
+            }
+            out
+        };
+        let mut stack = [(0u32, 0u64); 66];
+        let mut len = 0;
+        let root = reaching(&self.nodes[0].bounds, live);
+        if root != 0 {
+            stack[0] = (0, root);
+            len = 1;
+        }
+        while len > 0 {
+            len -= 1;
+            let (index, mask) = stack[len];
+            let node = &self.nodes[index as usize];
+            if node.count > 0 {
+                let range = node.index as usize..(node.index + node.count) as usize;
+                for placed in &self.placed[range] {
+                    let mask = reaching(&placed.bounds, mask);
+                    if mask != 0 {
+                        visit(placed, mask);
+                    }
+                }
+                continue;
+            }
+            for child in [node.index, index + 1] {
+                let mask = reaching(&self.nodes[child as usize].bounds, mask);
+                if mask != 0 {
+                    stack[len] = (child, mask);
+                    len += 1;
+                }
+            }
+        }
+    }
+}
+
+impl<A: Accelerator> Accelerator for TwoLevel<A> {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        self.walk(ray, |placed| {
+            // A hit at exactly the best `t` may still win on its lower index: let it through.
+            let t_max = best.map_or(ray.t_max, |b| b.t.next_up());
+            let local = Self::local_ray(placed, ray, t_max);
+            if let Some(hit) = self.bottoms[placed.bottom as usize].accel.closest_hit(&local) {
+                self.scene_hit(placed, hit).keep_first(&mut best);
+            }
+            Some(best.map_or(ray.t_max, |b| b.t.next_up()))
+        });
+        best
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        let mut occluded = false;
+        self.walk(ray, |placed| {
+            let local = Self::local_ray(placed, ray, ray.t_max);
+            occluded = self.bottoms[placed.bottom as usize].accel.occluded(&local);
+            if occluded { None } else { Some(ray.t_max) }
+        });
+        occluded
+    }
+
+    /// Traces up to 64 rays at a time through the top level together, and the rays that reach
+    /// an instance through its bottom level together (its packets, for a BVH). The answers are
+    /// exactly those of [`closest_hit`](Self::closest_hit).
+    fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one answer per ray");
+        let mut local = Vec::with_capacity(PACKET);
+        let mut local_hits = Vec::with_capacity(PACKET);
+        let mut which = Vec::with_capacity(PACKET);
+        for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
+            hits.fill(None);
+            let best: Vec<std::cell::Cell<Option<Hit>>> =
+                hits.iter().map(|_| std::cell::Cell::new(None)).collect();
+            // A hit at exactly the best `t` may still win on its lower index: let it through.
+            let t_max = |i: usize| best[i].get().map_or(rays[i].t_max, |b| b.t.next_up());
+            self.walk_packet(rays, t_max, |placed, mask| {
+                local.clear();
+                which.clear();
+                let mut rest = mask;
+                while rest != 0 {
+                    let i = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    local.push(Self::local_ray(placed, &rays[i], t_max(i)));
+                    which.push(i);
+                }
+                local_hits.clear();
+                local_hits.resize(local.len(), None);
+                self.bottoms[placed.bottom as usize].accel.closest_hits(&local, &mut local_hits);
+                for (&i, hit) in which.iter().zip(&local_hits) {
+                    if let Some(hit) = hit {
+                        let mut b = best[i].get();
+                        self.scene_hit(placed, *hit).keep_first(&mut b);
+                        best[i].set(b);
+                    }
+                }
+            });
+            for (hit, best) in hits.iter_mut().zip(best) {
+                *hit = best.get();
+            }
+        }
+    }
+
+    /// Occlusion for up to 64 rays at a time, as [`closest_hits`](Self::closest_hits); the
+    /// answers are exactly those of [`occluded`](Self::occluded).
+    fn occluded_each(&self, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one answer per ray");
+        let mut local = Vec::with_capacity(PACKET);
+        let mut local_occluded = Vec::with_capacity(PACKET);
+        let mut which = Vec::with_capacity(PACKET);
+        for (rays, occluded) in rays.chunks(PACKET).zip(occluded.chunks_mut(PACKET)) {
+            let done: Vec<std::cell::Cell<bool>> =
+                rays.iter().map(|_| std::cell::Cell::new(false)).collect();
+            // An occluded ray has nothing left to find: an empty range drops it.
+            let t_max = |i: usize| if done[i].get() { f32::NEG_INFINITY } else { rays[i].t_max };
+            self.walk_packet(rays, t_max, |placed, mask| {
+                local.clear();
+                which.clear();
+                let mut rest = mask;
+                while rest != 0 {
+                    let i = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    if !done[i].get() {
+                        local.push(Self::local_ray(placed, &rays[i], rays[i].t_max));
+                        which.push(i);
+                    }
+                }
+                local_occluded.clear();
+                local_occluded.resize(local.len(), false);
+                let bottom = &self.bottoms[placed.bottom as usize].accel;
+                bottom.occluded_each(&local, &mut local_occluded);
+                for (&i, &o) in which.iter().zip(&local_occluded) {
+                    if o {
+                        done[i].set(true);
+                    }
+                }
+            });
+            for (o, done) in occluded.iter_mut().zip(done) {
+                *o = done.get();
+            }
+        }
+    }
+}
+
+/// A box grown by a small margin: the instance's transform and the ray's are both rounded, so
+/// an object-space hit at the very edge of the mesh must still find its world box.
+fn padded(bounds: Bounds) -> Bounds {
+    if bounds.is_empty() {
+        return bounds;
+    }
+    let scale = (bounds.max - bounds.min).max_element()
+        + bounds.min.abs().max(bounds.max.abs()).max_element();
+    let pad = Vec3::splat(scale * 1e-5);
+    Bounds { min: bounds.min - pad, max: bounds.max + pad }
+}
+
+/// The box around `bounds` moved by `m`: its eight corners' box.
+fn transformed(bounds: &Bounds, m: &Affine3A) -> Bounds {
+    if bounds.is_empty() {
+        return *bounds;
+    }
+    (0..8).fold(Bounds::EMPTY, |b, corner| {
+        let pick = |axis: usize| {
+            if corner >> axis & 1 == 0 { bounds.min[axis] } else { bounds.max[axis] }
+        };
+        b.grow(m.transform_point3(Vec3::new(pick(0), pick(1), pick(2))))
+    })
+}
+
+/// Builds the top level over `placed[start..end]`, splitting where the surface area heuristic
+/// is least (a full sweep over the boxes sorted by centre on each axis: instances are few), down
+/// to one instance a leaf; returns the node's index.
+fn build_top(placed: &mut [Placed], start: usize, end: usize, nodes: &mut Vec<Node>) -> u32 {
+    let bounds = placed[start..end].iter().fold(Bounds::EMPTY, |b, p| b.union(p.bounds));
+    let index = nodes.len() as u32;
+    nodes.push(Node { bounds, index: start as u32, count: (end - start) as u32 });
+    if end - start <= LEAF_SIZE {
+        return index;
+    }
+    // The split (axis, first index of the right side) of least cost.
+    let mut best = (f32::INFINITY, 0, start + (end - start) / 2);
+    let mut right_areas = vec![0.0f32; end - start];
+    for axis in 0..3 {
+        let range = &mut placed[start..end];
+        range.sort_unstable_by(|a, b| {
+            a.bounds.centroid()[axis].total_cmp(&b.bounds.centroid()[axis])
+        });
+        let mut grown = Bounds::EMPTY;
+        for k in (1..range.len()).rev() {
+            grown = grown.union(range[k].bounds);
+            right_areas[k] = grown.half_area();
+        }
+        let mut grown = Bounds::EMPTY;
+        for k in 1..range.len() {
+            grown = grown.union(range[k - 1].bounds);
+            let cost = grown.half_area() * k as f32 + right_areas[k] * (range.len() - k) as f32;
+            if cost < best.0 {
+                best = (cost, axis, start + k);
+            }
+        }
+    }
+    let (_, axis, middle) = best;
+    placed[start..end]
+        .sort_unstable_by(|a, b| a.bounds.centroid()[axis].total_cmp(&b.bounds.centroid()[axis]));
+    build_top(placed, start, middle, nodes);
+    let right = build_top(placed, middle, end, nodes);
+    nodes[index as usize].index = right;
+    nodes[index as usize].count = 0;
+    index
+}
