@@ -251,7 +251,8 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
     let accel = pool.install(|| system::build_bvh(&scene.name, &scene.geometry))?;
     let build = start.elapsed();
     let stage = args.scene.stage;
-    let lab;
+    // Its texture filtering follows each frame's camera (see `render_frame`).
+    let lab = Lab::new(scene, &accel, stage).for_camera(camera);
     let path = (integrator_name == "path").then(|| {
         let settings = PathSettings {
             max_depth,
@@ -262,10 +263,7 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
     });
     let aov;
     let integrator: &dyn Integrator = match (integrator_name.as_str(), &path) {
-        ("lab", _) => {
-            lab = Lab::new(scene, &accel, stage).for_camera(camera);
-            &lab
-        }
+        ("lab", _) => &lab,
         (_, Some(path)) => path,
         (other, None) => {
             aov = Aov::new(scene, &accel, aov_kind(other));
@@ -277,6 +275,10 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
                         output: &std::path::Path,
                         state: Option<Part>|
      -> Result<()> {
+        // An animation's frames may change the field of view, and with it the pixels' ray cone.
+        let frame_lab = lab.for_camera(camera);
+        let integrator: &dyn Integrator =
+            if integrator_name == "lab" { &frame_lab } else { integrator };
         // What the pixels depend on besides the scene: parts and checkpoints must agree on it.
         let settings_text = format!(
             "size={width}x{height}; camera={camera:?}; integrator={integrator_name}; \

@@ -214,7 +214,11 @@ fn load_scene(name: &str, flatten: bool) -> Result<(Scene, bool)> {
     }
     let lower = name.to_ascii_lowercase();
     if lower.ends_with(".toml") {
-        return Ok((raylab::scene::load_scene_file(path)?, false));
+        let scene = raylab::scene::load_scene_file(path)?;
+        for warning in &scene.warnings {
+            eprintln!("raylab: warning: {warning}");
+        }
+        return Ok((scene, false));
     }
     let mut loaded = raylab::scene::load_mesh(path)?;
     if flatten {

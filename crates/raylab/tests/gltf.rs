@@ -292,4 +292,61 @@ fn materials_and_punctual_lights_map_to_raylab() {
     assert!(loaded.warnings.iter().any(|w| w.contains("alphaMode BLEND is rendered opaque")));
     let scene = raylab::Scene::from_loaded(&loaded);
     assert_eq!(scene.materials[0].bsdf, Bsdf::Dielectric(Dielectric { eta: 1.33 }));
+
+    // An index below 1 (or 0, "not set") is no glass's: 1.5, with a warning.
+    for ior in ["0", "0.5"] {
+        let (_dir, path) = broken_box(|json| {
+            *json = json.replace(
+                r#""name": "Texture""#,
+                &format!(
+                    r#""name": "Texture", "extensions": {{
+                    "KHR_materials_transmission": {{"transmissionFactor": 1.0}},
+                    "KHR_materials_ior": {{"ior": {ior}}}}}"#
+                ),
+            );
+        });
+        let loaded = load_mesh(&path).unwrap();
+        let warning = format!("material \"Texture\": ior {ior} is not a refractive index");
+        assert!(loaded.warnings.iter().any(|w| w.contains(&warning)), "{:?}", loaded.warnings);
+        let scene = raylab::Scene::from_loaded(&loaded);
+        assert!(matches!(&scene.materials[0].bsdf, Bsdf::RoughDielectric(r) if r.eta == 1.5));
+    }
+}
+
+/// Generated tangents follow glTF's convention: its normal maps' green channel points up the
+/// image, toward decreasing `v`, so the bitangent `w · n × t` runs along `−∂p/∂v` (the Khronos
+/// sample viewer's `n × t`), and `t` along `∂p/∂u`.
+#[test]
+fn generated_tangents_follow_gltf_s_normal_map_convention() {
+    let (dir, path) = broken_box(|json| {
+        *json = json
+            .replace(r#""name": "Texture""#, r#""name": "Texture", "normalTexture": {"index": 0}"#);
+    });
+    std::fs::copy(data("BoxTextured/CesiumLogoFlat.png"), dir.path().join("CesiumLogoFlat.png"))
+        .unwrap();
+    let loaded = load_mesh(&path).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let mesh = &loaded.mesh;
+    let (tangents, uvs, normals) = (
+        mesh.tangents.as_ref().unwrap(),
+        mesh.uvs.as_ref().unwrap(),
+        mesh.normals.as_ref().unwrap(),
+    );
+    for (i, corners) in mesh.triangles.iter().enumerate() {
+        let p = corners.map(|v| mesh.positions[v as usize]);
+        let uv = uvs.triangles[i].map(|k| uvs.values[k as usize]);
+        // ∂p/∂u and ∂p/∂v from the triangle's edges.
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let (d1, d2) = (uv[1] - uv[0], uv[2] - uv[0]);
+        let det = d1.x * d2.y - d1.y * d2.x;
+        let dp_du = (e1 * d2.y - e2 * d1.y) / det;
+        let dp_dv = (e2 * d1.x - e1 * d2.x) / det;
+        for c in 0..3 {
+            let t = tangents.values[tangents.triangles[i][c] as usize];
+            let n = normals.values[normals.triangles[i][c] as usize];
+            let bitangent = t.w * n.cross(t.truncate());
+            assert!(t.truncate().dot(dp_du) > 0.0, "triangle {i}: t against ∂p/∂u");
+            assert!(bitangent.dot(-dp_dv) > 0.0, "triangle {i}: w · n × t along ∂p/∂v");
+        }
+    }
 }

@@ -195,14 +195,15 @@ fn mtl_textures_with_options_and_missing_files() {
     std::fs::write(
         d.join("m.mtl"),
         "newmtl scaled\nKd 1 1 1\nmap_Kd -s 2 3 -o 0.5 0.25 -clamp on -bm 1 a b.jpg\n\
-         newmtl missing\nmap_Kd gone.png\nnewmtl broken\nmap_Kd broken.jpg\n",
+         newmtl missing\nmap_Kd gone.png\nnewmtl broken\nmap_Kd broken.jpg\n\
+         newmtl odd\nmap_Kd -zz 1 x.png\nnewmtl bare\nmap_Kd -clamp a b.jpg\n",
     )
     .unwrap();
     std::fs::write(
         d.join("m.obj"),
         "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
          usemtl scaled\nf 1/1 2/2 3/3\nusemtl missing\nf 1/1 2/2 3/3\n\
-         usemtl broken\nf 1/1 2/2 3/3\n",
+         usemtl broken\nf 1/1 2/2 3/3\nusemtl odd\nf 1/1 2/2 3/3\nusemtl bare\nf 1/1 2/2 3/3\n",
     )
     .unwrap();
     let loaded = load(&d.join("m.obj"));
@@ -217,11 +218,20 @@ fn mtl_textures_with_options_and_missing_files() {
     assert!(st.abs_diff_eq(glam::Vec2::new(1.0, -0.75), 1e-6), "{st}");
     assert!(loaded.mesh.materials[1].textures.base_color.is_none());
     assert!(loaded.mesh.materials[2].textures.base_color.is_none());
-    assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
-    assert!(loaded.warnings[0].contains("m.mtl:5: the texture of material \"missing\" is ignored"));
-    assert!(loaded.warnings[0].contains("gone.png"));
-    assert!(loaded.warnings[1].contains("m.mtl:7: the texture of material \"broken\" is ignored"));
-    assert!(loaded.warnings[1].contains("not a PNG or JPEG image"), "{}", loaded.warnings[1]);
+    // A `map_Kd` line that cannot be read leaves its material untextured, with a warning.
+    assert!(loaded.mesh.materials[3].textures.base_color.is_none());
+    // `-clamp` without `on` or `off`: the next word is the file, and the texture tiles.
+    let Some(raylab::texture::Texture::Image(bare)) = &loaded.mesh.materials[4].textures.base_color
+    else {
+        panic!("the bare -clamp texture loads");
+    };
+    assert_eq!(bare.wrap, [raylab::texture::Wrap::Repeat; 2]);
+    assert_eq!(loaded.warnings.len(), 3, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("m.mtl:9: ignored: `map_Kd`: unknown option \"-zz\""));
+    assert!(loaded.warnings[1].contains("m.mtl:5: the texture of material \"missing\" is ignored"));
+    assert!(loaded.warnings[1].contains("gone.png"));
+    assert!(loaded.warnings[2].contains("m.mtl:7: the texture of material \"broken\" is ignored"));
+    assert!(loaded.warnings[2].contains("not a PNG or JPEG image"), "{}", loaded.warnings[2]);
 }
 
 #[test]

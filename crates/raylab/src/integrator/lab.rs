@@ -96,7 +96,7 @@ impl FromStr for Stage {
 
 /// The lab's integrator over a scene and an accelerator built from its
 /// [`vertices`](Scene::vertices).
-#[derive(Clone, Copy, Debug)]
+#[derive(Debug)]
 pub struct Lab<'a, A: ?Sized> {
     scene: &'a Scene,
     accel: &'a A,
@@ -110,6 +110,15 @@ pub struct Lab<'a, A: ?Sized> {
     /// pixel does not alias. 0 reads them at a point.
     pub pixel_spread: f32,
 }
+
+// By hand: the derive would ask `A: Copy`, but a `Lab` only holds a reference to it.
+impl<A: ?Sized> Clone for Lab<'_, A> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<A: ?Sized> Copy for Lab<'_, A> {}
 
 impl<'a, A: Accelerator + ?Sized> Lab<'a, A> {
     /// The lab's model at `stage`, with the scene's [`lab_light`](Scene::lab_light) and the lab's

@@ -321,7 +321,15 @@ impl Bsdf {
             Bsdf::Diffuse(d) => d.reflectance *= colour,
             Bsdf::Conductor(c) => c.specular_reflectance *= colour,
             Bsdf::RoughConductor(r) => r.conductor.specular_reflectance *= colour,
-            Bsdf::Plastic(p) => p.diffuse_reflectance *= colour,
+            // Rebuilt: the lobes' sampling weights follow the diffuse reflectance.
+            Bsdf::Plastic(p) => {
+                *p = Plastic::new(
+                    p.diffuse_reflectance * colour,
+                    p.specular_reflectance,
+                    p.eta,
+                    p.nonlinear,
+                )
+            }
             Bsdf::Pbr(p) => p.base_color *= colour,
             Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) => {}
         }

@@ -204,3 +204,18 @@ fn invalid_parameters_are_named() {
     assert_eq!(material.validate(), Ok(()));
     assert!(material.is_emissive());
 }
+
+/// A texture's tint on a plastic is the plastic with the tinted diffuse reflectance, lobe
+/// sampling weights included (they follow the diffuse reflectance).
+#[test]
+fn a_tinted_plastic_is_rebuilt_with_its_new_weights() {
+    let plastic = Plastic::new(Vec3::splat(0.8), Vec3::ONE, 1.5, false);
+    let tint = Vec3::new(0.1, 0.2, 0.05);
+    let tinted = Bsdf::Plastic(plastic.clone()).tinted(tint);
+    let expected = Plastic::new(Vec3::splat(0.8) * tint, Vec3::ONE, 1.5, false);
+    assert_eq!(tinted, Bsdf::Plastic(expected));
+    // Only scaling the reflectance would keep the untinted weights: not the same BSDF.
+    let mut scaled = plastic;
+    scaled.diffuse_reflectance *= tint;
+    assert_ne!(tinted, Bsdf::Plastic(scaled));
+}

@@ -130,6 +130,20 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
                     )),
                 }
             }
+            // KHR_materials_ior allows 0 (an old exporter's "not set") and asks for at least 1
+            // otherwise: a glass needs a finite index of at least 1.
+            let ior = match m.ior() {
+                None => 1.5,
+                Some(ior) if ior.is_finite() && ior >= 1.0 => ior,
+                Some(ior) => {
+                    warnings.push(format!(
+                        "{}: material {}: ior {ior} is not a refractive index; 1.5 is used",
+                        path.display(),
+                        quoted(&name)
+                    ));
+                    1.5
+                }
+            };
             MeshMaterial {
                 diffuse: Vec3::new(r, g, b),
                 emission: Vec3::from_array(m.emissive_factor()) * strength,
@@ -138,7 +152,7 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
                     metallic: pbr.metallic_factor(),
                     roughness: pbr.roughness_factor(),
                     transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
-                    ior: m.ior().unwrap_or(1.5),
+                    ior,
                 }),
                 name,
             }
@@ -238,8 +252,8 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
     let mut instanced: Vec<InstancedMesh> = instanced.into_iter().map(|(_, part)| part).collect();
     let meshes = std::iter::once(&mut mesh).chain(instanced.iter_mut().map(|part| &mut part.mesh));
     let untangled = meshes
-        .filter(|m| !m.triangles.is_empty())
-        .map(|m| mapped && m.tangents.is_none() && !m.generate_tangents())
+        .filter(|m| mapped && !m.triangles.is_empty())
+        .map(|m| !complete_tangents(m))
         .fold(false, |any, failed| any | failed);
     if untangled {
         warnings.push(format!(
@@ -258,6 +272,45 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
         )));
     }
     Ok(LoadedMesh { mesh, instanced, warnings, camera, lights })
+}
+
+/// Gives every triangle of `mesh` that has no tangents (no TANGENT in its primitive) generated
+/// ones, in glTF's convention; returns `false` if some need them and none can be made (no
+/// texture coordinates).
+///
+/// [`Mesh::generate_tangents`] follows MikkTSpace on the coordinates as given, its bitangent
+/// `w · n × t` along `∂p/∂v`. glTF's texture space runs `v` down the image while its normal
+/// maps' green channel points up it (the Khronos sample viewer's bitangent is `n × t` with `t`
+/// along `∂p/∂u`: along `−∂p/∂v`), so the sign is turned.
+fn complete_tangents(mesh: &mut Mesh) -> bool {
+    let missing = |t: &CornerAttribute<Vec4>, i: usize| {
+        t.triangles[i].iter().all(|&k| t.values[k as usize].truncate() == Vec3::ZERO)
+    };
+    let given = mesh.tangents.take();
+    if given.as_ref().is_some_and(|t| (0..t.triangles.len()).all(|i| !missing(t, i))) {
+        mesh.tangents = given;
+        return true;
+    }
+    if !mesh.generate_tangents() {
+        mesh.tangents = given;
+        return false;
+    }
+    let generated = mesh.tangents.take().expect("generated");
+    let flip = |t: Vec4| Vec4::new(t.x, t.y, t.z, -t.w);
+    let Some(mut given) = given else {
+        let values = generated.values.into_iter().map(flip).collect();
+        mesh.tangents = Some(CornerAttribute { values, triangles: generated.triangles });
+        return true;
+    };
+    for i in 0..given.triangles.len() {
+        if missing(&given, i) {
+            let base = given.values.len() as u32;
+            given.values.extend(generated.triangles[i].map(|k| flip(generated.values[k as usize])));
+            given.triangles[i] = [base, base + 1, base + 2];
+        }
+    }
+    mesh.tangents = Some(given);
+    true
 }
 
 /// The file's images, decoded as materials ask for them, each once per colour space.
@@ -615,5 +668,50 @@ fn camera_settings(world: &Mat4, yfov: f32) -> CameraSettings {
         fov_axis: FovAxis::Y,
         aperture_radius: 0.0,
         focus_distance: 1.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A primitive with TANGENT keeps the file's; one without (zeros) gets generated ones, in
+    /// glTF's sign: the two halves of a quad mapped the same way end up alike.
+    #[test]
+    fn tangents_are_completed_where_a_primitive_has_none() {
+        // u along +x, v down the image along −y: the bitangent runs along +y = z × x, w = 1.
+        let given = Vec4::new(1.0, 0.0, 0.0, 1.0);
+        let mut mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: Some(CornerAttribute {
+                values: vec![Vec2::new(0.0, 1.0), Vec2::ONE, Vec2::X, Vec2::ZERO],
+                triangles: vec![[0, 1, 2], [0, 2, 3]],
+            }),
+            normals: Some(CornerAttribute { values: vec![Vec3::Z], triangles: vec![[0; 3]; 2] }),
+            tangents: Some(CornerAttribute {
+                values: vec![given, Vec4::ZERO],
+                triangles: vec![[0; 3], [1; 3]],
+            }),
+            ..Mesh::default()
+        };
+        assert!(complete_tangents(&mut mesh));
+        let t = mesh.tangents.unwrap();
+        let corner = |i: usize, c: usize| t.values[t.triangles[i][c] as usize];
+        for c in 0..3 {
+            assert_eq!(corner(0, c), given, "the file's tangent is kept");
+            assert!(corner(1, c).abs_diff_eq(given, 1e-6), "generated: {}", corner(1, c));
+        }
+        // Without texture coordinates nothing can be made.
+        let mut bare = Mesh { uvs: None, tangents: None, ..quad_without_uvs() };
+        assert!(!complete_tangents(&mut bare));
+    }
+
+    fn quad_without_uvs() -> Mesh {
+        Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            triangles: vec![[0, 1, 2]],
+            ..Mesh::default()
+        }
     }
 }

@@ -24,11 +24,11 @@ pub mod terrain;
 use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
-pub(crate) use file::read_file_bytes;
 pub use file::{
     InstancedMesh, LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh,
     read_limit_bytes,
 };
+pub(crate) use file::{read_bytes, read_file_bytes};
 pub use keyframes::Keyframe;
 pub use model::model_to_lab;
 pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
@@ -98,6 +98,9 @@ pub struct Scene {
     pub keyframes: Vec<Keyframe>,
     /// The render settings a scene file gives; the command line overrides them.
     pub settings: RenderSettings,
+    /// Problems that did not stop the load (a model's texture that could not be read), one
+    /// line each naming the file: for the caller to show.
+    pub warnings: Vec<String>,
 }
 
 /// A camera as a scene describes it, independent of the image size.
@@ -397,6 +400,7 @@ impl Scene {
             camera: self.camera,
             keyframes: self.keyframes.clone(),
             settings: self.settings.clone(),
+            warnings: self.warnings.clone(),
         }
     }
 }

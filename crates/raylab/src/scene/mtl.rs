@@ -40,9 +40,13 @@ pub(crate) struct TextureLine {
 /// the line number and what was wrong.
 pub(crate) type Library = Vec<(MeshMaterial, Option<TextureLine>)>;
 
-/// Reads an MTL file's materials (see the module documentation).
-pub(crate) fn parse_mtl(text: &[u8]) -> Result<Library, (u64, String)> {
+/// Reads an MTL file's materials (see the module documentation), and the `map_Kd` lines it
+/// could not read (each with its line number and what was wrong): those materials are drawn
+/// untextured.
+#[allow(clippy::type_complexity)]
+pub(crate) fn parse_mtl(text: &[u8]) -> Result<(Library, Vec<(u64, String)>), (u64, String)> {
     let mut materials: Library = Vec::new();
+    let mut ignored = Vec::new();
     for (index, raw) in text.split(|&b| b == b'\n').enumerate() {
         let number = index as u64 + 1;
         let line = String::from_utf8_lossy(raw);
@@ -68,10 +72,10 @@ pub(crate) fn parse_mtl(text: &[u8]) -> Result<Library, (u64, String)> {
             return Err((number, format!("`{keyword}` before any `newmtl`")));
         };
         match keyword {
-            "map_Kd" => {
-                *texture =
-                    Some(parse_map(number, words.collect()).map_err(|message| (number, message))?)
-            }
+            "map_Kd" => match parse_map(number, words.collect()) {
+                Ok(line) => *texture = Some(line),
+                Err(message) => ignored.push((number, message)),
+            },
             _ => {
                 let colour = parse_colour(keyword, words).map_err(|message| (number, message))?;
                 match keyword {
@@ -81,7 +85,7 @@ pub(crate) fn parse_mtl(text: &[u8]) -> Result<Library, (u64, String)> {
             }
         }
     }
-    Ok(materials)
+    Ok((materials, ignored))
 }
 
 /// `map_Kd [options] file`: the options this loader uses (`-s`, `-o`, `-clamp`) and skips
@@ -128,10 +132,12 @@ fn parse_map(line: u64, words: Vec<&str>) -> Result<TextureLine, String> {
                     _ => {}
                 }
             }
-            "-clamp" => {
-                texture.clamp = words.get(i) == Some(&"on");
-                i += 1;
-            }
+            // `on` or `off`; anything else is the file name, not the option's value.
+            "-clamp" => match words.get(i) {
+                Some(&"on") => (texture.clamp, i) = (true, i + 1),
+                Some(&"off") => i += 1,
+                _ => {}
+            },
             "-mm" => i += 2,
             "-blendu" | "-blendv" | "-bm" | "-boost" | "-cc" | "-imfchan" | "-texres" => i += 1,
             other => return Err(format!("`map_Kd`: unknown option {}", quoted(other))),

@@ -281,7 +281,12 @@ impl Shared<'_> {
 
     fn add_library(&self, (path, bytes): (PathBuf, Vec<u8>), result: &mut tobj::MTLLoadResult) {
         match parse_mtl(&bytes) {
-            Ok(library) => {
+            Ok((library, ignored)) => {
+                for (line, message) in ignored {
+                    self.warnings
+                        .borrow_mut()
+                        .push(format!("{}:{line}: ignored: {message}", path.display()));
+                }
                 let mut materials = Vec::with_capacity(library.len());
                 for (mut material, texture) in library {
                     if let Some(line) = texture {

@@ -66,7 +66,7 @@ pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneF
     let document: Document =
         toml::from_str(text).map_err(|e| at(e.span(), e.message().trim().replace('\n', " ")))?;
     let folder = path.parent().unwrap_or(Path::new("."));
-    Builder { at: &at, folder }.build(document, path)
+    Builder { at: &at, folder, warnings: Default::default() }.build(document, path)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -156,6 +156,8 @@ enum LightDoc {
 struct Builder<'a, F> {
     at: &'a F,
     folder: &'a Path,
+    /// The meshes' loaders' warnings, for [`Scene::warnings`].
+    warnings: std::cell::RefCell<Vec<String>>,
 }
 
 type Result<T> = std::result::Result<T, SceneFileError>;
@@ -210,6 +212,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             scene.settings = self.render(render)?;
         }
         scene.validate().map_err(|e| (self.at)(None, e.to_string()))?;
+        scene.warnings = self.warnings.take();
         Ok(scene)
     }
 
@@ -295,6 +298,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                 let mesh_path = self.folder.join(file.get_ref());
                 let loaded = super::load_mesh(&mesh_path)
                     .map_err(|e| (self.at)(Some(file.span()), e.to_string()))?;
+                self.warnings.borrow_mut().extend(loaded.warnings.iter().cloned());
                 if material.is_none() {
                     // The file's own materials, as diffuse with their Kd and Ke.
                     let base = materials.len() as u32;

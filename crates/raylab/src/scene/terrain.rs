@@ -100,7 +100,7 @@ pub fn terrain(side: u32, seed: u64) -> Scene {
         textures: MaterialTextures {
             base_color: Some(Texture::Noise(NoiseTexture {
                 pattern: Pattern::Clouds,
-                noise: Perlin::new(seed + 1),
+                noise: Perlin::new(seed.wrapping_add(1)),
                 scale: 0.6,
                 octaves: 6,
                 turbulence: 1.0,

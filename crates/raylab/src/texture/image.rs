@@ -2,8 +2,11 @@
 //! as linear floats), a mip-map pyramid, and filtered lookups with a wrap mode per axis.
 //!
 //! **Layout.** Level 0 is the image, rows from the top; level k+1 halves level k in each
-//! direction (rounding down, at least 1), each texel the mean of the 2×2 texels above it,
-//! averaged in linear light (sRGB texels are decoded, averaged and encoded again). A texture of
+//! direction (rounding down, at least 1), each texel the mean of the part of level k it covers
+//! (a box filter), averaged in linear light (sRGB texels are decoded, averaged and encoded
+//! again). Where a size is even that is the 2×2 texels above it; where it is odd (7 texels
+//! become 3, each covering 7/3 of them) the texels at the seams count for the fraction each
+//! covers, so that no row or column of the image is left out of the smaller levels. A texture of
 //! 300×200 has levels 300×200, 150×100, 75×50, 37×25, 18×12, 9×6, 4×3, 2×1, 1×1.
 //!
 //! **Coordinates.** A lookup takes `(s, t)` in texture space: `s = 0` is the left edge of the
@@ -259,13 +262,13 @@ impl TextureImage {
         }
         let (width, height) = ((above.width / 2).max(1), (above.height / 2).max(1));
         let mean = |x: u32, y: u32| -> Vec4 {
-            let (x0, y0) = ((2 * x).min(above.width - 1), (2 * y).min(above.height - 1));
-            let (x1, y1) = ((2 * x + 1).min(above.width - 1), (2 * y + 1).min(above.height - 1));
-            (self.texel(k, x0, y0)
-                + self.texel(k, x1, y0)
-                + self.texel(k, x0, y1)
-                + self.texel(k, x1, y1))
-                * 0.25
+            let mut sum = Vec4::ZERO;
+            for (j, wy) in footprint(y, height, above.height) {
+                for (i, wx) in footprint(x, width, above.width) {
+                    sum += self.texel(k, i, j) * (wx * wy);
+                }
+            }
+            sum
         };
         let positions = (0..height).flat_map(|y| (0..width).map(move |x| (x, y)));
         let texels = match &above.texels {
@@ -294,4 +297,17 @@ impl TextureImage {
         };
         Some(Level { width, height, texels })
     }
+}
+
+/// The texels of a row (or column) of `n_in` that texel `x` of a row of `n_out` covers, each
+/// with the fraction of `x`'s width it takes (the weights sum to 1): output texel `x` spans
+/// `[x·r, (x+1)·r)` of the input, `r = n_in / n_out`.
+fn footprint(x: u32, n_out: u32, n_in: u32) -> impl Iterator<Item = (u32, f32)> {
+    let r = f64::from(n_in) / f64::from(n_out);
+    let (a, b) = (f64::from(x) * r, f64::from(x + 1) * r);
+    let (first, end) = (a.floor() as u32, (b.ceil() as u32).min(n_in));
+    (first..end).map(move |i| {
+        let covered = b.min(f64::from(i) + 1.0) - a.max(f64::from(i));
+        (i, (covered / r) as f32)
+    })
 }

@@ -64,10 +64,20 @@ pub fn decode_texture(name: &str, bytes: &[u8], srgb: bool) -> Result<TextureIma
     })
 }
 
+/// The largest texture file [`load_texture`] reads.
+pub const MAX_TEXTURE_FILE_BYTES: u64 = 1 << 30;
+
 /// Reads and decodes an image file (see [`decode_texture`]); errors name the file.
 pub fn load_texture(path: &Path, srgb: bool) -> Result<TextureImage, String> {
-    let bytes =
-        std::fs::read(path).map_err(|e| format!("{}: cannot read it: {e}", path.display()))?;
+    // At most 1 GiB (or half the memory available): more than any image within the size
+    // limits takes, compressed; a bigger file is refused before it is read.
+    let limit = crate::scene::read_limit_bytes().min(MAX_TEXTURE_FILE_BYTES);
+    let bytes = crate::scene::read_bytes(path, false, limit).map_err(|e| match e {
+        crate::scene::LoadError::Read { error, .. } => {
+            format!("{}: cannot read it: {error}", path.display())
+        }
+        other => other.to_string(),
+    })?;
     let name =
         path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
     decode_texture(&name, &bytes, srgb).map_err(|e| format!("{}: {e}", path.display()))

@@ -121,6 +121,25 @@ fn the_pyramid_halves_each_level_down_to_one_texel() {
     let mean = image.texel(1, 0, 0);
     assert!((mean.x - 0.5).abs() < 4e-3, "{mean}");
     assert_eq!(mean.w, 1.0);
+    // An odd row leaves no texel out: 3 texels (0, 0, 1) become one of 1/3, where taking the
+    // first two would give 0; 7 become 3, each 7/3 wide: the middle one covers 2/3 of texel 2,
+    // all of 3 and 2/3 of 4.
+    let row = |values: &[f32]| {
+        let texels = values.iter().map(|&v| [0.0, 0.0, v, 1.0]).collect();
+        TextureImage::from_rgba_f32("row", values.len() as u32, 1, texels)
+    };
+    assert!((row(&[0.0, 0.0, 1.0]).texel(1, 0, 0).z - 1.0 / 3.0).abs() < 1e-6);
+    let seven = row(&[0.0, 0.0, 3.0, 6.0, 9.0, 0.0, 0.0]);
+    assert_eq!(seven.levels()[1].size(), (3, 1));
+    let expected =
+        [(3.0 / 3.0) * 3.0 / 7.0, (2.0 + 6.0 + 6.0) * 3.0 / 7.0, (9.0 / 3.0) * 3.0 / 7.0];
+    for (x, e) in expected.iter().enumerate() {
+        let got = seven.texel(1, x as u32, 0).z;
+        assert!((got - e).abs() < 1e-5, "texel {x}: {got}, not {e}");
+    }
+    // The mean over the row is kept at every level: nothing is dropped or counted twice.
+    let total: f32 = (0..3).map(|x| seven.texel(1, x, 0).z).sum::<f32>() / 3.0;
+    assert!((total - 18.0 / 7.0).abs() < 1e-5, "{total}");
 }
 
 #[test]

@@ -422,4 +422,14 @@ fn a_gltf_model_is_a_mesh_shape() {
     let material = &scene.materials[scene.geometry.material_id(0) as usize];
     assert!(matches!(material.bsdf, Bsdf::Pbr(_)), "{:?}", material.bsdf);
     assert!(material.textures.base_color.is_some());
+    assert_eq!(scene.warnings, Vec::<String>::new());
+    // The model's warnings reach the scene's, for the caller to show.
+    std::fs::remove_file(dir.path().join("CesiumLogoFlat.png")).unwrap();
+    let scene = load_scene_file(&scene_path).unwrap();
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert!(
+        scene.warnings[0].contains("CesiumLogoFlat.png: cannot read it"),
+        "{:?}",
+        scene.warnings
+    );
 }
