@@ -13,10 +13,12 @@ const BVH_LIMIT: usize = 4096;
 
 /// What a loaded mesh goes through in `raylab render`: a scene, a BVH, a ray.
 fn use_mesh(loaded: &LoadedMesh) {
-    if loaded.mesh.triangles.is_empty() || loaded.mesh.triangles.len() > BVH_LIMIT {
+    // Instances count as many times as they are drawn: that is what a render traces.
+    let drawn = loaded.triangle_count();
+    if drawn == 0 || drawn > BVH_LIMIT {
         return;
     }
-    let scene = Scene::from_mesh(&loaded.mesh);
+    let scene = Scene::from_loaded(loaded);
     use_scene(&scene);
 }
 

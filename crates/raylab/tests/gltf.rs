@@ -350,3 +350,22 @@ fn generated_tangents_follow_gltf_s_normal_map_convention() {
         }
     }
 }
+
+/// An emissive texture is not read: the material emits its factor evenly, and the load says so.
+#[test]
+fn an_emissive_texture_is_named_as_unsupported() {
+    let (dir, path) = broken_box(|json| {
+        *json = json.replace(
+            r#""name": "Texture""#,
+            r#""name": "Texture", "emissiveFactor": [1, 0.5, 0], "emissiveTexture": {"index": 0}"#,
+        );
+    });
+    std::fs::copy(data("BoxTextured/CesiumLogoFlat.png"), dir.path().join("CesiumLogoFlat.png"))
+        .unwrap();
+    let loaded = load_mesh(&path).unwrap();
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(
+        loaded.warnings[0].contains("material \"Texture\": its emissive texture is not supported")
+    );
+    assert_eq!(loaded.mesh.materials[0].emission, Vec3::new(1.0, 0.5, 0.0));
+}

@@ -117,6 +117,14 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
                     quoted(&name)
                 )),
             }
+            if m.emissive_texture().is_some() {
+                warnings.push(format!(
+                    "{}: material {}: its emissive texture is not supported; it emits its \
+                     emissiveFactor evenly",
+                    path.display(),
+                    quoted(&name)
+                ));
+            }
             if let Some(normal) = m.normal_texture() {
                 let texture = images.texture(&normal.texture(), normal.tex_coord(), None, false);
                 match texture {
