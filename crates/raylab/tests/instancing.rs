@@ -386,3 +386,35 @@ fn the_path_tracer_sees_instances_as_their_copies() {
         panic!("{difference:?}; images: {saved:?}");
     }
 }
+
+/// Instances laid out to make the surface area heuristic split one off at a time (a row of
+/// boxes, each twice as far and a little larger than the last): the top level stays shallow
+/// enough for its fixed traversal stacks, and answers stay exact.
+#[test]
+fn a_degenerate_row_of_instances_is_traced_exactly() {
+    let cube = closed_cube(1);
+    let transforms: Vec<Affine3A> = (0..400)
+        .map(|k| {
+            let s = 1.02f32.powi(k);
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(s),
+                Quat::from_rotation_z(k as f32 * 0.1),
+                Vec3::new(3.0 * s * k as f32, 0.0, 0.0),
+            )
+        })
+        .collect();
+    let mut geometry = Geometry::new();
+    geometry.add_instanced_mesh(&cube, &transforms, |_| 0);
+    let bvh = SceneBvh::build(&geometry).unwrap();
+    let mut rays = hostile_rays(&geometry, 3000, 17);
+    // Along the row, through every instance.
+    rays.push(Ray::new(Vec3::new(-10.0, 0.01, 0.02), Vec3::X));
+    rays.push(Ray::new(Vec3::new(1e5, 0.01, 0.02), -Vec3::X));
+    for ray in &rays {
+        assert_eq!(bvh.closest_hit(ray), reference_hit(&geometry, ray), "{ray:?}");
+    }
+    let mut batch = vec![None; rays.len()];
+    bvh.closest_hits(&rays, &mut batch);
+    let single: Vec<Option<Hit>> = rays.iter().map(|r| bvh.closest_hit(r)).collect();
+    assert_eq!(batch, single);
+}

@@ -33,7 +33,18 @@ pub struct TwoLevel<A> {
     placed: Vec<Placed>,
     /// The top level, depth first: an inner node's left child follows it.
     nodes: Vec<Node>,
+    /// `RAY_ERROR · max cond(M)` over the placements (0 without any): a ray with origin `o`
+    /// tests the top level's boxes grown by `margin · (|o|∞ + extent)` (see [`Self::pad`]).
+    margin: f32,
+    /// The largest coordinate of any instance's box.
+    extent: f32,
 }
+
+/// How far, in units of `f32::EPSILON · cond(M) · (|o|∞ + extent)`, the world ray and the
+/// placed image of its object-space copy may drift apart: the rounding of `M⁻¹` itself and of
+/// `M⁻¹·o` (a few ulps each, times the condition number when mapped back) and of `M⁻¹·d` over
+/// the ray's reach inside the scene (at most `|o|∞ + extent`), with a wide margin.
+const RAY_ERROR: f32 = 64.0;
 
 /// One bottom-level accelerator and how its hits' indices become scene triangles.
 struct Bottom<A> {
@@ -119,12 +130,29 @@ impl<A: Accelerator> TwoLevel<A> {
             });
         }
         placed.retain(|p| !p.bounds.is_empty());
+        let norm = |m: &glam::Mat3A| {
+            let rows = m.transpose();
+            [rows.x_axis, rows.y_axis, rows.z_axis]
+                .map(|r| r.abs().element_sum())
+                .into_iter()
+                .fold(0.0, f32::max)
+        };
+        let condition = placed
+            .iter()
+            .filter_map(|p| p.placement.as_ref())
+            .map(|p| norm(&p.to_world.matrix3) * norm(&p.to_object.matrix3))
+            .fold(0.0, f32::max);
+        let extent = placed
+            .iter()
+            .map(|p| p.bounds.min.abs().max(p.bounds.max.abs()).max_element())
+            .fold(0.0, f32::max);
+        let margin = RAY_ERROR * f32::EPSILON * condition;
         let mut nodes = Vec::new();
         if !placed.is_empty() {
             let n = placed.len();
-            build_top(&mut placed, 0, n, &mut nodes);
+            build_top(&mut placed, (0, n), 0, &mut nodes);
         }
-        Ok(TwoLevel { bottoms, placed, nodes })
+        Ok(TwoLevel { bottoms, placed, nodes, margin, extent })
     }
 
     /// The triangles the bottom levels hold: each stored mesh's once, however many instances
@@ -153,6 +181,15 @@ impl<A: Accelerator> TwoLevel<A> {
         std::mem::size_of_val(self.nodes.as_slice())
             + std::mem::size_of_val(self.placed.as_slice())
             + self.bottoms.iter().map(|b| 4 * b.scene_ids.len()).sum::<usize>()
+    }
+
+    /// How much the top level's boxes grow for a ray from `origin`: enough that a ray which
+    /// hits a triangle in the instance's space always finds the instance's box in the world,
+    /// whatever the rounding of the transform (the bottom level decides on the object-space
+    /// ray, exactly as the reference does).
+    #[inline]
+    fn pad(&self, origin: Vec3) -> f32 {
+        self.margin * (origin.abs().max_element() + self.extent)
     }
 
     /// The ray in `placed`'s space, limited to `t < t_max`.
@@ -191,12 +228,12 @@ impl<A: Accelerator> TwoLevel<A> {
             return;
         }
         let test = RayBoxTest::new(ray);
+        let pad = self.pad(ray.origin);
+        let grow = |b: &Bounds| grown(b, pad);
         let mut t_max = ray.t_max;
-        // The tree is balanced (median splits): its depth is below 64 for any instance count,
-        // and a stack holds at most one entry a level plus one.
-        let mut stack = [(0u32, 0f32); 66];
+        let mut stack = [(0u32, 0f32); STACK];
         let mut len = 0;
-        if let Some(t) = test.enter(&self.nodes[0].bounds, t_max) {
+        if let Some(t) = test.enter(&grow(&self.nodes[0].bounds), t_max) {
             stack[0] = (0, t);
             len = 1;
         }
@@ -210,7 +247,7 @@ impl<A: Accelerator> TwoLevel<A> {
             if node.count > 0 {
                 let range = node.index as usize..(node.index + node.count) as usize;
                 for placed in &self.placed[range] {
-                    if test.enter(&placed.bounds, t_max).is_some() {
+                    if test.enter(&grow(&placed.bounds), t_max).is_some() {
                         match visit(placed) {
                             Some(t) => t_max = t_max.min(t),
                             None => return,
@@ -220,8 +257,8 @@ impl<A: Accelerator> TwoLevel<A> {
                 continue;
             }
             let (left, right) = (index + 1, node.index);
-            let near = test.enter(&self.nodes[left as usize].bounds, t_max);
-            let far = test.enter(&self.nodes[right as usize].bounds, t_max);
+            let near = test.enter(&grow(&self.nodes[left as usize].bounds), t_max);
+            let far = test.enter(&grow(&self.nodes[right as usize].bounds), t_max);
             let mut push = |entry: (u32, f32)| {
                 stack[len] = entry;
                 len += 1;
@@ -261,13 +298,16 @@ impl<A: Accelerator> TwoLevel<A> {
             return;
         }
         let mut tests = [None; PACKET];
+        let mut pads = [0.0f32; PACKET];
         let mut live = 0u64;
         for (i, ray) in rays.iter().enumerate() {
             if ray.origin.is_finite() && ray.direction.is_finite() {
                 tests[i] = Some(RayBoxTest::new(ray));
+                pads[i] = self.pad(ray.origin);
                 live |= 1 << i;
             }
         }
+        let packet_pad = pads.iter().fold(0.0, |a: f32, &b| a.max(b));
         // A bound on the whole packet where the rays share their directions' signs: a box it
         // misses is missed by every ray, at the cost of one test.
         let frustum = Frustum::of(tests[..rays.len()].iter().flatten().copied());
@@ -276,7 +316,7 @@ impl<A: Accelerator> TwoLevel<A> {
             .fold(f32::NEG_INFINITY, |a, t| if t.is_nan() { f32::INFINITY } else { a.max(t) });
         let reaching = |bounds: &Bounds, mask: u64| {
             if let Some(frustum) = &frustum
-                && frustum.enter(bounds, packet_t_max).is_none()
+                && frustum.enter(&grown(bounds, packet_pad), packet_t_max).is_none()
             {
                 return 0;
             }
@@ -286,14 +326,14 @@ impl<A: Accelerator> TwoLevel<A> {
                 let i = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
                 if let Some(test) = &tests[i]
-                    && test.enter(bounds, t_max(i)).is_some()
+                    && test.enter(&grown(bounds, pads[i]), t_max(i)).is_some()
                 {
                     out |= 1 << i;
                 }
             }
             out
         };
-        let mut stack = [(0u32, 0u64); 66];
+        let mut stack = [(0u32, 0u64); STACK];
         let mut len = 0;
         let root = reaching(&self.nodes[0].bounds, live);
         if root != 0 {
@@ -432,6 +472,12 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
     }
 }
 
+/// `bounds` grown by `pad` on every side.
+#[inline]
+fn grown(bounds: &Bounds, pad: f32) -> Bounds {
+    Bounds { min: bounds.min - Vec3::splat(pad), max: bounds.max + Vec3::splat(pad) }
+}
+
 /// A box grown by a small margin: the instance's transform and the ray's are both rounded, so
 /// an object-space hit at the very edge of the mesh must still find its world box.
 fn padded(bounds: Bounds) -> Bounds {
@@ -457,20 +503,36 @@ fn transformed(bounds: &Bounds, m: &Affine3A) -> Bounds {
     })
 }
 
+/// How deep the top level splits by the surface area heuristic; below, it halves the instances
+/// (median splits), so that no tree is deeper than `SAH_DEPTH + 32` and the traversal stacks
+/// (`STACK`) cannot overflow, however the instances lie (a row of growing boxes would make the
+/// heuristic split off one at a time).
+const SAH_DEPTH: u32 = 32;
+
+/// Entries of a traversal stack: at most one per level of the tree, plus one.
+const STACK: usize = SAH_DEPTH as usize + 34;
+
 /// Builds the top level over `placed[start..end]`, splitting where the surface area heuristic
-/// is least (a full sweep over the boxes sorted by centre on each axis: instances are few), down
-/// to one instance a leaf; returns the node's index.
-fn build_top(placed: &mut [Placed], start: usize, end: usize, nodes: &mut Vec<Node>) -> u32 {
+/// is least (a full sweep over the boxes sorted by centre on each axis: instances are few), or
+/// in the middle below [`SAH_DEPTH`], down to one instance a leaf; returns the node's index.
+fn build_top(
+    placed: &mut [Placed],
+    (start, end): (usize, usize),
+    depth: u32,
+    nodes: &mut Vec<Node>,
+) -> u32 {
     let bounds = placed[start..end].iter().fold(Bounds::EMPTY, |b, p| b.union(p.bounds));
     let index = nodes.len() as u32;
     nodes.push(Node { bounds, index: start as u32, count: (end - start) as u32 });
     if end - start <= LEAF_SIZE {
         return index;
     }
-    // The split (axis, first index of the right side) of least cost.
-    let mut best = (f32::INFINITY, 0, start + (end - start) / 2);
+    // The split (axis, first index of the right side) of least cost; by default the middle
+    // along the axis where the centres spread most.
+    let centres = placed[start..end].iter().fold(Bounds::EMPTY, |b, p| b.grow(p.bounds.centroid()));
+    let mut best = (f32::INFINITY, centres.longest_axis(), start + (end - start) / 2);
     let mut right_areas = vec![0.0f32; end - start];
-    for axis in 0..3 {
+    for axis in (0..3).filter(|_| depth < SAH_DEPTH) {
         let range = &mut placed[start..end];
         range.sort_unstable_by(|a, b| {
             a.bounds.centroid()[axis].total_cmp(&b.bounds.centroid()[axis])
@@ -492,8 +554,8 @@ fn build_top(placed: &mut [Placed], start: usize, end: usize, nodes: &mut Vec<No
     let (_, axis, middle) = best;
     placed[start..end]
         .sort_unstable_by(|a, b| a.bounds.centroid()[axis].total_cmp(&b.bounds.centroid()[axis]));
-    build_top(placed, start, middle, nodes);
-    let right = build_top(placed, middle, end, nodes);
+    build_top(placed, (start, middle), depth + 1, nodes);
+    let right = build_top(placed, (middle, end), depth + 1, nodes);
     nodes[index as usize].index = right;
     nodes[index as usize].count = 0;
     index
