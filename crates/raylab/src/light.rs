@@ -2,7 +2,9 @@
 //!
 //! Area lights are triangles whose material emits (see [`crate::material::Material::emission`]);
 //! the path integrator gathers every light into one set it samples by power
-//! (`integrator::lights`).
+//! (`integrator::lights`). A material's emission texture makes a triangle shine in a pattern:
+//! its radiance is read at the sampled point (and where a ray hits it), and its power for
+//! choosing among lights is the texture's mean over the triangle, estimated on a grid.
 
 use std::f32::consts::PI;
 
@@ -15,6 +17,7 @@ use crate::sampling::{
     square_to_uniform_sphere, square_to_uniform_triangle, uniform_sphere_pdf,
 };
 use crate::scene::Scene;
+use crate::texture::{Texture, TextureQuery};
 
 /// A light of the scene that is not a surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,6 +84,9 @@ pub struct LightSet {
     environment: Option<(Vec3, u32)>,
     /// How points on triangle lights are chosen.
     triangle_sampling: TriangleSampling,
+    /// The emission texture of each textured triangle light, with the texture coordinates at
+    /// its corners ([`SampledLight::Triangle::texture`] indexes it).
+    textures: Vec<(Texture, [Vec2; 3])>,
 }
 
 /// How points on triangle lights are chosen.
@@ -111,9 +117,21 @@ const SOLID_ANGLE_SAMPLING: std::ops::Range<f32> = 3e-4..6.22;
 
 #[derive(Clone, Debug)]
 enum SampledLight {
-    Point { position: Vec3, intensity: Vec3 },
-    Triangle { corners: [Vec3; 3], normal: Vec3, area: f32, radiance: Vec3 },
-    Environment { radiance: Vec3 },
+    Point {
+        position: Vec3,
+        intensity: Vec3,
+    },
+    /// `texture`: an index into [`LightSet::textures`], or `u32::MAX` for an even emitter.
+    Triangle {
+        corners: [Vec3; 3],
+        normal: Vec3,
+        area: f32,
+        radiance: Vec3,
+        texture: u32,
+    },
+    Environment {
+        radiance: Vec3,
+    },
 }
 
 /// A point sampled on a light, seen from a shading point.
@@ -164,16 +182,29 @@ impl LightSet {
                 },
             }
         }
+        let mut textures = Vec::new();
+        let mut texture_means = Vec::new();
         for (i, slot) in triangle_light.iter_mut().enumerate() {
             let material = &scene.materials[scene.geometry.material_id(i) as usize];
             let area = scene.geometry.area(i);
             if material.is_emissive() && area > 0.0 {
                 *slot = lights.len() as u32;
+                let corners = scene.geometry.triangle(i);
+                let texture = match &material.textures.emission {
+                    None => u32::MAX,
+                    Some(texture) => {
+                        let uvs = scene.geometry.corner_uvs(i);
+                        texture_means.push(mean_over(texture, corners, uvs));
+                        textures.push((texture.clone(), uvs));
+                        textures.len() as u32 - 1
+                    }
+                };
                 lights.push(SampledLight::Triangle {
-                    corners: scene.geometry.triangle(i),
+                    corners,
                     normal: scene.geometry.normal(i),
                     area,
                     radiance: material.emission,
+                    texture,
                 });
             }
         }
@@ -181,7 +212,10 @@ impl LightSet {
             .iter()
             .map(|light| match light {
                 SampledLight::Point { intensity, .. } => 4.0 * PI * mean(*intensity),
-                SampledLight::Triangle { area, radiance, .. } => PI * area * mean(*radiance),
+                SampledLight::Triangle { area, radiance, texture, .. } => {
+                    let pattern = texture_means.get(*texture as usize).copied().unwrap_or(1.0);
+                    PI * area * mean(*radiance) * pattern
+                }
                 // Through a disk the size of the scene (PBR 4th ed. §12.5).
                 SampledLight::Environment { radiance } => PI * radius * radius * mean(*radiance),
             })
@@ -192,7 +226,19 @@ impl LightSet {
             triangle_light,
             environment,
             triangle_sampling: TriangleSampling::Area,
+            textures,
         }
+    }
+
+    /// A triangle light's radiance at barycentrics `(b1, b2)`, point `p`: `radiance` times its
+    /// texture there, if it has one.
+    #[inline]
+    fn radiance_at(&self, radiance: Vec3, texture: u32, (b1, b2): (f32, f32), p: Vec3) -> Vec3 {
+        let Some((texture, [t0, t1, t2])) = self.textures.get(texture as usize) else {
+            return radiance;
+        };
+        let uv = (1.0 - b1 - b2) * *t0 + b1 * *t1 + b2 * *t2;
+        radiance * texture.rgb(&TextureQuery { uv, p, footprint: 0.0 }).max(Vec3::ZERO)
     }
 
     /// The same lights, with triangle lights sampled as `sampling` says.
@@ -251,7 +297,7 @@ impl LightSet {
                     shadow_ray: point.spawn_ray_to(position),
                 })
             }
-            SampledLight::Triangle { corners, normal, area, radiance } => {
+            SampledLight::Triangle { corners, normal, area, radiance, texture } => {
                 let [v0, v1, v2] = corners;
                 let solid_angle = self.solid_angle(corners, point.p);
                 let ([b0, b1, b2], solid_angle_pdf) = match solid_angle {
@@ -275,7 +321,7 @@ impl LightSet {
                 };
                 Some(LightSample {
                     direction,
-                    radiance,
+                    radiance: self.radiance_at(radiance, texture, (b1, b2), target),
                     pdf: selection * pdf,
                     delta: false,
                     shadow_ray,
@@ -304,7 +350,7 @@ impl LightSet {
         if light == u32::MAX {
             return (Vec3::ZERO, 0.0);
         }
-        let SampledLight::Triangle { corners, normal, area, radiance } =
+        let SampledLight::Triangle { corners, normal, area, radiance, texture } =
             self.lights[light as usize]
         else {
             unreachable!("triangle_light indexes triangle lights");
@@ -319,6 +365,10 @@ impl LightSet {
         let pdf = match self.solid_angle(corners, origin) {
             Some(omega) => 1.0 / omega,
             None => distance_squared / (cos_light * area),
+        };
+        let radiance = match self.textures.get(texture as usize) {
+            None => radiance,
+            Some((pattern, _)) => radiance * pattern.rgb(&hit.texture_query()).max(Vec3::ZERO),
         };
         (radiance, selection * pdf)
     }
@@ -341,6 +391,27 @@ impl LightSet {
 #[inline]
 fn mean(c: Vec3) -> f32 {
     c.element_sum() / 3.0
+}
+
+/// The mean of a texture's colour (the mean of its channels) over a triangle, from a grid of
+/// 21 points over it: the power estimate that picks among lights. A texture that is dark at
+/// every grid point but not everywhere still shines, only found less often by light sampling.
+fn mean_over(texture: &Texture, corners: [Vec3; 3], uvs: [Vec2; 3]) -> f32 {
+    const N: u32 = 5;
+    let (mut sum, mut count) = (0.0, 0);
+    for i in 0..=N {
+        for j in 0..=N - i {
+            let (b1, b2) = (i as f32 / N as f32, j as f32 / N as f32);
+            let b0 = 1.0 - b1 - b2;
+            let uv = b0 * uvs[0] + b1 * uvs[1] + b2 * uvs[2];
+            let p = b0 * corners[0] + b1 * corners[1] + b2 * corners[2];
+            let value = texture.rgb(&TextureQuery { uv, p, footprint: 0.0 }).max(Vec3::ZERO);
+            sum += mean(value);
+            count += 1;
+        }
+    }
+    let mean = sum / count as f32;
+    if mean.is_finite() { mean } else { 0.0 }
 }
 
 #[cfg(test)]

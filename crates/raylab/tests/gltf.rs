@@ -351,9 +351,9 @@ fn generated_tangents_follow_gltf_s_normal_map_convention() {
     }
 }
 
-/// An emissive texture is not read: the material emits its factor evenly, and the load says so.
+/// An emissive texture multiplies the emissive factor: the material shines in its pattern.
 #[test]
-fn an_emissive_texture_is_named_as_unsupported() {
+fn an_emissive_texture_shines_in_its_pattern() {
     let (dir, path) = broken_box(|json| {
         *json = json.replace(
             r#""name": "Texture""#,
@@ -363,9 +363,15 @@ fn an_emissive_texture_is_named_as_unsupported() {
     std::fs::copy(data("BoxTextured/CesiumLogoFlat.png"), dir.path().join("CesiumLogoFlat.png"))
         .unwrap();
     let loaded = load_mesh(&path).unwrap();
-    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
-    assert!(
-        loaded.warnings[0].contains("material \"Texture\": its emissive texture is not supported")
-    );
-    assert_eq!(loaded.mesh.materials[0].emission, Vec3::new(1.0, 0.5, 0.0));
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let material = &loaded.mesh.materials[0];
+    assert_eq!(material.emission, Vec3::new(1.0, 0.5, 0.0));
+    let texture = material.textures.emission.as_ref().expect("the emissive texture");
+    // The logo's corner texel is the same colour as its base colour texture gives there.
+    let query = raylab::texture::TextureQuery { uv: glam::Vec2::splat(0.01), ..Default::default() };
+    let base = material.textures.base_color.as_ref().unwrap().rgb(&query);
+    assert_eq!(texture.rgb(&query), base);
+    let scene = raylab::Scene::from_loaded(&loaded);
+    let emitted = scene.materials[0].emission_at(&query);
+    assert!(emitted.abs_diff_eq(Vec3::new(1.0, 0.5, 0.0) * base, 1e-6), "{emitted}");
 }

@@ -517,6 +517,13 @@ impl Geometry {
         if ratio.is_finite() { ratio } else { 0.0 }
     }
 
+    /// The texture coordinates at scene triangle `i`'s corners (its barycentric `(0, 0)`,
+    /// `(1, 0)`, `(0, 1)` where the mesh has none).
+    pub fn corner_uvs(&self, i: usize) -> [Vec2; 3] {
+        let (s, placement) = self.locate(i);
+        Self::corner_values(&self.uvs, s, placement).unwrap_or(DEFAULT_UVS)
+    }
+
     /// Where textures are read for `ray` at `hit`, with the footprint of a ray cone that
     /// spreads by `spread` radians from the ray's origin (see [`crate::texture`]): `d · spread`
     /// across at distance `d`, `1/|cos θ|` longer on a slanted surface, in texture units.

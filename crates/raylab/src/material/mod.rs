@@ -70,6 +70,9 @@ pub struct MaterialTextures {
     /// Cut-out coverage (glTF's `alphaMode: MASK`): where the base colour's alpha is below the
     /// cutoff, the surface is not there and rays pass through.
     pub alpha_mask: Option<AlphaMask>,
+    /// Multiplies the emitted radiance (glTF's `emissiveTexture`): an emitter that shines in a
+    /// pattern. Light sampling reads it at the sampled point (see [`crate::light`]).
+    pub emission: Option<Texture>,
 }
 
 /// Cut-out coverage: the alpha is `factor` times the base colour texture's alpha (where there is
@@ -101,6 +104,7 @@ impl MaterialTextures {
             && self.normal.is_none()
             && self.roughness.is_none()
             && self.alpha_mask.is_none()
+            && self.emission.is_none()
     }
 }
 
@@ -185,6 +189,16 @@ impl Material {
         match &self.textures.base_color {
             None => self.bsdf.albedo(),
             Some(texture) => self.bsdf.tinted(texture.rgb(query)).albedo(),
+        }
+    }
+
+    /// The radiance it emits at a point: [`emission`](Self::emission), times its emission
+    /// texture there where it has one.
+    #[inline]
+    pub fn emission_at(&self, query: &TextureQuery) -> Vec3 {
+        match &self.textures.emission {
+            None => self.emission,
+            Some(texture) => self.emission * texture.rgb(query).max(Vec3::ZERO),
         }
     }
 

@@ -1,12 +1,15 @@
 //! glTF 2.0 (`.gltf` with external or embedded buffers, and `.glb`) via the `gltf` crate.
 //!
-//! The default scene's node hierarchy is walked and flattened: every mesh a node uses is added
-//! with the node's world transform. Triangles keep the file's order (nodes depth first, then
-//! primitives), positions and normals are transformed (normals by the inverse transpose), and a
-//! transform that mirrors reverses the winding, so that front faces stay front faces. Each
-//! primitive's material gives a [`MeshMaterial`]: the metallic-roughness material's base colour
-//! factor as the diffuse colour, the emissive factor (times `KHR_materials_emissive_strength`)
-//! as emission. The first perspective camera, in node order, becomes the scene's camera.
+//! The default scene's node hierarchy is walked. A mesh that one node uses is added with the
+//! node's world transform; a mesh that several nodes use is kept once, in its own space, with
+//! each node's transform ([`InstancedMesh`]: instancing, under a two-level BVH). Triangles keep
+//! the file's order (nodes depth first, then primitives), positions and normals are
+//! transformed (normals by the inverse transpose), and a transform that mirrors reverses the
+//! winding, so that front faces stay front faces. Each primitive's material gives a
+//! [`MeshMaterial`]: the metallic-roughness material's base colour factor as the diffuse
+//! colour, the emissive factor (times `KHR_materials_emissive_strength`) as emission, and
+//! their textures (base colour, metallic-roughness, normal, emissive). The first perspective
+//! camera, in node order, becomes the scene's camera.
 //!
 //! Mistakes are one line naming the file and the part: a primitive that is not triangles
 //! (points, lines, strips are refused, not guessed at), an accessor whose data lies outside its
@@ -105,6 +108,10 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
             textures.base_color = read(pbr.base_color_texture(), "base colour", true);
             textures.metallic_roughness =
                 read(pbr.metallic_roughness_texture(), "metallic-roughness", false);
+            // Only read where something emits: the texture multiplies emissiveFactor.
+            if m.emissive_factor().iter().any(|&e| e > 0.0) {
+                textures.emission = read(m.emissive_texture(), "emissive", true);
+            }
             match m.alpha_mode() {
                 gltf::material::AlphaMode::Opaque => {}
                 gltf::material::AlphaMode::Mask => {
@@ -116,14 +123,6 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
                     path.display(),
                     quoted(&name)
                 )),
-            }
-            if m.emissive_texture().is_some() {
-                warnings.push(format!(
-                    "{}: material {}: its emissive texture is not supported; it emits its \
-                     emissiveFactor evenly",
-                    path.display(),
-                    quoted(&name)
-                ));
             }
             if let Some(normal) = m.normal_texture() {
                 let texture = images.texture(&normal.texture(), normal.tex_coord(), None, false);
