@@ -11,7 +11,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use crate::geometry::SurfaceInteraction;
-use crate::ray::{Ray, SurfacePoint};
+use crate::ray::{Ray, SurfacePoint, offset_ray_origin};
 use crate::sampling::{
     DiscreteDistribution, sample_spherical_triangle, spherical_triangle_area,
     square_to_uniform_sphere, square_to_uniform_triangle, uniform_sphere_pdf,
@@ -121,10 +121,14 @@ enum SampledLight {
         position: Vec3,
         intensity: Vec3,
     },
-    /// `texture`: an index into [`LightSet::textures`], or `u32::MAX` for an even emitter.
+    /// `texture`: an index into [`LightSet::textures`], or `u32::MAX` for an even emitter;
+    /// `error`: a bound on the rounding of its points ([`Geometry::point_error_bound`]).
+    ///
+    /// [`Geometry::point_error_bound`]: crate::geometry::Geometry::point_error_bound
     Triangle {
         corners: [Vec3; 3],
         normal: Vec3,
+        error: Vec3,
         area: f32,
         radiance: Vec3,
         texture: u32,
@@ -194,7 +198,7 @@ impl LightSet {
                     None => u32::MAX,
                     Some(texture) => {
                         let uvs = scene.geometry.corner_uvs(i);
-                        texture_means.push(mean_over(texture, corners, uvs));
+                        texture_means.push(mean_over(texture, material.emission, corners, uvs));
                         textures.push((texture.clone(), uvs));
                         textures.len() as u32 - 1
                     }
@@ -202,6 +206,7 @@ impl LightSet {
                 lights.push(SampledLight::Triangle {
                     corners,
                     normal: scene.geometry.normal(i),
+                    error: scene.geometry.point_error_bound(i),
                     area,
                     radiance: material.emission,
                     texture,
@@ -213,8 +218,8 @@ impl LightSet {
             .map(|light| match light {
                 SampledLight::Point { intensity, .. } => 4.0 * PI * mean(*intensity),
                 SampledLight::Triangle { area, radiance, texture, .. } => {
-                    let pattern = texture_means.get(*texture as usize).copied().unwrap_or(1.0);
-                    PI * area * mean(*radiance) * pattern
+                    let textured = texture_means.get(*texture as usize).copied();
+                    PI * area * textured.unwrap_or_else(|| mean(*radiance))
                 }
                 // Through a disk the size of the scene (PBR 4th ed. §12.5).
                 SampledLight::Environment { radiance } => PI * radius * radius * mean(*radiance),
@@ -297,7 +302,7 @@ impl LightSet {
                     shadow_ray: point.spawn_ray_to(position),
                 })
             }
-            SampledLight::Triangle { corners, normal, area, radiance, texture } => {
+            SampledLight::Triangle { corners, normal, error, area, radiance, texture } => {
                 let [v0, v1, v2] = corners;
                 let solid_angle = self.solid_angle(corners, point.p);
                 let ([b0, b1, b2], solid_angle_pdf) = match solid_angle {
@@ -313,7 +318,11 @@ impl LightSet {
                 if cos_light <= 0.0 || !distance_squared.is_normal() {
                     return None;
                 }
-                let mut shadow_ray = point.spawn_ray_to(target);
+                // Both ends leave their surfaces (PBR 4th ed.'s `SpawnRayTo` between two
+                // surface points): the light's end by its own rounding bound, which for an
+                // instance far from where it is stored can outgrow the relative shortening.
+                let end = SurfacePoint { p: target, error, normal };
+                let mut shadow_ray = point.spawn_ray_to(offset_ray_origin(&end, point.p - target));
                 shadow_ray.t_max = SHADOW_RAY_LENGTH;
                 let pdf = match solid_angle {
                     Some(_) => solid_angle_pdf,
@@ -350,7 +359,7 @@ impl LightSet {
         if light == u32::MAX {
             return (Vec3::ZERO, 0.0);
         }
-        let SampledLight::Triangle { corners, normal, area, radiance, texture } =
+        let SampledLight::Triangle { corners, normal, area, radiance, texture, .. } =
             self.lights[light as usize]
         else {
             unreachable!("triangle_light indexes triangle lights");
@@ -393,30 +402,74 @@ fn mean(c: Vec3) -> f32 {
     c.element_sum() / 3.0
 }
 
-/// The mean of a texture's colour (the mean of its channels) over a triangle, from a grid of
-/// 21 points over it: the power estimate that picks among lights. A texture that is dark at
-/// every grid point but not everywhere still shines, only found less often by light sampling.
-fn mean_over(texture: &Texture, corners: [Vec3; 3], uvs: [Vec2; 3]) -> f32 {
-    const N: u32 = 5;
-    let (mut sum, mut count) = (0.0, 0);
-    for i in 0..=N {
-        for j in 0..=N - i {
-            let (b1, b2) = (i as f32 / N as f32, j as f32 / N as f32);
-            let b0 = 1.0 - b1 - b2;
-            let uv = b0 * uvs[0] + b1 * uvs[1] + b2 * uvs[2];
-            let p = b0 * corners[0] + b1 * corners[1] + b2 * corners[2];
-            let value = texture.rgb(&TextureQuery { uv, p, footprint: 0.0 }).max(Vec3::ZERO);
-            sum += mean(value);
-            count += 1;
+/// The mean of `radiance` times a texture over a triangle (the mean of its channels): the
+/// power estimate that picks among lights. The texture is read at the centres of the 64
+/// triangles of an 8 × 8 subdivision, each through a footprint as wide as one of them (a
+/// mip-mapped image averages over it, so a small bright spot between centres still counts),
+/// and the estimate is kept above 1% of the untextured power, so that an emitter the grid
+/// misses is still sampled now and then (the choice among lights only steers samples: any
+/// positive power leaves the estimate unbiased).
+fn mean_over(texture: &Texture, radiance: Vec3, corners: [Vec3; 3], uvs: [Vec2; 3]) -> f32 {
+    const N: u32 = 8;
+    let uv_area = 0.5 * (uvs[1] - uvs[0]).perp_dot(uvs[2] - uvs[0]).abs();
+    let footprint = (2.0 * uv_area).sqrt() / N as f32;
+    let mut sum = 0.0;
+    let mut read = |b1: f32, b2: f32| {
+        let b0 = 1.0 - b1 - b2;
+        let uv = b0 * uvs[0] + b1 * uvs[1] + b2 * uvs[2];
+        let p = b0 * corners[0] + b1 * corners[1] + b2 * corners[2];
+        let value = texture.rgb(&TextureQuery { uv, p, footprint }).max(Vec3::ZERO);
+        sum += mean(radiance * value);
+    };
+    // Cell (i, j) of the subdivision: its upright triangle's centre, and where it has one,
+    // its inverted neighbour's.
+    let n = N as f32;
+    for i in 0..N {
+        for j in 0..N - i {
+            let (i, j) = (i as f32, j as f32);
+            read((i + 1.0 / 3.0) / n, (j + 1.0 / 3.0) / n);
+            if i + j + 2.0 <= n {
+                read((i + 2.0 / 3.0) / n, (j + 2.0 / 3.0) / n);
+            }
         }
     }
-    let mean = sum / count as f32;
-    if mean.is_finite() { mean } else { 0.0 }
+    let estimate = sum / (N * N) as f32;
+    let floor = 0.01 * mean(radiance);
+    if estimate.is_finite() { estimate.max(floor) } else { floor }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `mean_over` weighs the texture by the emission channel by channel, finds a pattern's
+    /// share of the triangle, and keeps a floor for a pattern its points miss.
+    #[test]
+    fn a_textured_emitter_s_power_is_its_mean_emission() {
+        use crate::texture::{ImageTexture, TextureImage, Wrap};
+        use std::sync::Arc;
+        let image = |texels: Vec<[f32; 4]>, width: u32| {
+            let image = TextureImage::from_rgba_f32("t", width, 1, texels);
+            let texture = ImageTexture::new(Arc::new(image));
+            Texture::Image(ImageTexture { wrap: [Wrap::Clamp; 2], ..texture })
+        };
+        let corners = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        // A constant texture scales the emission.
+        let grey = image(vec![[0.5, 0.25, 1.0, 1.0]], 1);
+        let emission = Vec3::new(2.0, 4.0, 1.0);
+        let expected = mean(emission * Vec3::new(0.5, 0.25, 1.0));
+        assert!((mean_over(&grey, emission, corners, uvs) - expected).abs() < 1e-6);
+        // Red emission through a blue texture emits nothing: only the floor remains.
+        let blue = image(vec![[0.0, 0.0, 1.0, 1.0]], 1);
+        let red = Vec3::new(3.0, 0.0, 0.0);
+        assert_eq!(mean_over(&blue, red, corners, uvs), 0.01 * mean(red));
+        // White where u < ½ (256 texels): the triangle's part with u < ½ is ¾ of its area.
+        let texels = (0..256).map(|x| if x < 128 { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] });
+        let half = image(texels.collect(), 256);
+        let share = mean_over(&half, Vec3::ONE, corners, uvs);
+        assert!((share - 0.75).abs() < 0.02, "{share}");
+    }
 
     #[test]
     fn several_environments_shine_as_their_sum() {

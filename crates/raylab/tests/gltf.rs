@@ -375,3 +375,58 @@ fn an_emissive_texture_shines_in_its_pattern() {
     let emitted = scene.materials[0].emission_at(&query);
     assert!(emitted.abs_diff_eq(Vec3::new(1.0, 0.5, 0.0) * base, 1e-6), "{emitted}");
 }
+
+/// `KHR_texture_transform` on a normal texture (which the `gltf` crate gives no reader for)
+/// moves the normal map as the same transform on the base colour texture moves the colours;
+/// a malformed one leaves the normal map out with a warning, and the model loads.
+#[test]
+fn a_normal_texture_s_transform_is_read() {
+    use raylab::texture::Texture;
+    let transform =
+        r#"{"KHR_texture_transform": {"offset": [0.25, 0.5], "rotation": 0.3, "scale": [2, 3]}}"#;
+    let (dir, path) = broken_box(|json| {
+        *json = json
+            .replace(
+                r#""index": 0"#,
+                &format!(r#""index": 0, "extensions": {transform}"#),
+            )
+            .replace(
+                r#""name": "Texture""#,
+                &format!(
+                    r#""name": "Texture", "normalTexture": {{"index": 0, "extensions": {transform}}}"#
+                ),
+            );
+    });
+    std::fs::copy(data("BoxTextured/CesiumLogoFlat.png"), dir.path().join("CesiumLogoFlat.png"))
+        .unwrap();
+    let loaded = load_mesh(&path).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let textures = &loaded.mesh.materials[0].textures;
+    let (Some(Texture::Image(base)), Some(normal)) = (&textures.base_color, &textures.normal)
+    else {
+        panic!("both textures: {textures:?}");
+    };
+    let Texture::Image(normal) = &normal.texture else { panic!("an image") };
+    assert_ne!(base.transform, glam::Affine2::IDENTITY, "the base colour's transform is read");
+    assert_eq!(normal.transform, base.transform);
+
+    let (dir, path) = broken_box(|json| {
+        *json = json.replace(
+            r#""name": "Texture""#,
+            r#""name": "Texture", "normalTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": 2}}}"#,
+        );
+    });
+    std::fs::copy(data("BoxTextured/CesiumLogoFlat.png"), dir.path().join("CesiumLogoFlat.png"))
+        .unwrap();
+    let loaded = load_mesh(&path).unwrap();
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(
+        loaded.warnings[0].ends_with(
+            "material \"Texture\": its normal texture is ignored: its KHR_texture_transform's \
+             scale is not two numbers"
+        ),
+        "{}",
+        loaded.warnings[0]
+    );
+    assert!(loaded.mesh.materials[0].textures.normal.is_none());
+}

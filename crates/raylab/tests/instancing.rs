@@ -418,3 +418,167 @@ fn a_degenerate_row_of_instances_is_traced_exactly() {
     let single: Vec<Option<Hit>> = rays.iter().map(|r| bvh.closest_hit(r)).collect();
     assert_eq!(batch, single);
 }
+
+/// Placements that take a mesh stored far from the origin (a CAD part modelled in place) back
+/// near it, apart: a translation, the same after a turn, and a mirror with a stretch.
+fn placed_back(offset: Vec3) -> Vec<Affine3A> {
+    let back = Affine3A::from_translation(-offset);
+    vec![
+        back,
+        Affine3A::from_rotation_translation(
+            Quat::from_euler(glam::EulerRot::XYZ, 0.3, 0.7, 1.1),
+            Vec3::new(4.0, 0.0, 0.0),
+        ) * back,
+        Affine3A::from_scale_rotation_translation(
+            Vec3::new(-1.5, 0.5, 1.0),
+            Quat::IDENTITY,
+            Vec3::new(0.0, 0.0, 6.0),
+        ) * back,
+    ]
+}
+
+/// The cube stored around `offset` and drawn back near the origin by each of `placed_back`'s
+/// placements.
+fn far_stored_cubes(offset: Vec3) -> Geometry {
+    let mut cube = closed_cube(4);
+    for p in &mut cube.positions {
+        *p = *p * Vec3::new(1.0, 0.7, 1.3) + offset;
+    }
+    let mut geometry = Geometry::new();
+    geometry.add_instanced_mesh(&cube, &placed_back(offset), |_| 0);
+    geometry
+}
+
+/// Rays that graze the instances' world boxes: along each axis, just inside and just outside
+/// each face, where the rounding of the ray's way into object space (an ulp of the stored
+/// coordinates, far larger than one of the world's) decides hit or miss.
+fn grazing_rays(geometry: &Geometry) -> Vec<Ray> {
+    let mut rays = Vec::new();
+    let mut rng = Rng(23);
+    for i in 0..geometry.len() {
+        let [a, b, _] = geometry.triangle(i);
+        for step in -8..=8 {
+            let point = a + (b - a) * rng.next() + Vec3::splat(step as f32 * 3e-5);
+            for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+                rays.push(Ray::new(point - 5.0 * axis, axis));
+                rays.push(Ray::new(point + 5.0 * axis, -axis));
+            }
+        }
+    }
+    rays
+}
+
+/// A mesh stored 5000 units away and placed back: the top level's boxes and margins still let
+/// every ray reach the instance the reference finds it in (grazing rays included), single and
+/// batched.
+#[test]
+fn far_stored_instances_are_traced_exactly() {
+    let geometry = far_stored_cubes(Vec3::new(5000.0, 3000.0, -2000.0));
+    let bvh = SceneBvh::build(&geometry).unwrap();
+    assert!(matches!(bvh, SceneBvh::Instanced(_)));
+    let mut rays = hostile_rays(&geometry, 2000, 29);
+    rays.extend(grazing_rays(&geometry));
+    let mut hits = 0;
+    for ray in &rays {
+        let expected = reference_hit(&geometry, ray);
+        hits += expected.is_some() as usize;
+        assert_eq!(bvh.closest_hit(ray), expected, "{ray:?}");
+        assert_eq!(bvh.occluded(ray), expected.is_some(), "{ray:?}");
+    }
+    assert!(hits > rays.len() / 4, "only {hits} of {} rays hit", rays.len());
+    let mut batch = vec![None; rays.len()];
+    bvh.closest_hits(&rays, &mut batch);
+    let single: Vec<Option<Hit>> = rays.iter().map(|r| bvh.closest_hit(r)).collect();
+    assert_eq!(batch, single);
+}
+
+/// Rays leaving a surface point of a far-stored instance, back the way they came or toward a
+/// point above it, never find the surface they leave: the point's error bound covers the
+/// rounding of the placement and of the ray's way back into object space, where an ulp of
+/// the stored coordinates is thousands of the world's.
+#[test]
+fn rays_leaving_far_stored_instances_do_not_hit_their_own_surface() {
+    for offset in [Vec3::new(5000.0, 3000.0, -2000.0), Vec3::new(-7e4, 2e4, 9e4)] {
+        let geometry = far_stored_cubes(offset);
+        let bvh = SceneBvh::build(&geometry).unwrap();
+        let mut rng = Rng(31);
+        let (mut tested, mut self_hits, mut shadowed) = (0, 0, 0);
+        for i in 0..geometry.len() {
+            let [a, b, c] = geometry.triangle(i);
+            let normal = (b - a).cross(c - a).normalize();
+            for _ in 0..40 {
+                let (u, v) = (rng.next(), rng.next());
+                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                let target = a + u * (b - a) + v * (c - a);
+                // From outside the closed cube, in front of the face.
+                let origin = target + 0.5 * normal + 0.1 * rng.in_box(-Vec3::ONE, Vec3::ONE);
+                let Some(hit) = bvh.closest_hit(&Ray::new(origin, target - origin)) else {
+                    continue;
+                };
+                if hit.triangle as usize != i {
+                    continue;
+                }
+                tested += 1;
+                let point = geometry.surface_point(&hit);
+                // Out on the side the ray came from (cosine-ish spread about the normal).
+                let side = if point.normal.dot(origin - point.p) > 0.0 { 1.0 } else { -1.0 };
+                let mut direction = side * point.normal + 0.9 * rng.in_box(-Vec3::ONE, Vec3::ONE);
+                if direction.dot(point.normal) * side <= 0.0 {
+                    direction = side * point.normal;
+                }
+                self_hits +=
+                    bvh.closest_hit(&point.spawn_ray(direction))
+                        .is_some_and(|h| h.triangle == hit.triangle) as u32;
+                shadowed += bvh.occluded(&point.spawn_ray_to(point.p + side * point.normal)) as u32;
+            }
+        }
+        assert!(tested > geometry.len() * 20, "{offset}: only {tested} points");
+        assert_eq!((self_hits, shadowed), (0, 0), "{offset}: of {tested} points");
+    }
+}
+
+/// A light stored far away and placed back: light sampling from a floor beneath it finds it
+/// unoccluded (the shadow ray stops short of the light's own surface by its error bound).
+#[test]
+fn a_far_stored_instanced_light_is_not_occluded_by_itself() {
+    let offset = Vec3::new(6e4, -4e4, 3e4);
+    let quad = Mesh {
+        name: "light".into(),
+        positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .map(|(x, z)| Vec3::new(x, -1.0, z) + offset)
+            .to_vec(),
+        // Facing +y, down onto the floor (the lab's y points down).
+        triangles: vec![[0, 2, 1], [0, 3, 2]],
+        ..Mesh::default()
+    };
+    let mut geometry = Geometry::new();
+    let turn = Affine3A::from_rotation_y(0.4);
+    let placements = [
+        turn * Affine3A::from_translation(-offset),
+        Affine3A::from_translation(-offset + 3.0 * Vec3::X),
+    ];
+    geometry.add_instanced_mesh(&quad, &placements, |_| 1);
+    let emitter =
+        raylab::Material { emission: Vec3::ONE, ..raylab::Material::diffuse("light", Vec3::ZERO) };
+    let scene = Scene {
+        name: "far light".into(),
+        geometry,
+        materials: vec![raylab::Material::diffuse("floor", Vec3::splat(0.5)), emitter],
+        ..Scene::default()
+    };
+    let bvh = SceneBvh::build(&scene.geometry).unwrap();
+    let lights = raylab::LightSet::new(&scene);
+    let mut rng = Rng(37);
+    let (mut samples, mut occluded) = (0, 0);
+    for _ in 0..4000 {
+        let p = Vec3::new(4.0 * rng.next() - 1.0, 0.5 + rng.next(), 4.0 * rng.next() - 2.0);
+        let point = raylab::SurfacePoint { p, error: Vec3::splat(1e-6), normal: -Vec3::Y };
+        let u = glam::Vec2::new(rng.next(), rng.next());
+        if let Some(sample) = lights.sample(&point, rng.next(), u) {
+            samples += 1;
+            occluded += bvh.occluded(&sample.shadow_ray) as u32;
+        }
+    }
+    assert!(samples > 3000, "only {samples} samples");
+    assert_eq!(occluded, 0, "of {samples} samples");
+}

@@ -33,18 +33,38 @@ pub struct TwoLevel<A> {
     placed: Vec<Placed>,
     /// The top level, depth first: an inner node's left child follows it.
     nodes: Vec<Node>,
-    /// `RAY_ERROR · max cond(M)` over the placements (0 without any): a ray with origin `o`
-    /// tests the top level's boxes grown by `margin · (|o|∞ + extent)` (see [`Self::pad`]).
-    margin: f32,
-    /// The largest coordinate of any instance's box.
-    extent: f32,
 }
 
-/// How far, in units of `f32::EPSILON · cond(M) · (|o|∞ + extent)`, the world ray and the
+/// How far, in units of `f32::EPSILON · cond(M) · (|o|∞ + reach)`, the world ray and the
 /// placed image of its object-space copy may drift apart: the rounding of `M⁻¹` itself and of
-/// `M⁻¹·o` (a few ulps each, times the condition number when mapped back) and of `M⁻¹·d` over
-/// the ray's reach inside the scene (at most `|o|∞ + extent`), with a wide margin.
+/// `M⁻¹·o` (a few ulps each, times the condition number when mapped back), of `M⁻¹`'s
+/// translation (`reach` includes `|T|∞`) and of `M⁻¹·d` over the ray's way to the instance
+/// (`reach` includes the box's coordinates), with a wide margin.
 const RAY_ERROR: f32 = 64.0;
+
+/// How much a top-level box grows for a ray from `o`: `scale · (|o|∞ + reach)`, enough that a
+/// ray which hits a triangle in an instance's space always finds the instance's box in the
+/// world, whatever the rounding of the transform (the bottom level decides on the
+/// object-space ray, exactly as the reference does). An inner node's is the largest of its
+/// subtree's, so it grows at least as much as any box below it.
+#[derive(Clone, Copy, Debug, Default)]
+struct Margin {
+    /// `RAY_ERROR · ε · cond(M)`; 0 for triangles stored in the world.
+    scale: f32,
+    /// The largest coordinate of the box or of `M`'s translation.
+    reach: f32,
+}
+
+impl Margin {
+    #[inline(always)]
+    fn pad(&self, origin_size: f32) -> f32 {
+        self.scale * (origin_size + self.reach)
+    }
+
+    fn max(self, other: Margin) -> Margin {
+        Margin { scale: self.scale.max(other.scale), reach: self.reach.max(other.reach) }
+    }
+}
 
 /// One bottom-level accelerator and how its hits' indices become scene triangles.
 struct Bottom<A> {
@@ -64,10 +84,13 @@ struct Placed {
     /// How the bottom's triangles are placed, or `None` for world-space triangles.
     placement: Option<Placement>,
     bounds: Bounds,
+    margin: Margin,
 }
 
 struct Node {
     bounds: Bounds,
+    /// The largest margin below it.
+    margin: Margin,
     /// A leaf's first entry in `placed`, or an inner node's right child.
     index: u32,
     /// A leaf's entry count; 0 for an inner node.
@@ -97,7 +120,13 @@ impl<A: Accelerator> TwoLevel<A> {
         }
         if !world.is_empty() {
             let bounds = world.iter().fold(Bounds::EMPTY, |b, &t| b.union(Bounds::of_triangle(t)));
-            placed.push(Placed { bottom: 0, first: 0, placement: None, bounds: padded(bounds) });
+            placed.push(Placed {
+                bottom: 0,
+                first: 0,
+                placement: None,
+                bounds: padded(bounds, 0.0),
+                margin: Margin::default(),
+            });
             bottoms.push(Bottom { accel: build(&world)?, triangles: world.len(), scene_ids });
         }
         drop(world);
@@ -122,37 +151,34 @@ impl<A: Accelerator> TwoLevel<A> {
                     entry
                 }
             };
+            let (m, translation) = (&placement.to_world, placement.to_world.translation);
+            // The corners `M·p` round by about ε (|A|·|p| + |T|).
+            let size = norm(&m.matrix3) * local.min.abs().max(local.max.abs()).max_element()
+                + translation.abs().max_element();
+            let bounds = padded(transformed(&local, m), size);
+            let margin = Margin {
+                scale: RAY_ERROR
+                    * f32::EPSILON
+                    * norm(&m.matrix3)
+                    * norm(&placement.to_object.matrix3),
+                reach: bounds.min.abs().max(bounds.max.abs()).max_element()
+                    + translation.abs().max_element(),
+            };
             placed.push(Placed {
                 bottom,
                 first: instance.first,
                 placement: Some(*placement),
-                bounds: padded(transformed(&local, &placement.to_world)),
+                bounds,
+                margin,
             });
         }
         placed.retain(|p| !p.bounds.is_empty());
-        let norm = |m: &glam::Mat3A| {
-            let rows = m.transpose();
-            [rows.x_axis, rows.y_axis, rows.z_axis]
-                .map(|r| r.abs().element_sum())
-                .into_iter()
-                .fold(0.0, f32::max)
-        };
-        let condition = placed
-            .iter()
-            .filter_map(|p| p.placement.as_ref())
-            .map(|p| norm(&p.to_world.matrix3) * norm(&p.to_object.matrix3))
-            .fold(0.0, f32::max);
-        let extent = placed
-            .iter()
-            .map(|p| p.bounds.min.abs().max(p.bounds.max.abs()).max_element())
-            .fold(0.0, f32::max);
-        let margin = RAY_ERROR * f32::EPSILON * condition;
         let mut nodes = Vec::new();
         if !placed.is_empty() {
             let n = placed.len();
             build_top(&mut placed, (0, n), 0, &mut nodes);
         }
-        Ok(TwoLevel { bottoms, placed, nodes, margin, extent })
+        Ok(TwoLevel { bottoms, placed, nodes })
     }
 
     /// The triangles the bottom levels hold: each stored mesh's once, however many instances
@@ -181,15 +207,6 @@ impl<A: Accelerator> TwoLevel<A> {
         std::mem::size_of_val(self.nodes.as_slice())
             + std::mem::size_of_val(self.placed.as_slice())
             + self.bottoms.iter().map(|b| 4 * b.scene_ids.len()).sum::<usize>()
-    }
-
-    /// How much the top level's boxes grow for a ray from `origin`: enough that a ray which
-    /// hits a triangle in the instance's space always finds the instance's box in the world,
-    /// whatever the rounding of the transform (the bottom level decides on the object-space
-    /// ray, exactly as the reference does).
-    #[inline]
-    fn pad(&self, origin: Vec3) -> f32 {
-        self.margin * (origin.abs().max_element() + self.extent)
     }
 
     /// The ray in `placed`'s space, limited to `t < t_max`.
@@ -228,12 +245,13 @@ impl<A: Accelerator> TwoLevel<A> {
             return;
         }
         let test = RayBoxTest::new(ray);
-        let pad = self.pad(ray.origin);
-        let grow = |b: &Bounds| grown(b, pad);
+        let size = ray.origin.abs().max_element();
+        let grow = |b: &Bounds, margin: &Margin| grown(b, margin.pad(size));
         let mut t_max = ray.t_max;
         let mut stack = [(0u32, 0f32); STACK];
         let mut len = 0;
-        if let Some(t) = test.enter(&grow(&self.nodes[0].bounds), t_max) {
+        let root = &self.nodes[0];
+        if let Some(t) = test.enter(&grow(&root.bounds, &root.margin), t_max) {
             stack[0] = (0, t);
             len = 1;
         }
@@ -247,7 +265,7 @@ impl<A: Accelerator> TwoLevel<A> {
             if node.count > 0 {
                 let range = node.index as usize..(node.index + node.count) as usize;
                 for placed in &self.placed[range] {
-                    if test.enter(&grow(&placed.bounds), t_max).is_some() {
+                    if test.enter(&grow(&placed.bounds, &placed.margin), t_max).is_some() {
                         match visit(placed) {
                             Some(t) => t_max = t_max.min(t),
                             None => return,
@@ -257,8 +275,9 @@ impl<A: Accelerator> TwoLevel<A> {
                 continue;
             }
             let (left, right) = (index + 1, node.index);
-            let near = test.enter(&grow(&self.nodes[left as usize].bounds), t_max);
-            let far = test.enter(&grow(&self.nodes[right as usize].bounds), t_max);
+            let (left_node, right_node) = (&self.nodes[left as usize], &self.nodes[right as usize]);
+            let near = test.enter(&grow(&left_node.bounds, &left_node.margin), t_max);
+            let far = test.enter(&grow(&right_node.bounds, &right_node.margin), t_max);
             let mut push = |entry: (u32, f32)| {
                 stack[len] = entry;
                 len += 1;
@@ -298,25 +317,25 @@ impl<A: Accelerator> TwoLevel<A> {
             return;
         }
         let mut tests = [None; PACKET];
-        let mut pads = [0.0f32; PACKET];
+        let mut sizes = [0.0f32; PACKET];
         let mut live = 0u64;
         for (i, ray) in rays.iter().enumerate() {
             if ray.origin.is_finite() && ray.direction.is_finite() {
                 tests[i] = Some(RayBoxTest::new(ray));
-                pads[i] = self.pad(ray.origin);
+                sizes[i] = ray.origin.abs().max_element();
                 live |= 1 << i;
             }
         }
-        let packet_pad = pads.iter().fold(0.0, |a: f32, &b| a.max(b));
+        let packet_size = sizes.iter().fold(0.0, |a: f32, &b| a.max(b));
         // A bound on the whole packet where the rays share their directions' signs: a box it
         // misses is missed by every ray, at the cost of one test.
         let frustum = Frustum::of(tests[..rays.len()].iter().flatten().copied());
         let packet_t_max = (0..rays.len())
             .map(&t_max)
             .fold(f32::NEG_INFINITY, |a, t| if t.is_nan() { f32::INFINITY } else { a.max(t) });
-        let reaching = |bounds: &Bounds, mask: u64| {
+        let reaching = |bounds: &Bounds, margin: &Margin, mask: u64| {
             if let Some(frustum) = &frustum
-                && frustum.enter(&grown(bounds, packet_pad), packet_t_max).is_none()
+                && frustum.enter(&grown(bounds, margin.pad(packet_size)), packet_t_max).is_none()
             {
                 return 0;
             }
@@ -326,7 +345,7 @@ impl<A: Accelerator> TwoLevel<A> {
                 let i = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
                 if let Some(test) = &tests[i]
-                    && test.enter(&grown(bounds, pads[i]), t_max(i)).is_some()
+                    && test.enter(&grown(bounds, margin.pad(sizes[i])), t_max(i)).is_some()
                 {
                     out |= 1 << i;
                 }
@@ -335,7 +354,7 @@ impl<A: Accelerator> TwoLevel<A> {
         };
         let mut stack = [(0u32, 0u64); STACK];
         let mut len = 0;
-        let root = reaching(&self.nodes[0].bounds, live);
+        let root = reaching(&self.nodes[0].bounds, &self.nodes[0].margin, live);
         if root != 0 {
             stack[0] = (0, root);
             len = 1;
@@ -347,7 +366,7 @@ impl<A: Accelerator> TwoLevel<A> {
             if node.count > 0 {
                 let range = node.index as usize..(node.index + node.count) as usize;
                 for placed in &self.placed[range] {
-                    let mask = reaching(&placed.bounds, mask);
+                    let mask = reaching(&placed.bounds, &placed.margin, mask);
                     if mask != 0 {
                         visit(placed, mask);
                     }
@@ -355,7 +374,8 @@ impl<A: Accelerator> TwoLevel<A> {
                 continue;
             }
             for child in [node.index, index + 1] {
-                let mask = reaching(&self.nodes[child as usize].bounds, mask);
+                let child_node = &self.nodes[child as usize];
+                let mask = reaching(&child_node.bounds, &child_node.margin, mask);
                 if mask != 0 {
                     stack[len] = (child, mask);
                     len += 1;
@@ -472,6 +492,15 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
     }
 }
 
+/// The infinity norm (largest row sum of magnitudes) of `m`.
+fn norm(m: &glam::Mat3A) -> f32 {
+    let rows = m.transpose();
+    [rows.x_axis, rows.y_axis, rows.z_axis]
+        .map(|r| r.abs().element_sum())
+        .into_iter()
+        .fold(0.0, f32::max)
+}
+
 /// `bounds` grown by `pad` on every side.
 #[inline]
 fn grown(bounds: &Bounds, pad: f32) -> Bounds {
@@ -479,13 +508,16 @@ fn grown(bounds: &Bounds, pad: f32) -> Bounds {
 }
 
 /// A box grown by a small margin: the instance's transform and the ray's are both rounded, so
-/// an object-space hit at the very edge of the mesh must still find its world box.
-fn padded(bounds: Bounds) -> Bounds {
+/// an object-space hit at the very edge of the mesh must still find its world box. `size`
+/// bounds the terms its corners were computed from (`|A|·|p| + |T|`, 0 for corners as
+/// stored): where a far-off mesh is placed back near the origin, they dwarf the result.
+fn padded(bounds: Bounds, size: f32) -> Bounds {
     if bounds.is_empty() {
         return bounds;
     }
     let scale = (bounds.max - bounds.min).max_element()
-        + bounds.min.abs().max(bounds.max.abs()).max_element();
+        + bounds.min.abs().max(bounds.max.abs()).max_element()
+        + size;
     let pad = Vec3::splat(scale * 1e-5);
     Bounds { min: bounds.min - pad, max: bounds.max + pad }
 }
@@ -522,8 +554,9 @@ fn build_top(
     nodes: &mut Vec<Node>,
 ) -> u32 {
     let bounds = placed[start..end].iter().fold(Bounds::EMPTY, |b, p| b.union(p.bounds));
+    let margin = placed[start..end].iter().fold(Margin::default(), |m, p| m.max(p.margin));
     let index = nodes.len() as u32;
-    nodes.push(Node { bounds, index: start as u32, count: (end - start) as u32 });
+    nodes.push(Node { bounds, margin, index: start as u32, count: (end - start) as u32 });
     if end - start <= LEAF_SIZE {
         return index;
     }

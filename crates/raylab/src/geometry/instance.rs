@@ -28,9 +28,10 @@
 //! the corners (normals, texture coordinates, tangents) follows that order. A hit found in object
 //! space swaps its barycentric `b1` and `b2` to match ([`Placement::world_hit`]).
 
-use glam::{Affine3A, Mat3, Vec3, Vec4};
+use glam::{Affine3A, DAffine3, DVec3, Mat3, Mat3A, Vec3, Vec4};
 
 use crate::accel::Hit;
+use crate::float::gamma;
 
 /// How an instance's stored triangles reach the world: an invertible affine map.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,6 +44,57 @@ pub struct Placement {
     normal_matrix: Mat3,
     /// Whether the map is a mirror (negative determinant).
     pub mirrored: bool,
+    /// What [`world_point`](Self::world_point) needs to bound a ray's round trip through the
+    /// placement (see there).
+    round_trip: RoundTrip,
+}
+
+/// The rounding of a point carried into object space and back (see
+/// [`Placement::world_point`]), for a placement `M = (A, T)` and its computed inverse
+/// `M⁻¹ = (B, T')`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RoundTrip {
+    /// `|A|`, element by element: it takes an object-space error bound to the world.
+    abs_linear: Mat3A,
+    /// `‖B‖∞` and `‖T'‖∞`: the size of the terms `B·o + T'` rounds.
+    inverse_norm: f32,
+    inverse_translation: f32,
+    /// `‖A·B − I‖∞` and `‖A·T' + T‖∞`, exactly (in f64, rounded up): how far `M·M⁻¹` is from
+    /// the identity, the inverse being rounded.
+    residual: f32,
+    translation_residual: f32,
+}
+
+impl RoundTrip {
+    fn of(to_world: &Affine3A, to_object: &Affine3A) -> RoundTrip {
+        let norm = |m: &Mat3A| {
+            let rows = m.transpose();
+            [rows.x_axis, rows.y_axis, rows.z_axis]
+                .map(|r| r.abs().element_sum())
+                .into_iter()
+                .fold(0.0, f32::max)
+        };
+        let wide = |m: &Affine3A| DAffine3::from_cols_array(&m.to_cols_array().map(f64::from));
+        let (m, inverse) = (wide(to_world), wide(to_object));
+        let product = m * inverse;
+        let rows = product.matrix3.transpose();
+        let residual = [rows.x_axis - DVec3::X, rows.y_axis - DVec3::Y, rows.z_axis - DVec3::Z]
+            .map(|r| r.abs().element_sum())
+            .into_iter()
+            .fold(0.0, f64::max);
+        let up = |x: f64| (x * (1.0 + 1e-6)) as f32;
+        RoundTrip {
+            abs_linear: Mat3A::from_cols(
+                to_world.matrix3.x_axis.abs(),
+                to_world.matrix3.y_axis.abs(),
+                to_world.matrix3.z_axis.abs(),
+            ),
+            inverse_norm: norm(&to_object.matrix3),
+            inverse_translation: to_object.translation.abs().max_element(),
+            residual: up(residual),
+            translation_residual: up(product.translation.abs().max_element()),
+        }
+    }
 }
 
 impl Placement {
@@ -59,7 +111,33 @@ impl Placement {
             to_object,
             normal_matrix: to_world.matrix3.inverse().transpose().into(),
             mirrored: det < 0.0,
+            round_trip: RoundTrip::of(&to_world, &to_object),
         })
+    }
+
+    /// A point found in object space, `p` within `error` on each axis, placed in the world: the
+    /// world point and a per-axis bound wide enough that a ray leaving it from just beyond the
+    /// bound ([`offset_ray_origin`](crate::ray::offset_ray_origin)) is, once carried back into
+    /// object space by the rounded `M⁻¹`, still on its side of the surface.
+    ///
+    /// Three roundings add up (PBR 4th ed. §6.8.5 for the first two): `M·p` itself,
+    /// `γ₃ (|A|·|p| + |T|)`; the error already in `p`, taken to the world by `|A|`; and the ray
+    /// origin's way back, `M⁻¹·o` rounding by `γ₃ (‖B‖·|o| + ‖T'‖)` in object space (that
+    /// much times `|A|` in the world), with `M⁻¹` not quite the inverse of `M`
+    /// (`‖A·B − I‖·|o| + ‖A·T' + T‖`). The last two matter where the stored coordinates are
+    /// large and the placement brings them back near the origin (a CAD part modelled in place
+    /// and moved): they are what a bound made from the world point alone misses.
+    #[inline]
+    pub fn world_point(&self, p: Vec3, error: Vec3) -> (Vec3, Vec3) {
+        let r = &self.round_trip;
+        let world = self.to_world.transform_point3(p);
+        let placed = (1.0 + gamma(3)) * (r.abs_linear * error)
+            + gamma(3) * (r.abs_linear * p.abs() + Vec3::from(self.to_world.translation.abs()));
+        // The ray's origin: the world point moved off the surface by about `placed`.
+        let origin = world.abs().max_element() + 2.0 * placed.max_element();
+        let back = gamma(4) * (r.inverse_norm * origin + r.inverse_translation);
+        let residual = r.residual * origin + r.translation_residual;
+        (world, placed + r.abs_linear * Vec3::splat(back) + Vec3::splat(residual))
     }
 
     /// Three values at a stored triangle's corners, in the scene triangle's order.
@@ -104,6 +182,7 @@ impl Placement {
         let mut scaled = *self;
         scaled.to_world = to_world;
         scaled.to_object = to_world.inverse();
+        scaled.round_trip = RoundTrip::of(&scaled.to_world, &scaled.to_object);
         scaled
     }
 

@@ -169,7 +169,12 @@ impl Geometry {
         for (transform, placement) in transforms.iter().zip(placements) {
             match (placement, stored) {
                 (Some(placement), Some(first)) => self.push_instance(first, count, Some(placement)),
-                _ => self.add_mesh(mesh, transform, &mut material_of),
+                // Flattened as the loaders flatten (a mirror keeps the front side outside).
+                _ => {
+                    let mut flat = Mesh { name: mesh.name.clone(), ..Mesh::default() };
+                    flat.append_transformed(mesh, transform);
+                    self.add_mesh(&flat, &Affine3A::IDENTITY, &mut material_of);
+                }
             }
         }
     }
@@ -436,16 +441,34 @@ impl Geometry {
     pub fn surface_point(&self, hit: &Hit) -> SurfacePoint {
         let (s, placement) = self.locate(hit.triangle as usize);
         let corners = self.stored_triangle(s);
-        let ([v0, v1, v2], normal) = match placement {
-            None => (corners, self.normals[s]),
-            Some(p) => {
-                let world = p.triangle(corners);
-                (world, geometric_normal(world))
-            }
-        };
         // PBR 4th ed. §6.8.5: interpolating the vertices errs by at most γ₇ Σ|bᵢ·pᵢ|.
-        let (a, b, c) = (hit.b0() * v0, hit.b1 * v1, hit.b2 * v2);
-        SurfacePoint { p: a + b + c, error: gamma(7) * (a.abs() + b.abs() + c.abs()), normal }
+        let interpolate = |[v0, v1, v2]: [Vec3; 3]| {
+            let (a, b, c) = (hit.b0() * v0, hit.b1 * v1, hit.b2 * v2);
+            (a + b + c, gamma(7) * (a.abs() + b.abs() + c.abs()))
+        };
+        match placement {
+            None => {
+                let (p, error) = interpolate(corners);
+                SurfacePoint { p, error, normal: self.normals[s] }
+            }
+            // Interpolated where the hit was found, in object space, then placed with a bound
+            // that covers the way there and back (`Placement::world_point`).
+            Some(placement) => {
+                let (p, error) = interpolate(placement.corners(corners));
+                let (p, error) = placement.world_point(p, error);
+                SurfacePoint { p, error, normal: geometric_normal(placement.triangle(corners)) }
+            }
+        }
+    }
+
+    /// A per-axis bound on the rounding error of [`surface_point`](Self::surface_point) for any
+    /// point of scene triangle `i` (the largest at its corners: the bound grows with the
+    /// coordinates' size).
+    pub fn point_error_bound(&self, i: usize) -> Vec3 {
+        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+            .map(|(b1, b2)| self.surface_point(&Hit { t: 0.0, triangle: i as u32, b1, b2 }).error)
+            .into_iter()
+            .fold(Vec3::ZERO, Vec3::max)
     }
 
     /// Where `ray` meets the surface at `hit` (which an accelerator over [`vertices`](Self::vertices)

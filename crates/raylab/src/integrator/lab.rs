@@ -264,6 +264,7 @@ impl TileShading {
         let power = lab.light.power.to_array();
         let shadows = matches!(lab.stage, Stage::Shadows | Stage::Ambient);
         let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let instanced = geometry.is_instanced();
         for i in 0..TILE {
             // `Geometry::surface_point`.
             let b0 = 1.0 - b1[i] - b2[i];
@@ -277,6 +278,12 @@ impl TileShading {
                 );
                 p[axis] = a + b + c;
                 error[axis] = gamma(7) * (a.abs() + b.abs() + c.abs());
+            }
+            // An instance's point is found in its own space, with the bound of the way there
+            // and back.
+            if instanced && let Some(hit) = &hits[i] {
+                let point = geometry.surface_point(hit);
+                (p, error) = (point.p.to_array(), point.error.to_array());
             }
             let mut n = [normal[0][i], normal[1][i], normal[2][i]];
             let d = [direction[0][i], direction[1][i], direction[2][i]];

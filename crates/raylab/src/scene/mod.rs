@@ -334,17 +334,15 @@ impl Scene {
                 return Err(not_finite(format!("vertex {i}"), *p));
             }
         }
-        if let Some(i) =
-            self.geometry.material_ids().iter().position(|&m| m as usize >= self.materials.len())
-        {
+        let ids = self.geometry.material_ids();
+        if let Some(i) = ids.iter().position(|&m| m as usize >= self.materials.len()) {
+            // (`material_ids` holds the stored triangles' ids: one per instanced mesh's
+            // triangle, not per scene triangle.)
+            let what = if self.geometry.is_instanced() { "stored triangle" } else { "triangle" };
             return Err(SceneError::Invalid {
                 scene: self.name.clone(),
-                what: format!("triangle {i}"),
-                problem: format!(
-                    "names material {} of {}",
-                    self.geometry.material_id(i),
-                    self.materials.len()
-                ),
+                what: format!("{what} {i}"),
+                problem: format!("names material {} of {}", ids[i], self.materials.len()),
             });
         }
         for material in &self.materials {

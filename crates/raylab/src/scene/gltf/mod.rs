@@ -15,19 +15,19 @@
 //! (points, lines, strips are refused, not guessed at), an accessor whose data lies outside its
 //! buffer, an index beyond the vertices, a missing buffer file, a truncated `.glb`.
 
+mod material;
+
 use std::collections::HashMap;
 use std::f32::consts::PI;
 use std::path::Path;
-use std::sync::Arc;
 
-use glam::{Affine2, Affine3A, Mat3, Mat4, Vec2, Vec3, Vec4};
+use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3, Vec4};
 
-use super::file::{InstancedMesh, LoadError, LoadedMesh, mesh_name, quoted};
+use super::file::{InstancedMesh, LoadError, LoadedMesh, mesh_name};
 use super::{CameraSettings, FovAxis, model_to_lab};
 use crate::light::PointLight;
-use crate::material::{AlphaMask, MaterialTextures, NormalMap};
-use crate::mesh::{CornerAttribute, Mesh, MeshMaterial, PbrParameters};
-use crate::texture::{ImageTexture, Texture, TextureImage, Wrap, decode_texture, load_texture};
+use crate::mesh::{CornerAttribute, Mesh};
+use material::Images;
 
 /// Reads the glTF file `bytes`, found at `path` (external buffers are read beside it).
 pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadError> {
@@ -77,94 +77,9 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
 
     let mut builder = Builder::default();
     builder.mesh.name = mesh_name(path);
-    let mut images =
-        Images { folder, buffers: &buffers, decoded: HashMap::new(), broken: broken_images };
     let mut warnings = Vec::new();
-    builder.mesh.materials = document
-        .materials()
-        .map(|m| {
-            let pbr = m.pbr_metallic_roughness();
-            let [r, g, b, a] = pbr.base_color_factor();
-            let strength = m.emissive_strength().unwrap_or(1.0);
-            let name = m
-                .name()
-                .map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
-            let mut textures = MaterialTextures::default();
-            let mut read = |info: Option<gltf::texture::Info>, what: &str, srgb: bool| {
-                let info = info?;
-                let transform = info.texture_transform();
-                match images.texture(&info.texture(), info.tex_coord(), transform, srgb) {
-                    Ok(texture) => Some(texture),
-                    Err(error) => {
-                        warnings.push(format!(
-                            "{}: material {}: its {what} texture is ignored: {error}",
-                            path.display(),
-                            quoted(&name)
-                        ));
-                        None
-                    }
-                }
-            };
-            textures.base_color = read(pbr.base_color_texture(), "base colour", true);
-            textures.metallic_roughness =
-                read(pbr.metallic_roughness_texture(), "metallic-roughness", false);
-            // Only read where something emits: the texture multiplies emissiveFactor.
-            if m.emissive_factor().iter().any(|&e| e > 0.0) {
-                textures.emission = read(m.emissive_texture(), "emissive", true);
-            }
-            match m.alpha_mode() {
-                gltf::material::AlphaMode::Opaque => {}
-                gltf::material::AlphaMode::Mask => {
-                    let cutoff = m.alpha_cutoff().unwrap_or(0.5);
-                    textures.alpha_mask = Some(AlphaMask { cutoff, factor: a });
-                }
-                gltf::material::AlphaMode::Blend => warnings.push(format!(
-                    "{}: material {}: alphaMode BLEND is rendered opaque (MASK cuts out)",
-                    path.display(),
-                    quoted(&name)
-                )),
-            }
-            if let Some(normal) = m.normal_texture() {
-                let texture = images.texture(&normal.texture(), normal.tex_coord(), None, false);
-                match texture {
-                    Ok(texture) => {
-                        textures.normal = Some(NormalMap { texture, scale: normal.scale() })
-                    }
-                    Err(error) => warnings.push(format!(
-                        "{}: material {}: its normal texture is ignored: {error}",
-                        path.display(),
-                        quoted(&name)
-                    )),
-                }
-            }
-            // KHR_materials_ior allows 0 (an old exporter's "not set") and asks for at least 1
-            // otherwise: a glass needs a finite index of at least 1.
-            let ior = match m.ior() {
-                None => 1.5,
-                Some(ior) if ior.is_finite() && ior >= 1.0 => ior,
-                Some(ior) => {
-                    warnings.push(format!(
-                        "{}: material {}: ior {ior} is not a refractive index; 1.5 is used",
-                        path.display(),
-                        quoted(&name)
-                    ));
-                    1.5
-                }
-            };
-            MeshMaterial {
-                diffuse: Vec3::new(r, g, b),
-                emission: Vec3::from_array(m.emissive_factor()) * strength,
-                textures,
-                pbr: Some(PbrParameters {
-                    metallic: pbr.metallic_factor(),
-                    roughness: pbr.roughness_factor(),
-                    transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
-                    ior,
-                }),
-                name,
-            }
-        })
-        .collect();
+    let mut images = Images::new(folder, &buffers, broken_images);
+    builder.mesh.materials = material::read_materials(&mut images, document, path, &mut warnings);
     let mut lights = Vec::new();
     // Each node that draws a mesh: the mesh and the node's world transform.
     let mut draws: Vec<(gltf::Mesh, Mat4)> = Vec::new();
@@ -320,88 +235,6 @@ fn complete_tangents(mesh: &mut Mesh) -> bool {
     true
 }
 
-/// The file's images, decoded as materials ask for them, each once per colour space.
-struct Images<'a> {
-    /// Where relative URIs point.
-    folder: &'a Path,
-    buffers: &'a [gltf::buffer::Data],
-    decoded: HashMap<(usize, bool), Arc<TextureImage>>,
-    /// Images found broken before the `gltf` crate reads them, with the reason.
-    broken: HashMap<usize, String>,
-}
-
-impl Images<'_> {
-    /// A material's texture: its image (sRGB colour or linear data), sampler and transform.
-    fn texture(
-        &mut self,
-        texture: &gltf::Texture,
-        tex_coord: u32,
-        transform: Option<gltf::texture::TextureTransform>,
-        srgb: bool,
-    ) -> Result<Texture, String> {
-        let tex_coord = transform.as_ref().and_then(|t| t.tex_coord()).unwrap_or(tex_coord);
-        if tex_coord != 0 {
-            return Err(format!("it reads TEXCOORD_{tex_coord}, and only TEXCOORD_0 is read"));
-        }
-        let source = texture.source();
-        let key = (source.index(), srgb);
-        let image = match self.decoded.get(&key) {
-            Some(image) => image.clone(),
-            None => {
-                let image = Arc::new(self.decode(&source, srgb)?);
-                self.decoded.insert(key, image.clone());
-                image
-            }
-        };
-        let sampler = texture.sampler();
-        let wrap = |mode| match mode {
-            gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
-            gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
-            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
-        };
-        let mut texture = ImageTexture::new(image);
-        texture.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
-        if let Some(t) = transform {
-            texture.transform = texture_transform(t.offset(), t.rotation(), t.scale());
-            if !texture.transform.is_finite() {
-                return Err("its KHR_texture_transform is not finite".into());
-            }
-        }
-        Ok(Texture::Image(texture))
-    }
-
-    /// Decodes image `source` from its buffer view, data URI or file.
-    fn decode(&self, source: &gltf::Image, srgb: bool) -> Result<TextureImage, String> {
-        if let Some(problem) = self.broken.get(&source.index()) {
-            return Err(problem.clone());
-        }
-        let name =
-            source.name().map_or_else(|| format!("image {}", source.index()), str::to_string);
-        match source.source() {
-            gltf::image::Source::View { view, .. } => {
-                let buffer = self.buffers.get(view.buffer().index()).ok_or("no buffer")?;
-                let bytes = buffer
-                    .0
-                    .get(view.offset()..view.offset().saturating_add(view.length()))
-                    .ok_or_else(|| format!("{name}: its buffer view lies outside its buffer"))?;
-                decode_texture(&name, bytes, srgb).map_err(|e| format!("{name}: {e}"))
-            }
-            gltf::image::Source::Uri { uri, .. } => {
-                if let Some(data) = uri.strip_prefix("data:") {
-                    let (_, encoded) = data
-                        .split_once(";base64,")
-                        .ok_or_else(|| format!("{name}: a data URI that is not base64"))?;
-                    let bytes = base64::decode(encoded)
-                        .map_err(|e| format!("{name}: its base64 data is broken: {e}"))?;
-                    return decode_texture(&name, &bytes, srgb).map_err(|e| format!("{name}: {e}"));
-                }
-                let relative = urlencoding::decode(uri).map_err(|e| format!("{uri}: {e}"))?;
-                load_texture(&self.folder.join(relative.as_ref()), srgb)
-            }
-        }
-    }
-}
-
 /// Checks what the `gltf` crate's readers take for granted (and panic on otherwise, found by
 /// fuzzing): each attribute read has the type and component types the specification gives it,
 /// and its buffer view's stride is no shorter than one element.
@@ -445,17 +278,6 @@ fn check_accessors(primitive: &gltf::Primitive) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-/// `KHR_texture_transform`'s matrix, translation × rotation × scale, with its rotation turning
-/// counter-clockwise in texture space (the extension's `[cos sin; −sin cos]`).
-fn texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
-    let (sin, cos) = rotation.sin_cos();
-    Affine2::from_cols(
-        Vec2::new(cos, -sin) * scale[0],
-        Vec2::new(sin, cos) * scale[1],
-        Vec2::from_array(offset),
-    )
 }
 
 /// One line from a `gltf` error (its messages can span lines).
