@@ -36,9 +36,6 @@ pub fn closest_opaque_hit<A: Accelerator + ?Sized>(
     ray: &Ray,
 ) -> Option<Hit> {
     let mut hit = accel.closest_hit(ray)?;
-    if !scene.has_cut_outs() {
-        return Some(hit);
-    }
     let mut ray = *ray;
     for _ in 0..MAX_HOLES {
         if !scene.is_cut_out(&ray, &hit) {
@@ -53,11 +50,10 @@ pub fn closest_opaque_hit<A: Accelerator + ?Sized>(
 /// Whether something that is there (not a cut-out hole) blocks the segment `ray`.
 #[inline]
 pub fn occluded_opaque<A: Accelerator + ?Sized>(scene: &Scene, accel: &A, ray: &Ray) -> bool {
-    if scene.has_cut_outs() {
-        closest_opaque_hit(scene, accel, ray).is_some()
-    } else {
-        accel.occluded(ray)
-    }
+    // Holes only take blockers away: a segment nothing blocks is clear, and only a blocked
+    // one in a scene with holes needs its blockers looked at one by one.
+    accel.occluded(ray)
+        && (!scene.has_cut_outs() || closest_opaque_hit(scene, accel, ray).is_some())
 }
 
 /// Computes the colour seen along a camera ray.
