@@ -342,7 +342,8 @@ fn the_instanced_engine_renders_as_its_flattened_obj() {
     let instanced = Scene::from_loaded(&loaded);
     let flattened =
         Scene::from_mesh(&load_mesh(&data("2CylinderEngine/2CylinderEngine.obj.gz")).unwrap().mesh);
-    let camera = loaded.camera.unwrap().camera(160, 120);
+    // An odd size: rows end in tiles shorter than the lab's.
+    let camera = loaded.camera.unwrap().camera(157, 118);
     let picture = |scene: &Scene| {
         let bvh = SceneBvh::build(&scene.geometry).unwrap();
         let lab = Lab::new(scene, &bvh, Stage::Ambient);
@@ -350,7 +351,7 @@ fn the_instanced_engine_renders_as_its_flattened_obj() {
     };
     let (a, b) = (picture(&instanced), picture(&flattened));
     let covered = b.pixels().filter(|p| p.0 != [0, 0, 0]).count();
-    assert!(covered > 160 * 120 / 4, "the engine covers only {covered} pixels");
+    assert!(covered > 157 * 118 / 4, "the engine covers only {covered} pixels");
     let difference = compare_rgb8(&a, &b, 2).unwrap();
     if difference.fraction_over_tolerance() > 0.002 || difference.mean_abs_diff > 0.05 {
         let saved = save_failure_images("instanced_engine", &a, &b);

@@ -281,7 +281,7 @@ impl TileShading {
             }
             // An instance's point is found in its own space, with the bound of the way there
             // and back.
-            if instanced && let Some(hit) = &hits[i] {
+            if instanced && let Some(Some(hit)) = hits.get(i) {
                 let point = geometry.surface_point(hit);
                 (p, error) = (point.p.to_array(), point.error.to_array());
             }
