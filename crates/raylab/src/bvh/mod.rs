@@ -58,6 +58,7 @@ mod wide;
 use glam::Vec3;
 
 pub use bounds::{Bounds, Frustum, RayBoxTest};
+pub(crate) use bounds::{FAR_SCALE, SLAB_PAD};
 pub use refit::RefitError;
 pub use scene::SceneBvh;
 pub use traverse::TraversalStats;

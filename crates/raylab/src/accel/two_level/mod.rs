@@ -22,10 +22,13 @@ use std::collections::HashMap;
 
 use glam::{Affine3A, Vec3};
 
+mod lanes;
+
 use super::{Accelerator, Hit};
 use crate::bvh::{Bounds, Frustum, RayBoxTest};
 use crate::geometry::{Geometry, Placement};
 use crate::ray::Ray;
+use lanes::BoxLanes;
 
 /// Instances over per-mesh accelerators `A` (see the module documentation).
 pub struct TwoLevel<A> {
@@ -327,34 +330,33 @@ impl<A: Accelerator> TwoLevel<A> {
             }
         }
         let packet_size = sizes.iter().fold(0.0, |a: f32, &b| a.max(b));
+        let lead =
+            rays.iter().find(|r| r.direction.is_finite()).map_or(Vec3::ZERO, |r| r.direction);
         // A bound on the whole packet where the rays share their directions' signs: a box it
         // misses is missed by every ray, at the cost of one test.
         let frustum = Frustum::of(tests[..rays.len()].iter().flatten().copied());
         let packet_t_max = (0..rays.len())
             .map(&t_max)
             .fold(f32::NEG_INFINITY, |a, t| if t.is_nan() { f32::INFINITY } else { a.max(t) });
-        let reaching = |bounds: &Bounds, margin: &Margin, mask: u64| {
+        // The rays lane by lane, their `t_max` brought up to date after every visit.
+        let mut lanes = BoxLanes::new(&tests[..rays.len()]);
+        let refresh = |lanes: &mut BoxLanes| {
+            for (i, t) in lanes.t_max[..rays.len()].iter_mut().enumerate() {
+                *t = t_max(i);
+            }
+        };
+        refresh(&mut lanes);
+        let reaching = |lanes: &BoxLanes, bounds: &Bounds, margin: &Margin, mask: u64| {
             if let Some(frustum) = &frustum
                 && frustum.enter(&grown(bounds, margin.pad(packet_size)), packet_t_max).is_none()
             {
                 return 0;
             }
-            let mut out = 0u64;
-            let mut rest = mask;
-            while rest != 0 {
-                let i = rest.trailing_zeros() as usize;
-                rest &= rest - 1;
-                if let Some(test) = &tests[i]
-                    && test.enter(&grown(bounds, margin.pad(sizes[i])), t_max(i)).is_some()
-                {
-                    out |= 1 << i;
-                }
-            }
-            out
+            lanes.reaching(bounds, margin, mask)
         };
         let mut stack = [(0u32, 0u64); STACK];
         let mut len = 0;
-        let root = reaching(&self.nodes[0].bounds, &self.nodes[0].margin, live);
+        let root = reaching(&lanes, &self.nodes[0].bounds, &self.nodes[0].margin, live);
         if root != 0 {
             stack[0] = (0, root);
             len = 1;
@@ -366,16 +368,23 @@ impl<A: Accelerator> TwoLevel<A> {
             if node.count > 0 {
                 let range = node.index as usize..(node.index + node.count) as usize;
                 for placed in &self.placed[range] {
-                    let mask = reaching(&placed.bounds, &placed.margin, mask);
+                    let mask = reaching(&lanes, &placed.bounds, &placed.margin, mask);
                     if mask != 0 {
                         visit(placed, mask);
+                        refresh(&mut lanes);
                     }
                 }
                 continue;
             }
-            for child in [node.index, index + 1] {
+            // The packet's nearer child last, to be visited first (by its first ray's
+            // direction): its hits then cull the farther child's instances.
+            let (left, right) = (index + 1, node.index);
+            let between = self.nodes[right as usize].bounds.centroid()
+                - self.nodes[left as usize].bounds.centroid();
+            let order = if between.dot(lead) < 0.0 { [left, right] } else { [right, left] };
+            for child in order {
                 let child_node = &self.nodes[child as usize];
-                let mask = reaching(&child_node.bounds, &child_node.margin, mask);
+                let mask = reaching(&lanes, &child_node.bounds, &child_node.margin, mask);
                 if mask != 0 {
                     stack[len] = (child, mask);
                     len += 1;
