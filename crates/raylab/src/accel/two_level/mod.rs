@@ -18,6 +18,7 @@
 //! bottom accelerator: a [`TwoLevel<BruteForce>`](super::BruteForce) and a
 //! [`TwoLevel<Bvh>`](crate::Bvh) agree exactly (`tests/instancing.rs`).
 
+use std::cell::Cell;
 use std::collections::HashMap;
 
 use glam::{Affine3A, Vec3};
@@ -226,6 +227,30 @@ impl<A: Accelerator> TwoLevel<A> {
         }
     }
 
+    /// The rays of `mask` that `t_max` keeps (giving each its `t_max`), carried into
+    /// `placed`'s space: into `local`, their packet indices into `which`.
+    #[inline]
+    fn gather(
+        placed: &Placed,
+        rays: &[Ray],
+        mask: u64,
+        t_max: impl Fn(usize) -> Option<f32>,
+        local: &mut Vec<Ray>,
+        which: &mut Vec<usize>,
+    ) {
+        local.clear();
+        which.clear();
+        let mut rest = mask;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            if let Some(t_max) = t_max(i) {
+                local.push(Self::local_ray(placed, &rays[i], t_max));
+                which.push(i);
+            }
+        }
+    }
+
     /// A bottom level's hit as a hit on a scene triangle.
     #[inline]
     fn scene_hit(&self, placed: &Placed, hit: Hit) -> Hit {
@@ -429,20 +454,11 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
         let mut which = Vec::with_capacity(PACKET);
         for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
             hits.fill(None);
-            let best: Vec<std::cell::Cell<Option<Hit>>> =
-                hits.iter().map(|_| std::cell::Cell::new(None)).collect();
+            let best: [Cell<Option<Hit>>; PACKET] = std::array::from_fn(|_| Cell::new(None));
             // A hit at exactly the best `t` may still win on its lower index: let it through.
             let t_max = |i: usize| best[i].get().map_or(rays[i].t_max, |b| b.t.next_up());
             self.walk_packet(rays, t_max, |placed, mask| {
-                local.clear();
-                which.clear();
-                let mut rest = mask;
-                while rest != 0 {
-                    let i = rest.trailing_zeros() as usize;
-                    rest &= rest - 1;
-                    local.push(Self::local_ray(placed, &rays[i], t_max(i)));
-                    which.push(i);
-                }
+                Self::gather(placed, rays, mask, |i| Some(t_max(i)), &mut local, &mut which);
                 local_hits.clear();
                 local_hits.resize(local.len(), None);
                 self.bottoms[placed.bottom as usize].accel.closest_hits(&local, &mut local_hits);
@@ -454,7 +470,7 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
                     }
                 }
             });
-            for (hit, best) in hits.iter_mut().zip(best) {
+            for (hit, best) in hits.iter_mut().zip(&best) {
                 *hit = best.get();
             }
         }
@@ -468,22 +484,12 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
         let mut local_occluded = Vec::with_capacity(PACKET);
         let mut which = Vec::with_capacity(PACKET);
         for (rays, occluded) in rays.chunks(PACKET).zip(occluded.chunks_mut(PACKET)) {
-            let done: Vec<std::cell::Cell<bool>> =
-                rays.iter().map(|_| std::cell::Cell::new(false)).collect();
+            let done: [Cell<bool>; PACKET] = std::array::from_fn(|_| Cell::new(false));
             // An occluded ray has nothing left to find: an empty range drops it.
             let t_max = |i: usize| if done[i].get() { f32::NEG_INFINITY } else { rays[i].t_max };
             self.walk_packet(rays, t_max, |placed, mask| {
-                local.clear();
-                which.clear();
-                let mut rest = mask;
-                while rest != 0 {
-                    let i = rest.trailing_zeros() as usize;
-                    rest &= rest - 1;
-                    if !done[i].get() {
-                        local.push(Self::local_ray(placed, &rays[i], rays[i].t_max));
-                        which.push(i);
-                    }
-                }
+                let open = |i: usize| (!done[i].get()).then_some(rays[i].t_max);
+                Self::gather(placed, rays, mask, open, &mut local, &mut which);
                 local_occluded.clear();
                 local_occluded.resize(local.len(), false);
                 let bottom = &self.bottoms[placed.bottom as usize].accel;
