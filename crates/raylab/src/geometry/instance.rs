@@ -67,13 +67,6 @@ struct RoundTrip {
 
 impl RoundTrip {
     fn of(to_world: &Affine3A, to_object: &Affine3A) -> RoundTrip {
-        let norm = |m: &Mat3A| {
-            let rows = m.transpose();
-            [rows.x_axis, rows.y_axis, rows.z_axis]
-                .map(|r| r.abs().element_sum())
-                .into_iter()
-                .fold(0.0, f32::max)
-        };
         let wide = |m: &Affine3A| DAffine3::from_cols_array(&m.to_cols_array().map(f64::from));
         let (m, inverse) = (wide(to_world), wide(to_object));
         let product = m * inverse;
@@ -89,12 +82,21 @@ impl RoundTrip {
                 to_world.matrix3.y_axis.abs(),
                 to_world.matrix3.z_axis.abs(),
             ),
-            inverse_norm: norm(&to_object.matrix3),
+            inverse_norm: max_row_sum(&to_object.matrix3),
             inverse_translation: to_object.translation.abs().max_element(),
             residual: up(residual),
             translation_residual: up(product.translation.abs().max_element()),
         }
     }
+}
+
+/// The infinity norm of `m`: its largest row sum of magnitudes (`‖m·v‖∞ ≤ ‖m‖∞·‖v‖∞`).
+pub fn max_row_sum(m: &Mat3A) -> f32 {
+    let rows = m.transpose();
+    [rows.x_axis, rows.y_axis, rows.z_axis]
+        .map(|r| r.abs().element_sum())
+        .into_iter()
+        .fold(0.0, f32::max)
 }
 
 impl Placement {

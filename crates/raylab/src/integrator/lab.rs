@@ -266,24 +266,25 @@ impl TileShading {
         let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let instanced = geometry.is_instanced();
         for i in 0..TILE {
-            // `Geometry::surface_point`.
-            let b0 = 1.0 - b1[i] - b2[i];
             let mut p = [0.0f32; 3];
             let mut error = [0.0f32; 3];
-            for axis in 0..3 {
-                let (a, b, c) = (
-                    b0 * corner[0][axis][i],
-                    b1[i] * corner[1][axis][i],
-                    b2[i] * corner[2][axis][i],
-                );
-                p[axis] = a + b + c;
-                error[axis] = gamma(7) * (a.abs() + b.abs() + c.abs());
-            }
-            // An instance's point is found in its own space, with the bound of the way there
-            // and back.
             if instanced && let Some(Some(hit)) = hits.get(i) {
+                // An instance's point is found in its own space, with the bound of the way
+                // there and back.
                 let point = geometry.surface_point(hit);
                 (p, error) = (point.p.to_array(), point.error.to_array());
+            } else {
+                // `Geometry::surface_point`, on the gathered corners.
+                let b0 = 1.0 - b1[i] - b2[i];
+                for axis in 0..3 {
+                    let (a, b, c) = (
+                        b0 * corner[0][axis][i],
+                        b1[i] * corner[1][axis][i],
+                        b2[i] * corner[2][axis][i],
+                    );
+                    p[axis] = a + b + c;
+                    error[axis] = gamma(7) * (a.abs() + b.abs() + c.abs());
+                }
             }
             let mut n = [normal[0][i], normal[1][i], normal[2][i]];
             let d = [direction[0][i], direction[1][i], direction[2][i]];

@@ -52,6 +52,11 @@ impl BoxLanes {
         lanes
     }
 
+    /// The largest `|o|∞` of the rays: what the packet's frustum grows a box's margin by.
+    pub fn largest_size(&self) -> f32 {
+        self.size.iter().fold(0.0, |a, &b| a.max(b))
+    }
+
     /// The lanes of `mask` whose rays enter `bounds` grown by `margin` within their
     /// `[t_min, t_max]`: bit `i` as `RayBoxTest::enter(grown box, t_max[i]).is_some()`.
     #[inline]

@@ -27,6 +27,7 @@ mod lanes;
 
 use super::{Accelerator, Hit};
 use crate::bvh::{Bounds, Frustum, RayBoxTest};
+use crate::geometry::instance::max_row_sum;
 use crate::geometry::{Geometry, Placement};
 use crate::ray::Ray;
 use lanes::BoxLanes;
@@ -157,14 +158,14 @@ impl<A: Accelerator> TwoLevel<A> {
             };
             let (m, translation) = (&placement.to_world, placement.to_world.translation);
             // The corners `M·p` round by about ε (|A|·|p| + |T|).
-            let size = norm(&m.matrix3) * local.min.abs().max(local.max.abs()).max_element()
+            let size = max_row_sum(&m.matrix3) * local.min.abs().max(local.max.abs()).max_element()
                 + translation.abs().max_element();
             let bounds = padded(transformed(&local, m), size);
             let margin = Margin {
                 scale: RAY_ERROR
                     * f32::EPSILON
-                    * norm(&m.matrix3)
-                    * norm(&placement.to_object.matrix3),
+                    * max_row_sum(&m.matrix3)
+                    * max_row_sum(&placement.to_object.matrix3),
                 reach: bounds.min.abs().max(bounds.max.abs()).max_element()
                     + translation.abs().max_element(),
             };
@@ -345,16 +346,13 @@ impl<A: Accelerator> TwoLevel<A> {
             return;
         }
         let mut tests = [None; PACKET];
-        let mut sizes = [0.0f32; PACKET];
         let mut live = 0u64;
         for (i, ray) in rays.iter().enumerate() {
             if ray.origin.is_finite() && ray.direction.is_finite() {
                 tests[i] = Some(RayBoxTest::new(ray));
-                sizes[i] = ray.origin.abs().max_element();
                 live |= 1 << i;
             }
         }
-        let packet_size = sizes.iter().fold(0.0, |a: f32, &b| a.max(b));
         let lead =
             rays.iter().find(|r| r.direction.is_finite()).map_or(Vec3::ZERO, |r| r.direction);
         // A bound on the whole packet where the rays share their directions' signs: a box it
@@ -365,6 +363,7 @@ impl<A: Accelerator> TwoLevel<A> {
             .fold(f32::NEG_INFINITY, |a, t| if t.is_nan() { f32::INFINITY } else { a.max(t) });
         // The rays lane by lane, their `t_max` brought up to date after every visit.
         let mut lanes = BoxLanes::new(&tests[..rays.len()]);
+        let packet_size = lanes.largest_size();
         let refresh = |lanes: &mut BoxLanes| {
             for (i, t) in lanes.t_max[..rays.len()].iter_mut().enumerate() {
                 *t = t_max(i);
@@ -505,15 +504,6 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
             }
         }
     }
-}
-
-/// The infinity norm (largest row sum of magnitudes) of `m`.
-fn norm(m: &glam::Mat3A) -> f32 {
-    let rows = m.transpose();
-    [rows.x_axis, rows.y_axis, rows.z_axis]
-        .map(|r| r.abs().element_sum())
-        .into_iter()
-        .fold(0.0, f32::max)
 }
 
 /// `bounds` grown by `pad` on every side.
