@@ -51,11 +51,11 @@ fn main() -> ExitCode {
             {
                 error.exit();
             }
-            // One line, like every other error: clap's first line names the problem.
-            let rendered = error.to_string();
-            let first = rendered.lines().next().unwrap_or("invalid arguments");
-            let first = first.strip_prefix("error: ").unwrap_or(first);
-            eprintln!("raylab: error: {first} (see raylab --help)");
+            // One line, like every other error, with all that clap says of the problem.
+            eprintln!(
+                "raylab: error: {} (see raylab --help)",
+                one_line_usage_error(&error.to_string())
+            );
             return ExitCode::from(2);
         }
     };
@@ -72,9 +72,96 @@ fn main() -> ExitCode {
             ExitCode::from(render_state::INTERRUPTED_STATUS)
         }
         Err(error) => {
-            // One line: the context chain joined by ": ".
-            eprintln!("raylab: error: {error:#}");
+            eprintln!("raylab: error: {}", one_line_error(&error));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// An error and its causes on one line, joined by ": ", each cause said once: a message that
+/// already quotes its cause (`cannot read 'x.exr': No such file or directory (os error 2)`)
+/// is not followed by the cause again.
+fn one_line_error(error: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in error.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
+}
+
+/// clap's message for bad arguments, whole, on one line: its `error: ` prefix dropped, the
+/// lines up to its usage summary joined (a line that ends in `:` runs on into the next, as in
+/// "the following required arguments were not provided: --output <FILE>").
+fn one_line_usage_error(rendered: &str) -> String {
+    let mut line = String::new();
+    for part in rendered.lines().map(str::trim).take_while(|l| !l.starts_with("Usage:")) {
+        let part = part.strip_prefix("error: ").unwrap_or(part);
+        if part.is_empty() {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(if line.ends_with(':') { " " } else { "; " });
+        }
+        line.push_str(part);
+    }
+    if line.is_empty() { "invalid arguments".to_owned() } else { line }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An error that quotes its cause in its own message, as the library's errors do.
+    #[derive(Debug)]
+    struct Quoting(std::io::Error);
+
+    impl std::fmt::Display for Quoting {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "cannot read 'nothere.exr': {}", self.0)
+        }
+    }
+
+    impl std::error::Error for Quoting {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn a_cause_the_message_already_quotes_is_said_once() {
+        let os = std::io::Error::from(std::io::ErrorKind::NotFound);
+        let cause = os.to_string();
+        let error = anyhow::Error::new(Quoting(os)).context("merging 2 parts");
+        assert_eq!(
+            one_line_error(&error),
+            format!("merging 2 parts: cannot read 'nothere.exr': {cause}")
+        );
+        // A cause the message does not quote is kept.
+        let error = anyhow::anyhow!("disk full").context("writing out.exr");
+        assert_eq!(one_line_error(&error), "writing out.exr: disk full");
+    }
+
+    #[test]
+    fn clap_s_whole_message_fits_on_one_line() {
+        let rendered = "error: the following required arguments were not provided:\n  \
+                        --output <FILE>\n\nUsage: raylab merge --output <FILE> <PARTS>...\n\n\
+                        For more information, try '--help'.\n";
+        assert_eq!(
+            one_line_usage_error(rendered),
+            "the following required arguments were not provided: --output <FILE>"
+        );
+        let rendered = "error: unexpected argument '--bogus' found\n\n  tip: to pass '--bogus' \
+                        as a value, use '-- --bogus'\n\nUsage: raylab render [OPTIONS]\n";
+        assert_eq!(
+            one_line_usage_error(rendered),
+            "unexpected argument '--bogus' found; tip: to pass '--bogus' as a value, use '-- --bogus'"
+        );
     }
 }

@@ -562,3 +562,33 @@ fn the_report_gives_load_time_and_memory() {
     assert!(stdout.contains("memory: geometry "), "{stdout}");
     assert!(stdout.contains(", 1 texture 231.0 KiB"), "{stdout}");
 }
+
+/// Each cause of an error is said once: a message that quotes the operating system's reason
+/// is not followed by the reason again.
+#[test]
+fn an_error_says_its_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylab(dir.path(), &["merge", "nothere.exr", "-o", "x.exr"]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.contains("nothere.exr"), "{stderr}");
+    let reason = std::io::Error::from_raw_os_error(2).to_string(); // ENOENT's own words
+    assert_eq!(stderr.matches(&reason).count(), 1, "the cause once: {stderr}");
+    assert_eq!(files_in(dir.path()), Vec::<String>::new(), "nothing written");
+}
+
+/// A missing argument is named: clap's whole message on the one line, not cut before the
+/// argument.
+#[test]
+fn a_missing_argument_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylab(dir.path(), &["merge", "-o", "x.exr"]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains("the following required arguments were not provided: <PART>..."),
+        "{stderr}"
+    );
+}

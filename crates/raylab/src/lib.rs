@@ -125,7 +125,9 @@
 pub mod accel;
 pub mod bvh;
 pub mod camera;
+pub mod file_bytes;
 pub mod film;
+pub mod filter;
 pub mod float;
 #[doc(hidden)]
 pub mod fuzzing;
@@ -133,6 +135,7 @@ pub mod geometry;
 pub mod image_compare;
 pub mod image_io;
 pub mod integrator;
+pub mod interaction;
 pub mod interactive;
 pub mod light;
 pub mod material;
@@ -152,14 +155,18 @@ pub use accel::{Accelerator, BruteForce, Hit};
 pub use bvh::{BuildSettings, Bvh, SceneBvh};
 pub use camera::{Camera, RayGenerator};
 pub use film::{Film, FilmError};
-pub use geometry::{Geometry, SurfaceInteraction};
-pub use integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
-pub use light::{Light, LightSet, PointLight, TriangleSampling};
+pub use filter::Filter;
+pub use geometry::Geometry;
+pub use integrator::{
+    Aov, AovKind, Integrator, Lab, LightSet, Path, PathSettings, Stage, TriangleSampling,
+};
+pub use interaction::SurfaceInteraction;
+pub use light::{Light, PointLight};
 pub use material::{Bsdf, Material};
 pub use mesh::{Mesh, MeshMaterial};
 pub use ray::{Ray, SurfacePoint};
 pub use region::Region;
-pub use render::{Accumulator, Filter, SampleSettings, render, render_samples};
+pub use render::{Accumulator, SampleSettings, render, render_samples};
 pub use sampling::{Sampler, SamplerKind, sample_offset};
 pub use scene::{LoadError, LoadedMesh, load_mesh};
 pub use scene::{Scene, SceneError};

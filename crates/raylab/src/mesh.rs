@@ -9,7 +9,7 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::material::{Bsdf, Dielectric, Ggx, Material, MaterialTextures, Pbr, RoughDielectric};
+use crate::material::MaterialTextures;
 
 /// A per-corner attribute (normals or texture coordinates) with its own index triples, as OBJ
 /// stores them (`f v/vt/vn`). For formats with per-vertex attributes (PLY) the triples equal the
@@ -53,37 +53,6 @@ pub struct PbrParameters {
 impl MeshMaterial {
     /// The colour of surfaces that name no material: a neutral grey of reflectance 0.75.
     pub const DEFAULT_DIFFUSE: Vec3 = Vec3::splat(0.75);
-
-    /// As a scene's material, emitting its `Ke` (glTF's emission): diffuse with the file's
-    /// colour and textures; with glTF's parameters, the metallic-roughness [`Pbr`] BSDF, or
-    /// glass (smooth or GGX-rough, of its index of refraction) where it transmits.
-    pub fn to_material(&self) -> Material {
-        let mut material = Material {
-            emission: self.emission,
-            textures: self.textures.clone(),
-            ..Material::diffuse(&self.name, self.diffuse)
-        };
-        let Some(p) = self.pbr else { return material };
-        let unit = |v: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
-        material.bsdf = if p.transmission > 0.5 {
-            let alpha = unit(p.roughness).powi(2);
-            if alpha < 1e-3 {
-                Bsdf::Dielectric(Dielectric { eta: p.ior })
-            } else {
-                Bsdf::RoughDielectric(RoughDielectric {
-                    eta: p.ior,
-                    distribution: Ggx::new(alpha, alpha),
-                })
-            }
-        } else {
-            Bsdf::Pbr(Pbr {
-                base_color: self.diffuse.clamp(Vec3::ZERO, Vec3::ONE),
-                metallic: unit(p.metallic),
-                roughness: unit(p.roughness),
-            })
-        };
-        material
-    }
 }
 
 /// A triangle mesh.
@@ -172,7 +141,7 @@ impl Mesh {
             let given =
                 self.normals.as_ref().map_or(Vec3::ZERO, |n| n.values[n.triangles[f][c] as usize]);
             if given == Vec3::ZERO || !given.is_finite() {
-                crate::geometry::geometric_normal(self.triangle(f))
+                crate::triangle::geometric_normal(self.triangle(f))
             } else {
                 given.normalize_or_zero()
             }

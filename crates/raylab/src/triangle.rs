@@ -438,6 +438,12 @@ impl WatertightRay {
     }
 }
 
+/// The unit normal `(v1 − v0) × (v2 − v0)` of the counter-clockwise side, zero for zero area.
+#[inline]
+pub fn geometric_normal([v0, v1, v2]: [Vec3; 3]) -> Vec3 {
+    (v1 - v0).cross(v2 - v0).normalize_or_zero()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

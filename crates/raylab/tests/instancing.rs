@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Quat, Vec3};
-use raylab::accel::TwoLevel;
+use raylab::bvh::TwoLevel;
 use raylab::scene::load_mesh;
 use raylab::{Accelerator, BruteForce, Geometry, Hit, Mesh, Ray, Scene, SceneBvh};
 

@@ -7,10 +7,8 @@
 //! answers them the same way, only faster.
 
 mod brute_force;
-mod two_level;
 
 pub use brute_force::BruteForce;
-pub use two_level::TwoLevel;
 
 /// The closest intersection of a ray with a scene.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -51,6 +51,7 @@ mod refit;
 mod scene;
 mod sweep;
 mod traverse;
+mod two_level;
 #[cfg(target_arch = "x86_64")]
 mod watertight_lanes;
 mod wide;
@@ -62,6 +63,7 @@ pub(crate) use bounds::{FAR_SCALE, SLAB_PAD};
 pub use refit::RefitError;
 pub use scene::SceneBvh;
 pub use traverse::TraversalStats;
+pub use two_level::TwoLevel;
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;

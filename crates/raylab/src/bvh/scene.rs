@@ -1,8 +1,9 @@
 //! The accelerator of a whole scene: one BVH over its triangles, or two levels where it draws
 //! a mesh in several places.
 
+use super::TwoLevel;
 use super::{BuildError, Bvh};
-use crate::accel::{Accelerator, Hit, TwoLevel};
+use crate::accel::{Accelerator, Hit};
 use crate::geometry::Geometry;
 use crate::ray::Ray;
 

@@ -28,9 +28,11 @@ pub use instance::{Instance, Placement};
 
 use crate::accel::Hit;
 use crate::float::gamma;
+use crate::interaction::SurfaceInteraction;
 use crate::mesh::Mesh;
 use crate::ray::{Ray, SurfacePoint};
 use crate::texture::TextureQuery;
+use crate::triangle::geometric_normal;
 
 /// Which stored triangles of a [`Geometry`] one mesh added.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,30 +68,6 @@ pub struct Geometry {
     placed: bool,
     /// The number of scene triangles.
     scene_triangles: usize,
-}
-
-/// What a ray sees where it hits a surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SurfaceInteraction {
-    /// The point, its error bound and the geometric normal (the triangle's front side).
-    pub point: SurfacePoint,
-    /// The shading normal: interpolated from the mesh's normals (which decide the front side of
-    /// one-sided materials, as in Mitsuba); the geometric normal where the mesh has none.
-    pub shading_normal: Vec3,
-    /// Texture coordinates (the barycentric `(b1, b2)` where the mesh has none).
-    pub uv: Vec2,
-    /// How the point moves with `u`: the shading frame's tangent direction (before it is made
-    /// perpendicular to the shading normal), as Mitsuba's `dp_du`; without UVs, `v1 − v0`.
-    pub dp_du: Vec3,
-    /// The interpolated tangent for normal maps (w: the bitangent's sign); zero where the mesh
-    /// has none.
-    pub tangent: Vec4,
-    /// Index into the scene's materials.
-    pub material: u32,
-    /// The triangle hit.
-    pub triangle: u32,
-    /// Ray parameter of the hit.
-    pub t: f32,
 }
 
 impl Geometry {
@@ -518,14 +496,6 @@ impl Geometry {
     }
 }
 
-impl SurfaceInteraction {
-    /// Where textures are read here, at a point (footprint 0): the path tracer's lookups.
-    #[inline]
-    pub fn texture_query(&self) -> TextureQuery {
-        TextureQuery { uv: self.uv, p: self.point.p, footprint: 0.0 }
-    }
-}
-
 impl Geometry {
     /// How many texture-coordinate units a unit of length spans on triangle `i`:
     /// `sqrt(uv area / area)` (0 for a triangle without area or without texture area).
@@ -587,12 +557,6 @@ fn dp_du([v0, v1, v2]: [Vec3; 3], [uv0, uv1, uv2]: [Vec2; 3]) -> Vec3 {
 
 /// Texture coordinates of a triangle that has none: its barycentric `(b1, b2)`.
 const DEFAULT_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::Y];
-
-/// The unit normal `(v1 − v0) × (v2 − v0)` of the counter-clockwise side, zero for zero area.
-#[inline]
-pub fn geometric_normal([v0, v1, v2]: [Vec3; 3]) -> Vec3 {
-    (v1 - v0).cross(v2 - v0).normalize_or_zero()
-}
 
 #[cfg(test)]
 mod tests;

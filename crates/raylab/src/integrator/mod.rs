@@ -10,12 +10,14 @@
 
 mod aov;
 mod lab;
+mod light_sampler;
 mod path;
 
 use glam::Vec3;
 
 pub use aov::{Aov, AovKind};
 pub use lab::{Lab, Stage};
+pub use light_sampler::{LightSample, LightSet, TriangleSampling};
 pub use path::{Path, PathSettings};
 
 use crate::accel::{Accelerator, Hit};

@@ -22,9 +22,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::{Vec2, Vec3};
 
 use super::Integrator;
+use super::light_sampler::{LightSet, TriangleSampling};
 use crate::accel::Accelerator;
-use crate::geometry::SurfaceInteraction;
-use crate::light::{LightSet, TriangleSampling};
+use crate::interaction::SurfaceInteraction;
 use crate::ray::Ray;
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
 use crate::scene::Scene;

@@ -35,7 +35,7 @@ pub use plastic::Plastic;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 
-use crate::geometry::SurfaceInteraction;
+use crate::interaction::SurfaceInteraction;
 use crate::texture::{Texture, TextureQuery};
 
 /// A surface's scattering, emission and sidedness.

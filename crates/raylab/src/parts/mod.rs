@@ -28,8 +28,9 @@ use exr::prelude::*;
 // The prelude's `Result` is exr's own.
 use std::result::Result;
 
-use crate::film::Film;
-use crate::image_io::{ImageIoError, write_atomically};
+use crate::image_io::ImageIoError;
+use crate::image_io::openexr as exr_file;
+pub use crate::image_io::openexr::{Channel, Compression, beauty, film_channels};
 use crate::region::Region;
 
 const KIND: &str = "raylab.kind";
@@ -74,9 +75,6 @@ pub struct PartHeader {
     /// For checkpoints: the command line to resume with (any text; stored as bytes).
     pub command: Option<String>,
 }
-
-/// One channel of a part: its name and its values, row by row over the region.
-pub type Channel = (String, Vec<f32>);
 
 /// A part read back: its header and channels, sorted by name.
 #[derive(Clone, Debug, PartialEq)]
@@ -142,47 +140,6 @@ pub enum PartError {
     NoParts,
 }
 
-/// The channels of `film` as `R`, `G`, `B`, and of each extra film as `NAME.R`, `NAME.G`,
-/// `NAME.B` (Nuke's and Blender's layer convention), or `NAME.Z` alone for a film named `depth`.
-///
-/// # Panics
-/// If an extra film's size is not the beauty's.
-pub fn film_channels(beauty: &Film, layers: &[(&str, &Film)]) -> Vec<Channel> {
-    let mut channels = Vec::new();
-    let mut add = |name: String, film: &Film, axis: usize| {
-        assert_eq!(
-            (film.width(), film.height()),
-            (beauty.width(), beauty.height()),
-            "{name}: a layer of the image's size"
-        );
-        channels.push((name, film.pixels().iter().map(|p| p[axis]).collect()));
-    };
-    for (axis, channel) in ["R", "G", "B"].into_iter().enumerate() {
-        add(channel.to_string(), beauty, axis);
-    }
-    for (name, film) in layers {
-        if *name == "depth" {
-            add("depth.Z".to_string(), film, 0);
-        } else {
-            for (axis, channel) in ["R", "G", "B"].into_iter().enumerate() {
-                add(format!("{name}.{channel}"), film, axis);
-            }
-        }
-    }
-    channels.sort_by(|a, b| a.0.cmp(&b.0));
-    channels
-}
-
-/// The beauty image of channels `R`, `G`, `B` of a `width×height` region, if they are there
-/// with a value for each pixel.
-pub fn beauty(channels: &[Channel], width: u32, height: u32) -> Option<Film> {
-    let pixels = width as usize * height as usize;
-    let find = |name: &str| channels.iter().find(|c| c.0 == name && c.1.len() == pixels);
-    let (r, g, b) = (&find("R")?.1, &find("G")?.1, &find("B")?.1);
-    let pixels = r.iter().zip(g).zip(b).map(|((&r, &g), &b)| glam::Vec3::new(r, g, b)).collect();
-    Some(Film::from_pixels(width, height, pixels))
-}
-
 /// Writes channels of `header.region` (float, lossless) to `path` atomically, with the header
 /// attributes of the module documentation; `header` `None` writes a plain OpenEXR image.
 ///
@@ -196,51 +153,28 @@ pub fn write_exr(
     channels: Vec<Channel>,
     header: Option<&PartHeader>,
 ) -> Result<(), ImageIoError> {
-    let list: Vec<AnyChannel<FlatSamples>> = channels
-        .into_iter()
-        .map(|(name, values)| {
-            assert_eq!(values.len() as u64, region.pixels(), "{name}: a value per pixel");
-            AnyChannel::new(name.as_str(), FlatSamples::F32(values))
-        })
-        .collect();
-    let mut attributes = LayerAttributes::named("rgb");
-    attributes.layer_position = Vec2(region.x0 as i32, region.y0 as i32);
+    let mut attributes = Vec::new();
     if let Some(header) = header {
         debug_assert_eq!((header.image, header.region), (image, region));
         let text = |s: &str| AttributeValue::Text(Text::new_or_panic(s));
-        let other = &mut attributes.other;
-        other.insert(Text::from(KIND), text(header.kind.name()));
-        other.insert(Text::from(SCENE_HASH), text(&header.scene_hash));
-        other.insert(Text::from(SETTINGS), text(&header.settings));
-        other.insert(Text::from(SAMPLES), AttributeValue::I32(header.samples as i32));
+        attributes.push((Text::from(KIND), text(header.kind.name())));
+        attributes.push((Text::from(SCENE_HASH), text(&header.scene_hash)));
+        attributes.push((Text::from(SETTINGS), text(&header.settings)));
+        attributes.push((Text::from(SAMPLES), AttributeValue::I32(header.samples as i32)));
         if let Some(command) = &header.command {
             let bytes = command.as_bytes().into();
-            other.insert(
+            attributes.push((
                 Text::from(COMMAND),
                 AttributeValue::Bytes { type_hint: Text::from("json"), bytes },
-            );
+            ));
         }
     }
     // Checkpoints are written often and read once: uncompressed, they cost the least time.
-    let encoding = match header.map(|h| h.kind) {
-        Some(PartKind::Checkpoint) => Encoding::UNCOMPRESSED,
-        _ => Encoding::SMALL_LOSSLESS,
+    let compression = match header.map(|h| h.kind) {
+        Some(PartKind::Checkpoint) => Compression::Uncompressed,
+        _ => Compression::Lossless,
     };
-    let layer = Layer::new(
-        (region.width() as usize, region.height() as usize),
-        attributes,
-        encoding,
-        AnyChannels::sort(list.into()),
-    );
-    let display = IntegerBounds::new((0, 0), (image.0 as usize, image.1 as usize));
-    let file = Image::new(ImageAttributes::new(display), layer);
-    write_atomically(path, |out| {
-        file.write().to_buffered(out).map_err(|e| ImageIoError::Float {
-            action: "write",
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })
-    })
+    exr_file::write_channels(path, image, region, channels, attributes, compression)
 }
 
 /// The most bytes of samples a part may declare (all its channels as 32-bit floats): files that

@@ -1,6 +1,7 @@
 //! Parts written and read back, merged, and refused.
 
 use super::*;
+use crate::film::Film;
 
 fn header(region: Region, samples: u32) -> PartHeader {
     PartHeader {

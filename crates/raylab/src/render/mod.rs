@@ -18,10 +18,11 @@ use rayon::prelude::*;
 
 use crate::camera::{Camera, RayGenerator};
 use crate::film::{Film, FilmError};
+pub use crate::filter::Filter;
 use crate::integrator::Integrator;
 use crate::ray::Ray;
 use crate::region::Region;
-use crate::sampling::{Sampler, SamplerKind, square_to_truncated_gaussian};
+use crate::sampling::{Sampler, SamplerKind};
 
 mod window;
 
@@ -33,38 +34,6 @@ const BAND_ROWS: u32 = 8;
 const TILE: u32 = 8;
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
 const MAX_TILE_PIXELS: usize = 64;
-
-/// The pixel filter: how a sample's position in and around its pixel is drawn. Samples are
-/// distributed as the filter, so every sample has the same weight (importance-sampled filtering).
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub enum Filter {
-    /// Uniform over the pixel: each pixel is the plain mean of the radiance over its area.
-    #[default]
-    Box,
-    /// A Gaussian about the pixel's centre, truncated at `radius` pixels on each axis.
-    Gaussian {
-        /// Standard deviation in pixels (Mitsuba's default is 0.5).
-        sigma: f32,
-        /// Truncation radius in pixels (Mitsuba's default is 4σ = 2).
-        radius: f32,
-    },
-}
-
-impl Filter {
-    /// Mitsuba's default Gaussian: σ = 0.5 px, radius 2 px.
-    pub const GAUSSIAN: Filter = Filter::Gaussian { sigma: 0.5, radius: 2.0 };
-
-    /// A sample's offset from the pixel's top-left corner for the uniform numbers `u`.
-    #[inline]
-    pub fn offset(&self, u: Vec2) -> Vec2 {
-        match *self {
-            Filter::Box => u,
-            Filter::Gaussian { sigma, radius } => {
-                Vec2::splat(0.5) + square_to_truncated_gaussian(u, sigma, radius)
-            }
-        }
-    }
-}
 
 /// How samples are drawn: the seed, the sampler (`None`: the integrator's choice), the filter and
 /// the tiling (which never changes the pixels, only the order of the work).

@@ -24,13 +24,12 @@
 //! system does not say. Half, because the parsed mesh needs room too.
 
 use std::fmt;
-use std::fs::File;
-use std::io::{self, BufReader, Read};
+use std::io;
 use std::path::{Path, PathBuf};
 
-use flate2::read::MultiGzDecoder;
-
 use super::{obj, ply};
+use crate::file_bytes::ReadError;
+pub use crate::file_bytes::read_limit_bytes;
 use crate::mesh::Mesh;
 
 /// The file name endings [`load_mesh`] accepts, in any case.
@@ -253,20 +252,6 @@ pub fn load_mesh(path: &Path) -> Result<LoadedMesh, LoadError> {
     Ok(loaded)
 }
 
-/// The most bytes [`load_mesh`] reads from one file, after decompression: half of the memory
-/// available now (`MemAvailable` in `/proc/meminfo`), clamped to 256 MiB ..= 16 GiB; 16 GiB
-/// where the system does not report it.
-pub fn read_limit_bytes() -> u64 {
-    const MIN: u64 = 256 << 20;
-    const MAX: u64 = 16 << 30;
-    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
-        let line = text.lines().find(|line| line.starts_with("MemAvailable:"))?;
-        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-        Some(kib.saturating_mul(1024))
-    });
-    available.map_or(MAX, |bytes| (bytes / 2).clamp(MIN, MAX))
-}
-
 /// Reads the whole file, decompressing it if `gzip`, within [`read_limit_bytes`]: for other
 /// readers of untrusted files (the ray-set files).
 pub(crate) fn read_file_bytes(path: &Path, gzip: bool) -> Result<Vec<u8>, LoadError> {
@@ -275,50 +260,19 @@ pub(crate) fn read_file_bytes(path: &Path, gzip: bool) -> Result<Vec<u8>, LoadEr
 
 /// Reads the whole file, decompressing it if `gzip`, refusing more than `limit` bytes.
 pub(crate) fn read_bytes(path: &Path, gzip: bool, limit: u64) -> Result<Vec<u8>, LoadError> {
-    let read_error = |error| LoadError::Read { path: path.into(), error };
-    let file = File::open(path).map_err(read_error)?;
-    // The size on disk is a hint only: special files report 0, and a file may grow.
-    let size_on_disk = file.metadata().map(|m| m.len()).unwrap_or(0);
-    if !gzip && size_on_disk > limit {
-        return Err(LoadError::TooLarge {
-            path: path.into(),
-            limit_bytes: limit,
-            decompressed: false,
-        });
-    }
-    let mut bytes = Vec::with_capacity(usize::try_from(size_on_disk.min(limit)).unwrap_or(0));
-    let result = if gzip {
-        MultiGzDecoder::new(BufReader::new(file))
-            .take(limit.saturating_add(1))
-            .read_to_end(&mut bytes)
-    } else {
-        file.take(limit.saturating_add(1)).read_to_end(&mut bytes)
-    };
-    match result {
-        Ok(_) => {}
-        // The decoder reports a malformed stream as invalid input or data, a cut one as an
-        // unexpected end; anything else is the operating system's.
-        Err(error)
-            if gzip
-                && matches!(
-                    error.kind(),
-                    io::ErrorKind::InvalidInput
-                        | io::ErrorKind::InvalidData
-                        | io::ErrorKind::UnexpectedEof
-                ) =>
-        {
-            return Err(LoadError::Gzip { path: path.into(), error });
+    Ok(crate::file_bytes::read_bytes(path, gzip, limit)?)
+}
+
+impl From<ReadError> for LoadError {
+    fn from(error: ReadError) -> LoadError {
+        match error {
+            ReadError::Read { path, error } => LoadError::Read { path, error },
+            ReadError::Gzip { path, error } => LoadError::Gzip { path, error },
+            ReadError::TooLarge { path, limit_bytes, decompressed } => {
+                LoadError::TooLarge { path, limit_bytes, decompressed }
+            }
         }
-        Err(error) => return Err(read_error(error)),
     }
-    if bytes.len() as u64 > limit {
-        return Err(LoadError::TooLarge {
-            path: path.into(),
-            limit_bytes: limit,
-            decompressed: gzip,
-        });
-    }
-    Ok(bytes)
 }
 
 /// `text` quoted for an error message: escaped so that it stays on one line, and cut after

@@ -24,17 +24,18 @@ pub mod terrain;
 use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
+pub(crate) use file::read_file_bytes;
 pub use file::{
     InstancedMesh, LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh,
     read_limit_bytes,
 };
-pub(crate) use file::{read_bytes, read_file_bytes};
 pub use keyframes::Keyframe;
 pub use model::model_to_lab;
 pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
 
 use crate::accel::Hit;
-use crate::geometry::{Geometry, SurfaceInteraction};
+use crate::geometry::Geometry;
+use crate::interaction::SurfaceInteraction;
 use crate::light::{Light, PointLight};
 use crate::material::Material;
 use crate::ray::Ray;
@@ -177,7 +178,7 @@ pub struct RenderSettings {
     /// The sampler.
     pub sampler: Option<crate::SamplerKind>,
     /// The pixel filter.
-    pub filter: Option<crate::Filter>,
+    pub filter: Option<crate::filter::Filter>,
 }
 
 impl Scene {

@@ -40,7 +40,7 @@ impl Scene {
     /// [`from_mesh`](Self::from_mesh) with meshes drawn in several places, each stored once.
     fn from_meshes(mesh: &Mesh, instanced: &[InstancedMesh]) -> Scene {
         let mut materials: Vec<Material> =
-            mesh.materials.iter().map(MeshMaterial::to_material).collect();
+            mesh.materials.iter().map(super::gltf::scene_material).collect();
         let default = materials.len() as u32;
         materials.push(Material::diffuse("default", MeshMaterial::DEFAULT_DIFFUSE));
         let mut geometry = Geometry::new();

@@ -16,11 +16,11 @@ use toml::Spanned;
 
 use super::{CameraSettings, FovAxis, Keyframe, RenderSettings, Scene};
 use crate::camera::Camera;
+use crate::filter::Filter;
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};
 use crate::material::Material;
 use crate::mesh::Mesh;
-use crate::render::Filter;
 use crate::sampling::SamplerKind;
 
 /// A scene file that cannot be used: the file, where in it, and what is wrong.
@@ -302,9 +302,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                 if material.is_none() {
                     // The file's own materials, as diffuse with their Kd and Ke.
                     let base = materials.len() as u32;
-                    materials.extend(
-                        loaded.mesh.materials.iter().map(crate::mesh::MeshMaterial::to_material),
-                    );
+                    materials.extend(loaded.mesh.materials.iter().map(super::gltf::scene_material));
                     let default = materials.len() as u32;
                     let grey = crate::mesh::MeshMaterial::DEFAULT_DIFFUSE;
                     materials.push(Material::diffuse("default", grey));

@@ -71,9 +71,9 @@ pub const MAX_TEXTURE_FILE_BYTES: u64 = 1 << 30;
 pub fn load_texture(path: &Path, srgb: bool) -> Result<TextureImage, String> {
     // At most 1 GiB (or half the memory available): more than any image within the size
     // limits takes, compressed; a bigger file is refused before it is read.
-    let limit = crate::scene::read_limit_bytes().min(MAX_TEXTURE_FILE_BYTES);
-    let bytes = crate::scene::read_bytes(path, false, limit).map_err(|e| match e {
-        crate::scene::LoadError::Read { error, .. } => {
+    let limit = crate::file_bytes::read_limit_bytes().min(MAX_TEXTURE_FILE_BYTES);
+    let bytes = crate::file_bytes::read_bytes(path, false, limit).map_err(|e| match e {
+        crate::file_bytes::ReadError::Read { error, .. } => {
             format!("{}: cannot read it: {error}", path.display())
         }
         other => other.to_string(),

@@ -17,6 +17,8 @@
 
 mod material;
 
+pub(crate) use material::scene_material;
+
 use std::collections::HashMap;
 use std::f32::consts::PI;
 use std::path::Path;

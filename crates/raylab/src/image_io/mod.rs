@@ -14,8 +14,10 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use image::{ImageEncoder, RgbImage};
 
+pub mod openexr;
+
 use crate::film::{Display, Film};
-use crate::region::Region;
+pub use openexr::{load_exr_channels, save_exr_layers};
 
 /// Why an image could not be written or read. Every message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -206,37 +208,6 @@ pub fn save_film(path: &Path, film: &Film, display: &Display) -> Result<(), Imag
         }),
         _ => save_rgb8(path, &film.to_rgb8(display).map_err(|e| float_error(e.to_string()))?),
     }
-}
-
-/// Writes an OpenEXR file with the beauty image as its `R`, `G`, `B` channels and each extra
-/// film as channels `NAME.R`, `NAME.G`, `NAME.B` (the layer convention of Nuke and Blender), or
-/// `NAME.Z` alone for a film named `depth`. Atomic, as every write.
-///
-/// # Panics
-/// If a film's size is not the beauty's.
-pub fn save_exr_layers(
-    path: &Path,
-    beauty: &Film,
-    layers: &[(&str, &Film)],
-) -> Result<(), ImageIoError> {
-    let (width, height) = (beauty.width(), beauty.height());
-    let channels = crate::parts::film_channels(beauty, layers);
-    crate::parts::write_exr(path, (width, height), Region::full(width, height), channels, None)
-}
-
-/// Reads every channel of an OpenEXR file's first layer by name, row by row from the top.
-pub fn load_exr_channels(path: &Path) -> Result<Vec<(String, Vec<f32>)>, ImageIoError> {
-    use exr::prelude::*;
-    let error =
-        |message: String| ImageIoError::Float { action: "read", path: path.to_path_buf(), message };
-    let image = read_all_flat_layers_from_file(path).map_err(|e| error(e.to_string()))?;
-    let layer = image.layer_data.first().ok_or_else(|| error("no layer".into()))?;
-    Ok(layer
-        .channel_data
-        .list
-        .iter()
-        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-        .collect())
 }
 
 /// Reads a float image, `.pfm` or `.exr` (its first RGB layer), as a film.

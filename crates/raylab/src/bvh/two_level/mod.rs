@@ -25,7 +25,7 @@ use glam::{Affine3A, Vec3};
 
 mod lanes;
 
-use super::{Accelerator, Hit};
+use crate::accel::{Accelerator, Hit};
 use crate::bvh::{Bounds, Frustum, RayBoxTest};
 use crate::geometry::instance::max_row_sum;
 use crate::geometry::{Geometry, Placement};

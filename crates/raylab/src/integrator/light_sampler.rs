@@ -1,0 +1,445 @@
+//! Light sampling for the path tracer: every light of a scene in one set, chosen by power.
+//!
+//! [`LightSet`] gathers the scene's point lights, its emissive triangles (area lights) and the
+//! environment, picks one in proportion to its power, and samples a direction toward it with its
+//! density per unit solid angle (next-event estimation). A material's emission texture makes a
+//! triangle shine in a pattern: its radiance is read at the sampled point (and where a ray hits
+//! it), and its power for choosing among lights is the texture's mean over the triangle,
+//! estimated on a grid.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+use crate::interaction::SurfaceInteraction;
+use crate::light::Light;
+use crate::ray::{Ray, SurfacePoint, offset_ray_origin};
+use crate::sampling::{
+    DiscreteDistribution, sample_spherical_triangle, spherical_triangle_area,
+    square_to_uniform_sphere, square_to_uniform_triangle, uniform_sphere_pdf,
+};
+use crate::scene::Scene;
+use crate::texture::{Texture, TextureQuery};
+
+/// Every light of a scene, ready to be sampled: point lights, the emissive triangles (area
+/// lights) and the environment, chosen by power.
+///
+/// A triangle light is one-sided, as Mitsuba's `area` emitter: it emits its material's
+/// `emission` from its front (counter-clockwise) side only. Points on it are sampled uniformly by
+/// area and their density converted to solid angle at the shading point.
+#[derive(Clone, Debug)]
+pub struct LightSet {
+    lights: Vec<SampledLight>,
+    /// By power; `None` without lights.
+    distribution: Option<DiscreteDistribution>,
+    /// For each triangle, the index of its light, or `u32::MAX`.
+    triangle_light: Vec<u32>,
+    /// The environment's radiance and its index, if the scene has one.
+    environment: Option<(Vec3, u32)>,
+    /// How points on triangle lights are chosen.
+    triangle_sampling: TriangleSampling,
+    /// The emission texture of each textured triangle light, with the texture coordinates at
+    /// its corners ([`SampledLight::Triangle::texture`] indexes it).
+    textures: Vec<(Texture, [Vec2; 3])>,
+}
+
+/// How points on triangle lights are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TriangleSampling {
+    /// Uniformly by area (Mitsuba's choice): simple, noisy for large lights close by.
+    #[default]
+    Area,
+    /// Uniformly in the solid angle the triangle subtends (Arvo 1995), where that is neither
+    /// tiny nor nearly a hemisphere (PBR 4th ed.'s bounds); by area elsewhere.
+    SolidAngle,
+}
+
+impl std::str::FromStr for TriangleSampling {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "area" => Ok(TriangleSampling::Area),
+            "solid-angle" => Ok(TriangleSampling::SolidAngle),
+            _ => Err(format!("unknown light sampling '{s}': expected area or solid-angle")),
+        }
+    }
+}
+
+/// Solid angles within which triangle lights are sampled by solid angle (PBR 4th ed.,
+/// `MinSphericalSampleArea` and `MaxSphericalSampleArea`).
+const SOLID_ANGLE_SAMPLING: std::ops::Range<f32> = 3e-4..6.22;
+
+#[derive(Clone, Debug)]
+enum SampledLight {
+    Point {
+        position: Vec3,
+        intensity: Vec3,
+    },
+    /// `texture`: an index into [`LightSet::textures`], or `u32::MAX` for an even emitter;
+    /// `error`: a bound on the rounding of its points ([`Geometry::point_error_bound`]).
+    ///
+    /// [`Geometry::point_error_bound`]: crate::geometry::Geometry::point_error_bound
+    Triangle {
+        corners: [Vec3; 3],
+        normal: Vec3,
+        error: Vec3,
+        area: f32,
+        radiance: Vec3,
+        texture: u32,
+    },
+    Environment {
+        radiance: Vec3,
+    },
+}
+
+/// A point sampled on a light, seen from a shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// The unit direction from the shading point toward the light.
+    pub direction: Vec3,
+    /// The radiance arriving from it (unoccluded).
+    pub radiance: Vec3,
+    /// The density per unit solid angle of this direction, times the light's selection
+    /// probability; for a point light, just that probability.
+    pub pdf: f32,
+    /// A point light: no other strategy can find it.
+    pub delta: bool,
+    /// The ray to test visibility with (from the shading point, ending just before the light).
+    pub shadow_ray: Ray,
+}
+
+/// The fraction of a shadow ray toward a point on a surface light that is tested: the rest
+/// (a relative 10⁻⁴) keeps the light's own triangle out of the test (PBR 4th ed.'s
+/// `ShadowEpsilon`).
+const SHADOW_RAY_LENGTH: f32 = 1.0 - 1e-4;
+
+impl LightSet {
+    /// The lights of `scene`.
+    pub fn new(scene: &Scene) -> LightSet {
+        let mut lights = Vec::new();
+        let mut triangle_light = vec![u32::MAX; scene.geometry.len()];
+        let mut environment = None;
+        let radius = scene.bounds().map_or(1.0, |(lo, hi)| 0.5 * (hi - lo).length());
+        for light in &scene.lights {
+            match light {
+                Light::Point(point) => lights.push(SampledLight::Point {
+                    position: point.position,
+                    intensity: point.intensity(),
+                }),
+                // Several environments shine as one: their radiances add.
+                Light::Environment { radiance } => match environment {
+                    Some((sum, index)) => {
+                        let sum = sum + *radiance;
+                        environment = Some((sum, index));
+                        lights[index as usize] = SampledLight::Environment { radiance: sum };
+                    }
+                    None => {
+                        environment = Some((*radiance, lights.len() as u32));
+                        lights.push(SampledLight::Environment { radiance: *radiance });
+                    }
+                },
+            }
+        }
+        let mut textures = Vec::new();
+        let mut texture_means = Vec::new();
+        for (i, slot) in triangle_light.iter_mut().enumerate() {
+            let material = &scene.materials[scene.geometry.material_id(i) as usize];
+            let area = scene.geometry.area(i);
+            if material.is_emissive() && area > 0.0 {
+                *slot = lights.len() as u32;
+                let corners = scene.geometry.triangle(i);
+                let texture = match &material.textures.emission {
+                    None => u32::MAX,
+                    Some(texture) => {
+                        let uvs = scene.geometry.corner_uvs(i);
+                        texture_means.push(mean_over(texture, material.emission, corners, uvs));
+                        textures.push((texture.clone(), uvs));
+                        textures.len() as u32 - 1
+                    }
+                };
+                lights.push(SampledLight::Triangle {
+                    corners,
+                    normal: scene.geometry.normal(i),
+                    error: scene.geometry.point_error_bound(i),
+                    area,
+                    radiance: material.emission,
+                    texture,
+                });
+            }
+        }
+        let powers: Vec<f32> = lights
+            .iter()
+            .map(|light| match light {
+                SampledLight::Point { intensity, .. } => 4.0 * PI * mean(*intensity),
+                SampledLight::Triangle { area, radiance, texture, .. } => {
+                    let textured = texture_means.get(*texture as usize).copied();
+                    PI * area * textured.unwrap_or_else(|| mean(*radiance))
+                }
+                // Through a disk the size of the scene (PBR 4th ed. §12.5).
+                SampledLight::Environment { radiance } => PI * radius * radius * mean(*radiance),
+            })
+            .collect();
+        LightSet {
+            lights,
+            distribution: DiscreteDistribution::new(&powers),
+            triangle_light,
+            environment,
+            triangle_sampling: TriangleSampling::Area,
+            textures,
+        }
+    }
+
+    /// A triangle light's radiance at barycentrics `(b1, b2)`, point `p`: `radiance` times its
+    /// texture there, if it has one.
+    #[inline]
+    fn radiance_at(&self, radiance: Vec3, texture: u32, (b1, b2): (f32, f32), p: Vec3) -> Vec3 {
+        let Some((texture, [t0, t1, t2])) = self.textures.get(texture as usize) else {
+            return radiance;
+        };
+        let uv = (1.0 - b1 - b2) * *t0 + b1 * *t1 + b2 * *t2;
+        radiance * texture.rgb(&TextureQuery { uv, p, footprint: 0.0 }).max(Vec3::ZERO)
+    }
+
+    /// The same lights, with triangle lights sampled as `sampling` says.
+    pub fn with_triangle_sampling(mut self, sampling: TriangleSampling) -> LightSet {
+        self.triangle_sampling = sampling;
+        self
+    }
+
+    /// The solid angle of a triangle light seen from `p`, when it is sampled by solid angle.
+    #[inline]
+    fn solid_angle(&self, corners: [Vec3; 3], p: Vec3) -> Option<f32> {
+        if self.triangle_sampling == TriangleSampling::Area {
+            return None;
+        }
+        let omega = spherical_triangle_area(corners, p);
+        SOLID_ANGLE_SAMPLING.contains(&omega).then_some(omega)
+    }
+
+    /// Moves the first point light to `position` (as `raylab view` moves the light); nothing
+    /// without a point light.
+    pub fn move_first_point_light(&mut self, position: Vec3) {
+        if let Some(SampledLight::Point { position: at, .. }) =
+            self.lights.iter_mut().find(|l| matches!(l, SampledLight::Point { .. }))
+        {
+            *at = position;
+        }
+    }
+
+    /// The number of lights (each emissive triangle counts as one).
+    pub fn len(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// Whether the scene has no light at all.
+    pub fn is_empty(&self) -> bool {
+        self.distribution.is_none()
+    }
+
+    /// Picks a light with `u_light` and a point on it with `u`, as seen from `point`; `None` when
+    /// there is nothing to sample or the point sees the light's back or nothing of it.
+    #[inline]
+    pub fn sample(&self, point: &SurfacePoint, u_light: f32, u: Vec2) -> Option<LightSample> {
+        let (index, selection, _) = self.distribution.as_ref()?.sample(u_light);
+        match self.lights[index] {
+            SampledLight::Point { position, intensity } => {
+                let to_light = position - point.p;
+                let distance_squared = to_light.length_squared();
+                if distance_squared == 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    direction: to_light / distance_squared.sqrt(),
+                    radiance: intensity / distance_squared,
+                    pdf: selection,
+                    delta: true,
+                    shadow_ray: point.spawn_ray_to(position),
+                })
+            }
+            SampledLight::Triangle { corners, normal, error, area, radiance, texture } => {
+                let [v0, v1, v2] = corners;
+                let solid_angle = self.solid_angle(corners, point.p);
+                let ([b0, b1, b2], solid_angle_pdf) = match solid_angle {
+                    Some(_) => sample_spherical_triangle(corners, point.p, u)?,
+                    None => (square_to_uniform_triangle(u), 0.0),
+                };
+                let target = b0 * v0 + b1 * v1 + b2 * v2;
+                let to_light = target - point.p;
+                let distance_squared = to_light.length_squared();
+                let direction = to_light / distance_squared.sqrt();
+                // One-sided: the light must face the point.
+                let cos_light = -direction.dot(normal);
+                if cos_light <= 0.0 || !distance_squared.is_normal() {
+                    return None;
+                }
+                // Both ends leave their surfaces (PBR 4th ed.'s `SpawnRayTo` between two
+                // surface points): the light's end by its own rounding bound, which for an
+                // instance far from where it is stored can outgrow the relative shortening.
+                let end = SurfacePoint { p: target, error, normal };
+                let mut shadow_ray = point.spawn_ray_to(offset_ray_origin(&end, point.p - target));
+                shadow_ray.t_max = SHADOW_RAY_LENGTH;
+                let pdf = match solid_angle {
+                    Some(_) => solid_angle_pdf,
+                    None => distance_squared / (cos_light * area),
+                };
+                Some(LightSample {
+                    direction,
+                    radiance: self.radiance_at(radiance, texture, (b1, b2), target),
+                    pdf: selection * pdf,
+                    delta: false,
+                    shadow_ray,
+                })
+            }
+            SampledLight::Environment { radiance } => {
+                let direction = square_to_uniform_sphere(u);
+                Some(LightSample {
+                    direction,
+                    radiance,
+                    pdf: selection * uniform_sphere_pdf(direction),
+                    delta: false,
+                    shadow_ray: point.spawn_ray(direction),
+                })
+            }
+        }
+    }
+
+    /// The radiance a ray from `origin` (the previous path vertex's point) sees at `hit` on an
+    /// emissive triangle, and the density with which [`sample`](Self::sample) would have chosen
+    /// that direction from `origin`; zero and zero for a triangle that does not emit or is seen
+    /// from behind.
+    #[inline]
+    pub fn emitted(&self, origin: Vec3, hit: &SurfaceInteraction) -> (Vec3, f32) {
+        let light = self.triangle_light[hit.triangle as usize];
+        if light == u32::MAX {
+            return (Vec3::ZERO, 0.0);
+        }
+        let SampledLight::Triangle { corners, normal, area, radiance, texture, .. } =
+            self.lights[light as usize]
+        else {
+            unreachable!("triangle_light indexes triangle lights");
+        };
+        let to_light = hit.point.p - origin;
+        let distance_squared = to_light.length_squared();
+        let cos_light = -to_light.dot(normal) / distance_squared.sqrt();
+        if cos_light <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let selection = self.distribution.as_ref().map_or(0.0, |d| d.pmf(light as usize));
+        let pdf = match self.solid_angle(corners, origin) {
+            Some(omega) => 1.0 / omega,
+            None => distance_squared / (cos_light * area),
+        };
+        let radiance = match self.textures.get(texture as usize) {
+            None => radiance,
+            Some((pattern, _)) => radiance * pattern.rgb(&hit.texture_query()).max(Vec3::ZERO),
+        };
+        (radiance, selection * pdf)
+    }
+
+    /// The environment's radiance along a ray that leaves the scene, and the density with which
+    /// [`sample`](Self::sample) would have chosen its direction; zero without an environment.
+    #[inline]
+    pub fn environment(&self, direction: Vec3) -> (Vec3, f32) {
+        match self.environment {
+            Some((radiance, index)) => {
+                let selection = self.distribution.as_ref().map_or(0.0, |d| d.pmf(index as usize));
+                (radiance, selection * uniform_sphere_pdf(direction))
+            }
+            None => (Vec3::ZERO, 0.0),
+        }
+    }
+}
+
+/// The mean of a colour's channels.
+#[inline]
+fn mean(c: Vec3) -> f32 {
+    c.element_sum() / 3.0
+}
+
+/// The mean of `radiance` times a texture over a triangle (the mean of its channels): the
+/// power estimate that picks among lights. The texture is read at the centres of the 64
+/// triangles of an 8 × 8 subdivision, each through a footprint as wide as one of them (a
+/// mip-mapped image averages over it, so a small bright spot between centres still counts),
+/// and the estimate is kept above 1% of the untextured power, so that an emitter the grid
+/// misses is still sampled now and then (the choice among lights only steers samples: any
+/// positive power leaves the estimate unbiased).
+fn mean_over(texture: &Texture, radiance: Vec3, corners: [Vec3; 3], uvs: [Vec2; 3]) -> f32 {
+    const N: u32 = 8;
+    let uv_area = 0.5 * (uvs[1] - uvs[0]).perp_dot(uvs[2] - uvs[0]).abs();
+    let footprint = (2.0 * uv_area).sqrt() / N as f32;
+    let mut sum = 0.0;
+    let mut read = |b1: f32, b2: f32| {
+        let b0 = 1.0 - b1 - b2;
+        let uv = b0 * uvs[0] + b1 * uvs[1] + b2 * uvs[2];
+        let p = b0 * corners[0] + b1 * corners[1] + b2 * corners[2];
+        let value = texture.rgb(&TextureQuery { uv, p, footprint }).max(Vec3::ZERO);
+        sum += mean(radiance * value);
+    };
+    // Cell (i, j) of the subdivision: its upright triangle's centre, and where it has one,
+    // its inverted neighbour's.
+    let n = N as f32;
+    for i in 0..N {
+        for j in 0..N - i {
+            let (i, j) = (i as f32, j as f32);
+            read((i + 1.0 / 3.0) / n, (j + 1.0 / 3.0) / n);
+            if i + j + 2.0 <= n {
+                read((i + 2.0 / 3.0) / n, (j + 2.0 / 3.0) / n);
+            }
+        }
+    }
+    let estimate = sum / (N * N) as f32;
+    let floor = 0.01 * mean(radiance);
+    if estimate.is_finite() { estimate.max(floor) } else { floor }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `mean_over` weighs the texture by the emission channel by channel, finds a pattern's
+    /// share of the triangle, and keeps a floor for a pattern its points miss.
+    #[test]
+    fn a_textured_emitter_s_power_is_its_mean_emission() {
+        use crate::texture::{ImageTexture, TextureImage, Wrap};
+        use std::sync::Arc;
+        let image = |texels: Vec<[f32; 4]>, width: u32| {
+            let image = TextureImage::from_rgba_f32("t", width, 1, texels);
+            let texture = ImageTexture::new(Arc::new(image));
+            Texture::Image(ImageTexture { wrap: [Wrap::Clamp; 2], ..texture })
+        };
+        let corners = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        // A constant texture scales the emission.
+        let grey = image(vec![[0.5, 0.25, 1.0, 1.0]], 1);
+        let emission = Vec3::new(2.0, 4.0, 1.0);
+        let expected = mean(emission * Vec3::new(0.5, 0.25, 1.0));
+        assert!((mean_over(&grey, emission, corners, uvs) - expected).abs() < 1e-6);
+        // Red emission through a blue texture emits nothing: only the floor remains.
+        let blue = image(vec![[0.0, 0.0, 1.0, 1.0]], 1);
+        let red = Vec3::new(3.0, 0.0, 0.0);
+        assert_eq!(mean_over(&blue, red, corners, uvs), 0.01 * mean(red));
+        // White where u < ½ (256 texels): the triangle's part with u < ½ is ¾ of its area.
+        let texels = (0..256).map(|x| if x < 128 { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] });
+        let half = image(texels.collect(), 256);
+        let share = mean_over(&half, Vec3::ONE, corners, uvs);
+        assert!((share - 0.75).abs() < 0.02, "{share}");
+    }
+
+    #[test]
+    fn several_environments_shine_as_their_sum() {
+        let mut scene = Scene::built_in("cornell").unwrap();
+        scene.lights = vec![
+            Light::Environment { radiance: Vec3::new(1.0, 2.0, 3.0) },
+            Light::Environment { radiance: Vec3::new(0.5, 0.5, 0.5) },
+        ];
+        let lights = LightSet::new(&scene);
+        assert_eq!(lights.len(), 1);
+        let (radiance, pdf) = lights.environment(Vec3::Z);
+        assert_eq!(radiance, Vec3::new(1.5, 2.5, 3.5));
+        assert!((pdf - 1.0 / (4.0 * PI)).abs() < 1e-7);
+        // Light sampling sees the same sum, with the same density.
+        let point = SurfacePoint { p: Vec3::ZERO, error: Vec3::ZERO, normal: Vec3::Z };
+        let sample = lights.sample(&point, 0.3, Vec2::new(0.2, 0.9)).unwrap();
+        assert_eq!((sample.radiance, sample.pdf), (radiance, pdf));
+    }
+}

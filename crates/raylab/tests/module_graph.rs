@@ -1,0 +1,586 @@
+//! The library's top-level modules import downward only: they form a DAG.
+//!
+//! This test reads the library's sources, finds every path that leaves a top-level module
+//! (`crate::scene::Scene`, `use crate::{bvh::Bounds, Ray}`, a `super::` that climbs past the
+//! module's root), resolves names the crate root re-exports to the module they come from, and
+//! fails on any cycle between top-level modules, naming the modules of each cycle and one place
+//! (file and line) for every edge in it. Test code (`#[cfg(test)]` items and the files they
+//! declare) may import from anywhere and is not counted.
+//!
+//! It reads source text, not the compiler's resolution, so it knows Rust's paths only as far
+//! as this crate writes them: `use` trees, inline paths, `super::` chains and inline modules.
+//! `tests::a_cycle_is_found` checks it against a small crate with a cycle given as text.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// One import from a top-level module into another.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+struct Edge {
+    from: String,
+    to: String,
+    file: String,
+    line: usize,
+}
+
+#[test]
+fn the_library_modules_form_a_dag() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    collect_rust_files(&root, &root, &mut files);
+    assert!(
+        files.iter().any(|(path, _)| path == Path::new("lib.rs")),
+        "no lib.rs under {}",
+        root.display()
+    );
+    let edges = module_edges(&files);
+    // The check must see the crate's real imports: the path tracer uses the BVH's accelerator
+    // interface, so an empty graph means the reader is broken, not that the crate is tidy.
+    assert!(
+        edges.iter().any(|e| e.from == "integrator" && e.to == "accel"),
+        "the reader found no import of accel from integrator: {} edges",
+        edges.len()
+    );
+    let cycles = cycles(&edges);
+    assert!(cycles.is_empty(), "{}", describe_cycles(&cycles, &edges));
+}
+
+fn collect_rust_files(root: &Path, dir: &Path, out: &mut Vec<(PathBuf, String)>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|entry| entry.expect("a directory entry").path())
+        .collect();
+    entries.sort();
+    for path in entries {
+        if path.is_dir() {
+            collect_rust_files(root, &path, out);
+        } else if path.extension().is_some_and(|ext| ext == "rs") {
+            let text = std::fs::read_to_string(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let relative = path.strip_prefix(root).expect("under the root").to_path_buf();
+            out.push((relative, text));
+        }
+    }
+}
+
+/// The module path of a file relative to `src/`: `lib.rs` is the root (empty), `a.rs` and
+/// `a/mod.rs` are `[a]`, `a/b.rs` is `[a, b]`.
+fn module_path_of(file: &Path) -> Vec<String> {
+    let mut parts: Vec<String> =
+        file.iter().map(|part| part.to_string_lossy().into_owned()).collect();
+    let last = parts.pop().expect("a file name");
+    let stem = last.trim_end_matches(".rs");
+    if stem != "mod" && !(parts.is_empty() && stem == "lib") {
+        parts.push(stem.to_owned());
+    }
+    parts
+}
+
+/// Every edge between distinct top-level modules, from non-test code.
+fn module_edges(files: &[(PathBuf, String)]) -> BTreeSet<Edge> {
+    let lib = files
+        .iter()
+        .find(|(path, _)| path == Path::new("lib.rs"))
+        .map(|(_, text)| strip_comments_and_literals(text))
+        .unwrap_or_default();
+    let top_modules: BTreeSet<String> =
+        files.iter().filter_map(|(path, _)| module_path_of(path).first().cloned()).collect();
+    let reexports = root_reexports(&tokens(&lib), &top_modules);
+
+    // Files declared by `#[cfg(test)] mod name;` are test code.
+    let mut test_files = BTreeSet::new();
+    for (path, text) in files {
+        let module = module_path_of(path);
+        for name in test_module_declarations(&tokens(&strip_comments_and_literals(text))) {
+            let mut child = module.clone();
+            child.push(name);
+            test_files.insert(child);
+        }
+    }
+
+    let mut edges = BTreeSet::new();
+    for (path, text) in files {
+        let module = module_path_of(path);
+        if module.is_empty() || (1..=module.len()).any(|n| test_files.contains(&module[..n])) {
+            continue;
+        }
+        let clean = strip_comments_and_literals(text);
+        for (target, line) in outside_references(&tokens(&clean), &module) {
+            let to = if top_modules.contains(&target) {
+                Some(target)
+            } else {
+                reexports.get(&target).cloned()
+            };
+            if let Some(to) = to
+                && to != module[0]
+            {
+                edges.insert(Edge {
+                    from: module[0].clone(),
+                    to,
+                    file: path.display().to_string(),
+                    line,
+                });
+            }
+        }
+    }
+    edges
+}
+
+/// The source text with comments, string and character literals blanked out (newlines kept,
+/// so that lines still count).
+fn strip_comments_and_literals(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    let blank = |c: char| if c == '\n' { '\n' } else { ' ' };
+    while i < chars.len() {
+        let c = chars[i];
+        let next = chars.get(i + 1).copied();
+        if c == '/' && next == Some('/') {
+            while i < chars.len() && chars[i] != '\n' {
+                i += 1;
+            }
+        } else if c == '/' && next == Some('*') {
+            let mut depth = 0;
+            while i < chars.len() {
+                if chars[i] == '/' && chars.get(i + 1) == Some(&'*') {
+                    depth += 1;
+                    i += 2;
+                } else if chars[i] == '*' && chars.get(i + 1) == Some(&'/') {
+                    depth -= 1;
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    out.push(blank(chars[i]));
+                    i += 1;
+                }
+            }
+        } else if c == 'r'
+            && (next == Some('"') || next == Some('#'))
+            && !chars[..i].last().is_some_and(|p| p.is_alphanumeric() || *p == '_')
+        {
+            // A raw string r"…" or r#"…"#.
+            let mut j = i + 1;
+            let mut hashes = 0;
+            while chars.get(j) == Some(&'#') {
+                hashes += 1;
+                j += 1;
+            }
+            if chars.get(j) != Some(&'"') {
+                out.push(c);
+                i += 1;
+                continue;
+            }
+            j += 1;
+            loop {
+                match chars.get(j) {
+                    None => break,
+                    Some('"') if (1..=hashes).all(|k| chars.get(j + k) == Some(&'#')) => {
+                        j += 1 + hashes;
+                        break;
+                    }
+                    Some(&other) => {
+                        out.push(blank(other));
+                        j += 1;
+                    }
+                }
+            }
+            i = j;
+        } else if c == '"' {
+            i += 1;
+            while i < chars.len() && chars[i] != '"' {
+                if chars[i] == '\\' {
+                    i += 1;
+                }
+                if let Some(&other) = chars.get(i) {
+                    out.push(blank(other));
+                }
+                i += 1;
+            }
+            i += 1;
+        } else if c == '\'' {
+            // A character literal ('x', '\n', '\u{..}'), not a lifetime ('a).
+            let close = if next == Some('\\') {
+                (i + 2..chars.len().min(i + 12)).find(|&j| chars[j] == '\'')
+            } else if chars.get(i + 2) == Some(&'\'') {
+                Some(i + 2)
+            } else {
+                None
+            };
+            match close {
+                Some(end) => i = end + 1,
+                None => {
+                    out.push(c);
+                    i += 1;
+                }
+            }
+        } else {
+            out.push(c);
+            i += 1;
+        }
+    }
+    out
+}
+
+/// A token: an identifier or keyword, `::`, or one punctuation character; with its line.
+fn tokens(text: &str) -> Vec<(String, usize)> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut line = 1;
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c == '\n' {
+            line += 1;
+            i += 1;
+        } else if c.is_whitespace() {
+            i += 1;
+        } else if c.is_alphanumeric() || c == '_' {
+            let start = i;
+            while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
+                i += 1;
+            }
+            out.push((chars[start..i].iter().collect(), line));
+        } else if c == ':' && chars.get(i + 1) == Some(&':') {
+            out.push(("::".to_owned(), line));
+            i += 2;
+        } else {
+            out.push((c.to_string(), line));
+            i += 1;
+        }
+    }
+    out
+}
+
+/// The index just past the item that starts at `start`: a `;` at brace depth 0, or the brace
+/// that closes the first `{` opened at depth 0.
+fn item_end(tokens: &[(String, usize)], start: usize) -> usize {
+    let mut depth = 0usize;
+    let mut i = start;
+    while i < tokens.len() {
+        match tokens[i].0.as_str() {
+            "{" | "(" | "[" => depth += 1,
+            "}" | ")" | "]" => {
+                depth = depth.saturating_sub(1);
+                if depth == 0 && tokens[i].0 == "}" {
+                    return i + 1;
+                }
+            }
+            ";" if depth == 0 => return i + 1,
+            _ => {}
+        }
+        i += 1;
+    }
+    tokens.len()
+}
+
+/// Where `#[cfg(test)]` starts at `i`, the index past the attribute.
+fn cfg_test_at(tokens: &[(String, usize)], i: usize) -> Option<usize> {
+    let pattern = ["#", "[", "cfg", "(", "test", ")", "]"];
+    let matches =
+        pattern.iter().enumerate().all(|(k, p)| tokens.get(i + k).is_some_and(|(t, _)| t == p));
+    matches.then_some(i + pattern.len())
+}
+
+/// Names of `#[cfg(test)] mod name;` declarations (test code in a file of its own).
+fn test_module_declarations(tokens: &[(String, usize)]) -> Vec<String> {
+    let mut names = Vec::new();
+    for i in 0..tokens.len() {
+        if let Some(mut j) = cfg_test_at(tokens, i) {
+            while matches!(tokens.get(j).map(|t| t.0.as_str()), Some("pub" | "(" | "crate" | ")")) {
+                j += 1;
+            }
+            if tokens.get(j).is_some_and(|t| t.0 == "mod")
+                && tokens.get(j + 2).is_some_and(|t| t.0 == ";")
+            {
+                names.push(tokens[j + 1].0.clone());
+            }
+        }
+    }
+    names
+}
+
+/// What the crate root re-exports: a name to the top-level module it comes from
+/// (`pub use bvh::{Bvh, BuildSettings};` maps `Bvh` and `BuildSettings` to `bvh`).
+fn root_reexports(
+    tokens: &[(String, usize)],
+    top_modules: &BTreeSet<String>,
+) -> BTreeMap<String, String> {
+    let mut map = BTreeMap::new();
+    let mut i = 0;
+    while i < tokens.len() {
+        if tokens[i].0 == "use" {
+            let end = item_end(tokens, i);
+            let mut j = i + 1;
+            if tokens.get(j).is_some_and(|t| t.0 == "crate") {
+                j += 2;
+            }
+            if let Some(module) = tokens.get(j).map(|t| &t.0)
+                && top_modules.contains(module)
+            {
+                // Every name the tree brings in: an identifier followed by `,`, `}` or `;`
+                // (or `as NAME`, whose alias is the name).
+                for k in j + 1..end {
+                    let name = &tokens[k].0;
+                    let follows = tokens.get(k + 1).map(|t| t.0.as_str());
+                    let is_name = name.chars().all(|c| c.is_alphanumeric() || c == '_')
+                        && name != "self"
+                        && matches!(follows, Some("," | "}" | ";"));
+                    if is_name {
+                        map.insert(name.clone(), module.clone());
+                    }
+                }
+            }
+            i = end;
+        } else {
+            i += 1;
+        }
+    }
+    map
+}
+
+/// Every name that a path in this module's non-test code reaches at the crate root, with its
+/// line: `crate::a`, `crate::{a, b::c}`, and `super::…` chains that climb to the root.
+fn outside_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(String, usize)> {
+    let mut out = Vec::new();
+    // The module path at each point: the file's, plus inline `mod name { … }` blocks.
+    let mut inline: Vec<(String, usize)> = Vec::new(); // (name, brace depth it closes at)
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < tokens.len() {
+        if let Some(after) = cfg_test_at(tokens, i) {
+            i = item_end(tokens, after);
+            continue;
+        }
+        let token = tokens[i].0.as_str();
+        match token {
+            "{" => depth += 1,
+            "}" => {
+                depth = depth.saturating_sub(1);
+                if inline.last().is_some_and(|(_, d)| *d == depth) {
+                    inline.pop();
+                }
+            }
+            "mod" if tokens.get(i + 2).is_some_and(|t| t.0 == "{") => {
+                inline.push((tokens[i + 1].0.clone(), depth));
+            }
+            _ => {}
+        }
+        let preceded_by_path = i > 0 && tokens[i - 1].0 == "::";
+        if (token == "crate" || token == "super") && !preceded_by_path {
+            // Climb: `crate` goes to the root; each `super` one level up.
+            let here = module.len() + inline.len();
+            let mut level = here;
+            let mut j = i;
+            if token == "crate" {
+                level = 0;
+                j += 1;
+            } else {
+                while tokens.get(j).is_some_and(|t| t.0 == "super") {
+                    level = level.saturating_sub(1);
+                    j += 1;
+                    if tokens.get(j).is_some_and(|t| t.0 == "::") {
+                        j += 1;
+                    } else {
+                        break;
+                    }
+                }
+                j -= 1; // back onto the `::` (or the last `super`)
+            }
+            if level == 0 && tokens.get(j).is_some_and(|t| t.0 == "::") {
+                j += 1;
+                match tokens.get(j).map(|t| t.0.as_str()) {
+                    Some("{") => {
+                        // A group: the first identifier of each top-level entry.
+                        let end = item_end(tokens, j);
+                        let mut nesting = 0;
+                        let mut at_entry_start = true;
+                        for (t, line) in &tokens[j + 1..end.saturating_sub(1)] {
+                            let t = t.as_str();
+                            match t {
+                                "{" => nesting += 1,
+                                "}" => nesting -= 1,
+                                "," if nesting == 0 => {
+                                    at_entry_start = true;
+                                    continue;
+                                }
+                                _ => {}
+                            }
+                            if at_entry_start && nesting == 0 && t != "self" {
+                                out.push((t.to_owned(), *line));
+                            }
+                            at_entry_start = false;
+                        }
+                    }
+                    Some(name) => out.push((name.to_owned(), tokens[j].1)),
+                    None => {}
+                }
+            }
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The cycles: each strongly connected component of more than one module (Tarjan's
+/// algorithm), its modules sorted.
+fn cycles(edges: &BTreeSet<Edge>) -> Vec<Vec<String>> {
+    let mut graph: BTreeMap<&str, BTreeSet<&str>> = BTreeMap::new();
+    for edge in edges {
+        graph.entry(&edge.from).or_default().insert(&edge.to);
+        graph.entry(&edge.to).or_default();
+    }
+    let nodes: Vec<&str> = graph.keys().copied().collect();
+
+    struct Tarjan<'a> {
+        graph: &'a BTreeMap<&'a str, BTreeSet<&'a str>>,
+        index: BTreeMap<&'a str, usize>,
+        low: BTreeMap<&'a str, usize>,
+        stack: Vec<&'a str>,
+        on_stack: BTreeSet<&'a str>,
+        components: Vec<Vec<String>>,
+    }
+    impl<'a> Tarjan<'a> {
+        fn visit(&mut self, node: &'a str) {
+            let n = self.index.len();
+            self.index.insert(node, n);
+            self.low.insert(node, n);
+            self.stack.push(node);
+            self.on_stack.insert(node);
+            for &next in &self.graph[node] {
+                if !self.index.contains_key(next) {
+                    self.visit(next);
+                    let low = self.low[node].min(self.low[next]);
+                    self.low.insert(node, low);
+                } else if self.on_stack.contains(next) {
+                    let low = self.low[node].min(self.index[next]);
+                    self.low.insert(node, low);
+                }
+            }
+            if self.low[node] == self.index[node] {
+                let mut component = Vec::new();
+                loop {
+                    let member = self.stack.pop().expect("on the stack");
+                    self.on_stack.remove(member);
+                    component.push(member.to_owned());
+                    if member == node {
+                        break;
+                    }
+                }
+                if component.len() > 1 {
+                    component.sort();
+                    self.components.push(component);
+                }
+            }
+        }
+    }
+    let mut tarjan = Tarjan {
+        graph: &graph,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        on_stack: BTreeSet::new(),
+        components: Vec::new(),
+    };
+    for node in nodes {
+        if !tarjan.index.contains_key(node) {
+            tarjan.visit(node);
+        }
+    }
+    tarjan.components.sort();
+    tarjan.components
+}
+
+/// A failure message: each cycle's modules and, for each edge inside it, one place it is made.
+fn describe_cycles(cycles: &[Vec<String>], edges: &BTreeSet<Edge>) -> String {
+    let mut message =
+        format!("{} import cycle(s) between top-level modules of src/:", cycles.len());
+    for cycle in cycles {
+        message.push_str(&format!("\n\ncycle: {}", cycle.join(", ")));
+        let mut seen = BTreeSet::new();
+        for edge in edges {
+            if cycle.contains(&edge.from)
+                && cycle.contains(&edge.to)
+                && seen.insert((&edge.from, &edge.to))
+            {
+                message.push_str(&format!(
+                    "\n  {} -> {}  ({}:{})",
+                    edge.from, edge.to, edge.file, edge.line
+                ));
+            }
+        }
+    }
+    message
+}
+
+mod tests {
+    use super::*;
+
+    fn crate_of(files: &[(&str, &str)]) -> Vec<(PathBuf, String)> {
+        files.iter().map(|(path, text)| (PathBuf::from(path), (*text).to_owned())).collect()
+    }
+
+    #[test]
+    fn a_cycle_is_found() {
+        // a → b by a re-exported name, b → c by a grouped use, c → a by `super::` from a
+        // nested file; d → a is outside the cycle.
+        let files = crate_of(&[
+            (
+                "lib.rs",
+                "pub mod a; pub mod b; pub mod c; pub mod d;\npub use b::{Thing, Other as O};",
+            ),
+            ("a.rs", "use crate::Thing;\n"),
+            ("b/mod.rs", "mod inner;\n"),
+            ("b/inner.rs", "use crate::{c::{X, Y}, float};\n"),
+            ("c/mod.rs", "mod deep;"),
+            ("c/deep.rs", "fn f() { super::super::a::g() }"),
+            ("d.rs", "use crate::a::g;"),
+        ]);
+        let edges = module_edges(&files);
+        let found = cycles(&edges);
+        assert_eq!(found, vec![vec!["a".to_owned(), "b".to_owned(), "c".to_owned()]]);
+        let message = describe_cycles(&found, &edges);
+        assert!(message.contains("c -> a  (c/deep.rs:1)"), "{message}");
+        assert!(message.contains("b -> c  (b/inner.rs:1)"), "{message}");
+    }
+
+    #[test]
+    fn test_code_comments_and_strings_make_no_edges() {
+        let files = crate_of(&[
+            ("lib.rs", "pub mod a; pub mod b;"),
+            ("a.rs", "use crate::b::B;\n#[cfg(test)]\nmod tests;\n"),
+            ("a/tests.rs", "use crate::b::x;"),
+            (
+                "b.rs",
+                "// use crate::a::A;\n/* crate::a */\nconst S: &str = \"crate::a::A\";\n\
+                 const R: &str = r#\"crate::a\"#;\nfn f<'a>(c: &'a char) -> bool { *c == '{' }\n\
+                 #[cfg(test)]\nmod tests { use crate::a::A; }\n",
+            ),
+        ]);
+        let edges = module_edges(&files);
+        assert_eq!(
+            edges.iter().map(|e| (e.from.as_str(), e.to.as_str())).collect::<Vec<_>>(),
+            vec![("a", "b")]
+        );
+        assert!(cycles(&edges).is_empty());
+    }
+
+    #[test]
+    fn inline_modules_and_super_stay_inside() {
+        // `super::` from an inline module of a nested file stays in the top-level module; one
+        // more `super` would leave it.
+        let files = crate_of(&[
+            ("lib.rs", "pub mod a; pub mod b;"),
+            ("a/mod.rs", "mod x;"),
+            ("a/x.rs", "mod simd { use super::super::y; fn g() { super::super::super::b::f() } }"),
+            ("b.rs", "use super::a::z;"),
+        ]);
+        let edges = module_edges(&files);
+        let pairs: Vec<_> =
+            edges.iter().map(|e| (e.from.as_str(), e.to.as_str(), e.line)).collect();
+        assert_eq!(pairs, vec![("a", "b", 1), ("b", "a", 1)]);
+        assert_eq!(cycles(&edges), vec![vec!["a".to_owned(), "b".to_owned()]]);
+    }
+}
