@@ -32,7 +32,7 @@ DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so.
 Example:
   DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
   python3 tools/mitsuba/cbox_reference.py --variant llvm_ad_rgb \\
-      --size 512 --spp 64 --seed 0 --out /work/refs/cbox_512_64spp.exr --npy
+      --size 512 --spp 64 --seed 0 --out refs/cbox_512_64spp.exr --npy
 """
 
 import time
