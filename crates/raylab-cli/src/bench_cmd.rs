@@ -1,4 +1,4 @@
-//! `raylab bench`: the ray-set benchmark (`shared/bench/BENCHMARK.md`), side by side with Embree.
+//! `raylab bench`: the ray-set benchmark (`docs/benchmarking.md`), side by side with Embree.
 //!
 //! `--generate DIR` writes the protocol's `primary.rays`, `shadow.rays` and `diffuse.rays` for a
 //! mesh. `--rays DIR` builds the BVH, traces the three sets on 1 and N threads the way the Embree

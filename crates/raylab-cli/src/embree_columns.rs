@@ -1,6 +1,6 @@
 //! Embree's figures beside raylab's: `raylab bench --embree summary.json`.
 //!
-//! The Embree reference program (`shared/bench/embree`) writes a `summary.json` with its
+//! The Embree reference program (see `docs/benchmarking.md`) writes a `summary.json` with its
 //! throughput per ray set, query, API mode and thread count. Given one or two of them (Embree's
 //! default run and its watertight `--robust` run, both made with `--rays DIR` on the ray files
 //! raylab traces), `raylab bench` prints each Embree figure beside its own with the ratio, so the

@@ -37,7 +37,7 @@ enum Command {
     /// W/S/A/D/Q/E while the picture follows in real time; still, it refines.
     View(view_cmd::ViewArgs),
     /// Measure ray-query speed on the standard ray sets (primary, shadow, diffuse), as Embree is
-    /// measured (shared/bench/BENCHMARK.md).
+    /// measured (docs/benchmarking.md in the repository).
     Bench(bench_cmd::BenchArgs),
 }
 

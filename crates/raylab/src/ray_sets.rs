@@ -1,9 +1,9 @@
 //! The ray-set benchmark protocol: primary, shadow and diffuse rays for a mesh, and their files.
 //!
-//! This follows "The protocol (exact)" of the Embree reference program
-//! (`shared/bench/embree/README.md`) to the letter, so that the `.rays` files raylab writes are
-//! the same bits as the reference program's (up to the last bit of a libm `cos`/`sin` in rare
-//! cases), and hits can be compared ray by ray:
+//! This is the protocol of `docs/benchmarking.md`, which the Embree reference program follows
+//! too: primary rays are the same bits as the reference program's, and shadow and diffuse rays
+//! are too when they start from the same primary hits (up to the last bit of a libm `cos`/`sin`
+//! in rare cases), so hits can be compared ray by ray:
 //! - the frame (camera, light, epsilon) comes from the bounding box of the used vertices;
 //! - primary rays: one per pixel, row major, from a pinhole at `c − (0, 0, E + R)` looking along
 //!   +z with image y along +y, `d = normalize(x + ½ − W/2, y + ½ − H/2, f)`;
