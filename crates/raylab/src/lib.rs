@@ -125,6 +125,7 @@
 pub mod accel;
 pub mod bvh;
 pub mod camera;
+pub mod color;
 pub mod file_bytes;
 pub mod film;
 pub mod filter;

@@ -14,7 +14,7 @@ fn machine_prefixes() -> Vec<String> {
 }
 
 /// Where a text holds a machine path: (line, the line), for every prefix found not as part of
-/// a longer path or word (`/home/` counts, `src/home/` and `https://x/work/` do not).
+/// a longer path or word (a home folder counts; the same letters inside `src/…` or a URL do not).
 fn machine_paths(text: &str, prefixes: &[String]) -> Vec<(usize, String)> {
     let mut found = Vec::new();
     for (number, line) in text.lines().enumerate() {

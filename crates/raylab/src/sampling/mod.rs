@@ -10,7 +10,9 @@
 //! - [`Sampler`]: the numbers behind every random decision of a path, derived from
 //!   (seed, pixel, sample index) alone, so pictures do not depend on threads or tiling.
 
+mod pcg;
 mod sampler;
+mod sobol;
 
 #[cfg(test)]
 pub(crate) mod chi2;
@@ -19,7 +21,8 @@ use std::f32::consts::{FRAC_1_PI, PI};
 
 use glam::{DVec3, Vec2, Vec3};
 
-pub use sampler::{Pcg32, Sampler, SamplerKind, mix64};
+pub use pcg::{Pcg32, mix64};
+pub use sampler::{Sampler, SamplerKind};
 
 /// Where sample `index` of pixel `(x, y)` goes through the pixel, in `[0, 1)²` from its top-left
 /// corner: the lab's pixel sampling.

@@ -10,10 +10,10 @@
 //! y-up; loaders turn them with [`model_to_lab`], a half turn about x that keeps handedness.
 
 mod cornell;
-mod file;
 mod finite;
 pub(crate) mod gltf;
 mod keyframes;
+mod mesh_file;
 mod model;
 mod mtl;
 pub(crate) mod obj;
@@ -24,12 +24,12 @@ pub mod terrain;
 use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
-pub(crate) use file::read_file_bytes;
-pub use file::{
+pub use keyframes::Keyframe;
+pub(crate) use mesh_file::read_file_bytes;
+pub use mesh_file::{
     InstancedMesh, LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh,
     read_limit_bytes,
 };
-pub use keyframes::Keyframe;
 pub use model::model_to_lab;
 pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
 

@@ -11,7 +11,7 @@ use glam::Vec3;
 use glam::Affine3A;
 
 use super::Scene;
-use super::file::{InstancedMesh, LoadedMesh};
+use super::mesh_file::{InstancedMesh, LoadedMesh};
 use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};

@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use glam::{Affine2, Vec2, Vec3};
 
-use super::file::{quoted, read_bytes};
+use super::mesh_file::{quoted, read_bytes};
 use crate::material::MaterialTextures;
 use crate::mesh::MeshMaterial;
 use crate::texture::{ImageTexture, Texture, TextureImage, Wrap, decode_texture};

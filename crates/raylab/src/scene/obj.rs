@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
-use super::file::{LoadError, LoadedMesh, Location, mesh_name, quoted, read_bytes};
+use super::mesh_file::{LoadError, LoadedMesh, Location, mesh_name, quoted, read_bytes};
 use super::mtl::{TextureFiles, parse_mtl};
 use crate::mesh::{CornerAttribute, Mesh, MeshMaterial};
 

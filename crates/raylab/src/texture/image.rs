@@ -23,6 +23,8 @@ use std::sync::LazyLock;
 
 use glam::{Vec2, Vec4};
 
+use crate::color::{linear_to_srgb, srgb_to_linear};
+
 /// How texture coordinates beyond `[0, 1]` find a texel, per axis (see the module documentation).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Wrap {
@@ -50,18 +52,6 @@ impl Wrap {
         };
         wrapped as u32
     }
-}
-
-/// Decodes an sRGB-encoded value in `[0, 1]` to linear light (IEC 61966-2-1).
-#[inline]
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
-}
-
-/// Encodes linear light in `[0, 1]` as sRGB (IEC 61966-2-1).
-#[inline]
-pub fn linear_to_srgb(c: f32) -> f32 {
-    if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
 }
 
 /// The linear value of each 8-bit sRGB code.

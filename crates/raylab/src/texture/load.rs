@@ -5,7 +5,8 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use super::image::{TextureImage, srgb_to_linear};
+use super::image::TextureImage;
+use crate::color::srgb_to_linear;
 
 /// The longest side a texture may have, in texels.
 pub const MAX_TEXTURE_SIDE: u32 = 16_384;

@@ -26,7 +26,7 @@ use std::sync::Arc;
 
 use glam::{Affine2, Vec2, Vec3, Vec4};
 
-pub use image::{Level, Texels, TextureImage, Wrap, linear_to_srgb, srgb_to_linear};
+pub use image::{Level, Texels, TextureImage, Wrap};
 pub use load::{MAX_TEXTURE_SIDE, MAX_TEXTURE_TEXELS, check_size, decode_texture, load_texture};
 pub use noise::{NoiseTexture, Pattern, Perlin};
 

@@ -3,6 +3,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::*;
+use crate::color::{linear_to_srgb, srgb_to_linear};
 
 /// A one-row linear image whose texel `i` is `i` in every channel (over 255).
 fn ramp(width: u32) -> TextureImage {

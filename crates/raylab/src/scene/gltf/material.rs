@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use glam::{Affine2, Vec2, Vec3};
 
-use super::super::file::quoted;
+use super::super::mesh_file::quoted;
 use crate::material::{
     AlphaMask, Bsdf, Dielectric, Ggx, Material, MaterialTextures, NormalMap, Pbr, RoughDielectric,
 };

@@ -25,7 +25,7 @@ use std::path::Path;
 
 use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3, Vec4};
 
-use super::file::{InstancedMesh, LoadError, LoadedMesh, mesh_name};
+use super::mesh_file::{InstancedMesh, LoadError, LoadedMesh, mesh_name};
 use super::{CameraSettings, FovAxis, model_to_lab};
 use crate::light::PointLight;
 use crate::mesh::{CornerAttribute, Mesh};

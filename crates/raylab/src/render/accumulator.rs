@@ -1,0 +1,174 @@
+//! The film that samples are added into: per-pixel sums, pass by pass.
+
+use glam::Vec3;
+use image::RgbImage;
+
+use super::SampleSettings;
+use super::passes::add_pass;
+use crate::camera::Camera;
+use crate::film::{Film, FilmError};
+use crate::integrator::Integrator;
+use crate::region::Region;
+
+/// Samples added up pass by pass: a picture that refines while the camera stands still.
+#[derive(Clone, Debug)]
+pub struct Accumulator {
+    /// The sums of the region's pixels.
+    pub(super) sum: Film,
+    pub(super) samples: u32,
+    /// The camera's image size.
+    image: (u32, u32),
+    /// The part of the image rendered.
+    region: Region,
+    /// Samples that were not finite and counted as black.
+    discarded: u64,
+    /// How samples are drawn; change it only before the first sample.
+    pub settings: SampleSettings,
+}
+
+impl Accumulator {
+    /// An empty accumulator for a `width×height` image.
+    pub fn new(width: u32, height: u32) -> Result<Accumulator, FilmError> {
+        Accumulator::for_region(width, height, Region::full(width, height))
+    }
+
+    /// An empty accumulator for the pixels of `region` of a `width×height` image (see
+    /// [`Region`]): exactly the pixels the whole image's accumulator has there, bit for bit.
+    ///
+    /// # Panics
+    /// If the region is empty or reaches outside the image ([`Region::new`] checks both).
+    pub fn for_region(width: u32, height: u32, region: Region) -> Result<Accumulator, FilmError> {
+        assert!(
+            region.x0 < region.x1 && region.y0 < region.y1,
+            "the region {region} must not be empty"
+        );
+        assert!(
+            region.x1 <= width && region.y1 <= height,
+            "the region {region} must lie in the {width}×{height} image"
+        );
+        Ok(Accumulator {
+            sum: Film::new(region.width(), region.height())?,
+            samples: 0,
+            image: (width, height),
+            region,
+            discarded: 0,
+            settings: SampleSettings::default(),
+        })
+    }
+
+    /// An accumulator that goes on from `samples` samples whose sums are `sums` (a checkpoint's,
+    /// see [`sums`](Self::sums)): the next sample added is sample `samples`, so the picture is
+    /// the one an accumulator that never stopped would have.
+    ///
+    /// # Panics
+    /// As [`for_region`](Self::for_region), and if `sums` is not the region's size.
+    pub fn resume(
+        (width, height): (u32, u32),
+        region: Region,
+        sums: Film,
+        samples: u32,
+        settings: SampleSettings,
+    ) -> Result<Accumulator, FilmError> {
+        let mut accumulator = Accumulator::for_region(width, height, region)?;
+        assert_eq!(
+            (sums.width(), sums.height()),
+            (region.width(), region.height()),
+            "the sums must be the region's size"
+        );
+        accumulator.sum = sums;
+        accumulator.samples = samples;
+        accumulator.settings = settings;
+        Ok(accumulator)
+    }
+
+    /// Width in pixels of what it holds (the region's).
+    pub fn width(&self) -> u32 {
+        self.sum.width()
+    }
+
+    /// Height in pixels of what it holds (the region's).
+    pub fn height(&self) -> u32 {
+        self.sum.height()
+    }
+
+    /// The size of the camera's whole image.
+    pub fn image_size(&self) -> (u32, u32) {
+        self.image
+    }
+
+    /// The part of the image it holds.
+    pub fn region(&self) -> Region {
+        self.region
+    }
+
+    /// The sum of every sample of each pixel so far (the region's pixels, row by row): with
+    /// [`samples`](Self::samples), all a checkpoint needs.
+    pub fn sums(&self) -> &Film {
+        &self.sum
+    }
+
+    /// Samples per pixel so far.
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// How many samples so far were NaN or infinite in some channel: they are counted as black
+    /// instead of reaching the picture (`raylab render` reports them).
+    pub fn discarded_samples(&self) -> u64 {
+        self.discarded
+    }
+
+    /// Forgets every sample (the camera moved).
+    pub fn clear(&mut self) {
+        self.sum.pixels_mut().fill(Vec3::ZERO);
+        self.discarded = 0;
+        self.samples = 0;
+    }
+
+    /// Renders the next sample of every pixel and adds it in.
+    ///
+    /// # Panics
+    /// If the camera's image size is not the accumulator's.
+    pub fn add_sample(&mut self, camera: &Camera, integrator: &(impl Integrator + ?Sized)) {
+        self.add_sample_with_progress(camera, integrator, &|_| {});
+    }
+
+    /// [`add_sample`](Self::add_sample), calling `progress` with the rows finished.
+    pub fn add_sample_with_progress(
+        &mut self,
+        camera: &Camera,
+        integrator: &(impl Integrator + ?Sized),
+        progress: &(dyn Fn(u32) + Sync),
+    ) {
+        assert_eq!(
+            (camera.width, camera.height),
+            self.image,
+            "the camera's image size must be the accumulator's"
+        );
+        let (settings, sample, region) = (&self.settings, self.samples, self.region);
+        self.discarded +=
+            add_pass(camera, integrator, settings, sample, region, self.sum.pixels_mut(), progress);
+        self.samples += 1;
+    }
+
+    /// The factor that turns sums into means: `1/samples` (black before the first sample).
+    #[inline]
+    pub(super) fn mean_factor(&self) -> f32 {
+        1.0 / self.samples.max(1) as f32
+    }
+
+    /// The mean of the samples so far, as a film.
+    pub fn mean(&self) -> Result<Film, FilmError> {
+        let mut film = Film::new(self.width(), self.height())?;
+        let factor = self.mean_factor();
+        for (pixel, sum) in film.pixels_mut().iter_mut().zip(self.sum.pixels()) {
+            *pixel = *sum * factor;
+        }
+        Ok(film)
+    }
+
+    /// The mean as 8-bit RGB, shown as the lab shows it (see [`Film::to_rgb8_clamped`]).
+    pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {
+        self.mean()?.to_rgb8_clamped()
+    }
+}
