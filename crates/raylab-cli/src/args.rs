@@ -129,35 +129,6 @@ pub fn frames(text: &str) -> Result<(u32, u32), String> {
     }
 }
 
-/// The output of one frame: `pattern` with its file name's printf-style `%d` or `%0Nd` replaced
-/// by the frame number (`out_%04d.exr`, frame 7: `out_0007.exr`).
-pub fn frame_path(pattern: &std::path::Path, frame: u32) -> anyhow::Result<std::path::PathBuf> {
-    let name = pattern.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let missing = || {
-        anyhow::anyhow!(
-            "--frames writes a file per frame: the output name needs the frame number's place, \
-             like out_%04d.exr, not {}",
-            pattern.display()
-        )
-    };
-    let start = name.find('%').ok_or_else(missing)?;
-    let rest = &name[start + 1..];
-    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
-    if !rest[digits.len()..].starts_with('d') {
-        return Err(missing());
-    }
-    let width: usize = if digits.is_empty() { 0 } else { digits.parse().map_err(|_| missing())? };
-    if width > 10 {
-        anyhow::bail!("{}: at most 10 digits for the frame number", pattern.display());
-    }
-    let number = format!("{frame:0width$}");
-    let file = format!("{}{number}{}", &name[..start], &rest[digits.len() + 1..]);
-    if file.contains('%') {
-        anyhow::bail!("{}: one frame number place only", pattern.display());
-    }
-    Ok(pattern.with_file_name(file))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -189,14 +160,6 @@ mod tests {
         assert_eq!(frames("7"), Ok((7, 7)));
         assert!(frames("5..3").unwrap_err().contains("must not come after"));
         assert!(frames("a..3").is_err() && frames("").is_err() && frames("-1..2").is_err());
-        let path =
-            |p: &str, f| frame_path(std::path::Path::new(p), f).map(|p| p.display().to_string());
-        assert_eq!(path("out/f_%04d.exr", 7).unwrap(), "out/f_0007.exr");
-        assert_eq!(path("%d.png", 12).unwrap(), "12.png");
-        assert_eq!(path("a%2d_b.exr", 123).unwrap(), "a123_b.exr");
-        assert!(path("out.exr", 1).unwrap_err().to_string().contains("like out_%04d.exr"));
-        assert!(path("out_%04x.exr", 1).is_err());
-        assert!(path("out_%d_%d.exr", 1).is_err());
     }
 
     #[test]

@@ -344,7 +344,7 @@ fn generate(
     // Three sets of 32-byte rays and the primary hits, at most.
     let rays = args.size.width as u64 * args.size.height as u64;
     let needed = rays.saturating_mul(3 * 32 + 8);
-    if rays > u32::MAX as u64 || system::available_memory_bytes().is_some_and(|a| needed > a) {
+    if rays > u32::MAX as u64 || raylab::memory::available_bytes().is_some_and(|a| needed > a) {
         bail!(
             "--size {}x{} makes {rays} rays per set, {} of memory: too many",
             args.size.width,

@@ -3,11 +3,10 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
-use raylab::film::{Display, ToneMap};
-use raylab::image_io::{self, ImageFormat};
-use raylab::parts;
+use raylab::film::ToneMap;
+use raylab::session;
 
 use crate::args;
 
@@ -33,32 +32,13 @@ pub struct MergeArgs {
 }
 
 pub fn run(args: &MergeArgs) -> Result<()> {
-    let format = image_io::check_writable(&args.output)?;
-    // By identity, not by name: `./a.exr` and `a.exr`, or a link, are the same file.
-    if let Ok(output) = std::fs::canonicalize(&args.output)
-        && args.parts.iter().any(|p| std::fs::canonicalize(p).is_ok_and(|p| p == output))
-    {
-        bail!("{}: the output would overwrite one of the parts", args.output.display());
-    }
-    let parts = args.parts.iter().map(|p| parts::read_part(p)).collect::<Result<Vec<_>, _>>()?;
-    let count = parts.len();
-    let (header, channels) = parts::merge(parts)?;
-    let (width, height) = header.image;
-    if format == ImageFormat::Exr {
-        parts::write_exr(&args.output, header.image, header.region, channels, Some(&header))?;
-    } else {
-        let film = parts::beauty(&channels, width, height).context("parts have R, G and B")?;
-        drop(channels);
-        // The lab's integrator shows linear values, the others sRGB-encoded.
-        let srgb = !header.settings.contains("integrator=lab;");
-        let display = Display { exposure: args.exposure, tone_map: args.tonemap, srgb };
-        image_io::save_film(&args.output, &film, &display)?;
-    }
+    let merged = session::merge_parts(&args.parts, &args.output, args.exposure, args.tonemap)?;
+    let (width, height) = merged.size;
     let report = format!(
         "{}: {width}×{height} from {} parts, {} samples per pixel\n",
         args.output.display(),
-        count,
-        header.samples
+        merged.parts,
+        merged.samples
     );
     match std::io::stdout().lock().write_all(report.as_bytes()) {
         Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {

@@ -15,7 +15,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -56,17 +56,6 @@ pub fn interrupt_flag() -> Result<Arc<AtomicBool>> {
             .context("cannot install the interrupt handler")?;
     }
     Ok(flag)
-}
-
-/// Whether a signal has asked the render to stop.
-pub fn interrupted(flag: &AtomicBool) -> bool {
-    flag.load(Ordering::Relaxed)
-}
-
-/// Where the checkpoint of a render writing `output` goes: `NAME.checkpoint.exr` beside it.
-pub fn checkpoint_path(output: &Path) -> PathBuf {
-    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    output.with_file_name(format!("{stem}.checkpoint.exr"))
 }
 
 /// The command line a checkpoint records: the working directory and the arguments after
@@ -111,12 +100,6 @@ impl Command {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn checkpoints_sit_beside_the_output() {
-        assert_eq!(checkpoint_path(Path::new("out/a.exr")), Path::new("out/a.checkpoint.exr"));
-        assert_eq!(checkpoint_path(Path::new("b.png")), Path::new("b.checkpoint.exr"));
-    }
 
     #[test]
     fn commands_read_back() {

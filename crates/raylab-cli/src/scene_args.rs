@@ -1,18 +1,15 @@
 //! What `raylab render` and `raylab view` share: the scene, the camera, the light, the stage and
 //! the threads, parsed and checked the same way.
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::Args;
 use glam::Vec3;
 use raylab::camera::tidy;
-use raylab::scene::CameraSettings;
-use raylab::{Camera, Scene, Stage};
+use raylab::scene::{CameraSettings, LoadOptions, OpenedScene};
+use raylab::session::CameraOptions;
+use raylab::{Scene, Stage};
 
 use crate::args::{self, Size};
-use crate::system;
-
-/// The most threads `--threads` accepts.
-const MAX_THREADS: usize = 1024;
 
 #[derive(Args, Debug)]
 pub struct SceneArgs {
@@ -95,11 +92,9 @@ Stages, the lab's steps in order (--stage NAME or 1-5):
 
 Every channel is clamped to [0,1] and shown without gamma, as in the lab.";
 
-/// A checked scene, its camera and the thread count.
+/// A scene opened and checked, with what the command line says of its camera.
 pub struct Setup {
     pub scene: Scene,
-    pub camera: Camera,
-    pub threads: usize,
     /// Whether the scene is a model file (framed by the camera unless told otherwise).
     pub is_model: bool,
     /// How long reading (or making) the scene took.
@@ -107,12 +102,15 @@ pub struct Setup {
 }
 
 impl SceneArgs {
-    /// Loads and checks everything before any rendering, so that no work is lost to a bad value.
+    /// Opens and checks the scene, with the light's overrides, and prints its warnings.
     pub fn setup(&self) -> Result<Setup> {
         let start = std::time::Instant::now();
-        let (mut scene, is_model) = load_scene(&self.scene, self.flatten)?;
+        let options = LoadOptions { flatten: self.flatten };
+        let OpenedScene { mut scene, is_model } = Scene::open(&self.scene, &options)?;
         let load = start.elapsed();
-        let scene_camera = scene.camera;
+        for warning in &scene.warnings {
+            eprintln!("raylab: warning: {warning}");
+        }
         if let Some(position) = self.light {
             scene.point_light_mut().position = position;
         }
@@ -120,116 +118,34 @@ impl SceneArgs {
             scene.point_light_mut().power = Vec3::splat(power);
         }
         scene.validate()?;
-
-        let Size { width, height } = self.size.unwrap_or(match scene.settings.size {
-            Some((width, height)) => Size { width, height },
-            None => Size { width: 500, height: 500 },
-        });
-        // The scene file's camera; an animation's first keyframe without one.
-        let settings = scene_camera.or(scene.keyframes.first().map(|k| k.camera));
-        let camera = self.camera(settings, &scene, is_model, width, height)?;
-        let threads = match self.threads {
-            None | Some(0) => system::cores(),
-            Some(n) if n > MAX_THREADS => bail!("--threads {n} is more than {MAX_THREADS}"),
-            Some(n) => n,
-        };
-        Ok(Setup { scene, camera, threads, is_model, load })
+        Ok(Setup { scene, is_model, load })
     }
-}
 
-impl SceneArgs {
-    /// The camera of a `width×height` picture of `scene`: `settings` (a scene file's camera, or
-    /// an animation's at some frame; `None`: the lab's, or one framing a model), with the
-    /// command line's options overriding its parts.
-    pub fn camera(
-        &self,
-        settings: Option<CameraSettings>,
-        scene: &Scene,
-        is_model: bool,
-        width: u32,
-        height: u32,
-    ) -> Result<Camera> {
-        let base = match settings {
-            Some(settings) => settings.camera(width, height),
-            None => Camera::lab(width, height),
-        };
-        let focal_length_px = match (self.focal, self.fov) {
-            (Some(focal), _) => focal,
-            (None, Some(fov)) => Camera::focal_length_for_fov(width, fov),
-            (None, None) => base.focal_length_px,
-        };
-        if !focal_length_px.is_finite() {
-            bail!(
-                "--fov {} is too small: the focal length would be infinite",
-                self.fov.unwrap_or(0.0)
-            );
+    /// The camera overrides.
+    pub fn camera_options(&self) -> CameraOptions {
+        CameraOptions {
+            size: self.size.map(|Size { width, height }| (width, height)),
+            position: self.camera,
+            yaw_deg: self.yaw,
+            pitch_deg: self.pitch,
+            focal_length_px: self.focal,
+            fov_deg: self.fov,
+            aperture_radius: self.aperture,
+            focus_distance: self.focus_distance,
         }
-        let default_position = match scene.bounds() {
-            Some((lo, hi)) if is_model => Camera::framing(lo, hi, width, height).position,
-            _ => base.position,
-        };
-        let mut camera = Camera {
-            position: self.camera.unwrap_or(default_position),
-            yaw: self.yaw.map_or(base.yaw, f32::to_radians),
-            pitch: self.pitch.map_or(base.pitch, f32::to_radians),
-            roll: base.roll,
-            focal_length_px,
-            width,
-            height,
-            aperture_radius: self.aperture.unwrap_or(base.aperture_radius),
-            focus_distance: self.focus_distance.unwrap_or(base.focus_distance),
-        };
-        if camera.has_lens() && self.focus_distance.is_none() && settings.is_none() {
-            // Focus on what the image's centre sees.
-            let centre = camera.ray(width as f32 / 2.0, height as f32 / 2.0);
-            let bvh = system::build_bvh(&scene.name, &scene.geometry)?;
-            if let Some(hit) = raylab::Accelerator::closest_hit(&bvh, &centre) {
-                camera.focus_distance = (hit.t * centre.direction.dot(camera.forward())).max(1e-6);
-            }
-        }
-        Ok(camera)
+    }
+
+    /// The render threads asked for (0: one per core).
+    pub fn threads(&self) -> usize {
+        self.threads.unwrap_or(0)
     }
 }
 
 impl Setup {
-    /// The render threads.
-    pub fn thread_pool(&self) -> Result<rayon::ThreadPool> {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(self.threads)
-            .build()
-            .context("cannot start the render threads")
+    /// The scene file's camera; an animation's first keyframe's without one.
+    pub fn first_camera(&self) -> Option<CameraSettings> {
+        self.scene.camera.or(self.scene.keyframes.first().map(|k| k.camera))
     }
-}
-
-/// A built-in scene by name, or a model file (anything that looks like a path), its instances
-/// placed as copies if `flatten`. The flag says whether it is a model.
-fn load_scene(name: &str, flatten: bool) -> Result<(Scene, bool)> {
-    let path = std::path::Path::new(name);
-    let looks_like_a_file = path.exists() || name.contains('/') || name.contains('.');
-    match Scene::built_in(name) {
-        Ok(scene) => return Ok((scene, false)),
-        // Neither a built-in name nor a file: say what the built-in scenes are.
-        Err(unknown) if !looks_like_a_file => return Err(unknown.into()),
-        Err(_) => {}
-    }
-    let lower = name.to_ascii_lowercase();
-    if lower.ends_with(".toml") {
-        let scene = raylab::scene::load_scene_file(path)?;
-        for warning in &scene.warnings {
-            eprintln!("raylab: warning: {warning}");
-        }
-        return Ok((scene, false));
-    }
-    let mut loaded = raylab::scene::load_mesh(path)?;
-    if flatten {
-        loaded.mesh = loaded.flattened();
-        loaded.instanced.clear();
-    }
-    for warning in &loaded.warnings {
-        eprintln!("raylab: warning: {warning}");
-    }
-    // A file with its own camera (glTF) is seen through it; other models are framed.
-    Ok((Scene::from_loaded(&loaded), loaded.camera.is_none()))
 }
 
 /// A vector as `(x, y, z)` with [`tidy`] numbers.

@@ -12,10 +12,12 @@ use clap::Args;
 use raylab::interactive::{
     Controller, FrameRenderer, Motion, Pose, View, ViewMode, rgb8_from_0rgb,
 };
+use raylab::session::{self, RenderJob, RenderOptions, ResolvedSettings};
+use raylab::settings::IntegratorKind;
 use raylab::{Film, PathSettings, SampleSettings, Scene, SceneBvh, image_io};
 
-use crate::scene_args::{STAGES_HELP, SceneArgs, Setup};
-use crate::{stats, system, view_window};
+use crate::scene_args::{STAGES_HELP, SceneArgs};
+use crate::{stats, view_window};
 
 /// The key map, printed by `raylab view --help` and the H key.
 pub const KEYS_HELP: &str = "\
@@ -70,8 +72,8 @@ pub struct ViewArgs {
     /// What to show first: lab (the lab's light model), path (path tracing), albedo, normals or
     /// depth; keys 1-9 switch [default: the scene file's; path for scenes with area lights,
     /// else lab].
-    #[arg(long, value_name = "NAME", value_parser = ["lab", "path", "albedo", "normals", "depth"])]
-    integrator: Option<String>,
+    #[arg(long, value_name = "NAME")]
+    integrator: Option<IntegratorKind>,
 
     /// A still picture refines up to this many samples per pixel.
     #[arg(long, value_name = "N", default_value = "1024", value_parser = clap::value_parser!(u32).range(1..=65536))]
@@ -98,14 +100,16 @@ const MAX_WINDOW_SIDE: u32 = 16_384;
 
 pub fn run(args: &ViewArgs) -> Result<()> {
     let setup = args.scene.setup()?;
-    let (width, height) = (setup.camera.width, setup.camera.height);
+    let scene = &setup.scene;
+    let cameras = args.scene.camera_options();
+    let (width, height) = cameras.size(scene);
     if width.max(height) > MAX_WINDOW_SIDE {
         bail!(
             "--size {width}x{height} is too large for a window: at most {MAX_WINDOW_SIDE} pixels a side"
         );
     }
     // The picture's sums, the window's words and their spare: about twice a film.
-    system::check_memory(Film::bytes_needed(width, height).saturating_mul(2), width, height)?;
+    session::check_memory(Film::bytes_needed(width, height).saturating_mul(2), width, height)?;
     if let Some(path) = &args.screenshot {
         image_io::check_writable(path)?;
     }
@@ -113,9 +117,15 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         // Before loading anything big: say at once when there is nowhere to show a window.
         view_window::check_display()?;
     }
-    let Setup { scene, camera, .. } = &setup;
-    let pool = setup.thread_pool()?;
-    let accel = pool.install(|| system::build_bvh(&scene.name, &scene.geometry))?;
+    let options = RenderOptions {
+        integrator: args.integrator,
+        stage: args.scene.stage,
+        ..RenderOptions::default()
+    };
+    let settings = ResolvedSettings::resolve(scene, &options);
+    let mut job = RenderJob::new(scene, settings, args.scene.threads())?;
+    let camera = cameras.camera(setup.first_camera(), scene, setup.is_model, job.accel()?)?;
+    let accel = job.built_accel().expect("built above");
     let home = Pose {
         position: camera.position,
         yaw: camera.yaw,
@@ -124,14 +134,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     };
     let view = View {
         pose: home,
-        mode: {
-            let name = args.integrator.clone().or_else(|| scene.settings.integrator.clone());
-            let name = name.unwrap_or_else(|| {
-                if scene.has_area_lights() { "path".into() } else { "lab".into() }
-            });
-            ViewMode::from_name(&name, args.scene.stage)
-                .expect("checked by clap and the scene file")
-        },
+        mode: ViewMode::of(settings.integrator, settings.stage),
         width: camera.width,
         height: camera.height,
         focal: (camera.width, camera.focal_length_px),
@@ -140,21 +143,13 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     };
     let session = Session {
         scene,
-        accel: &accel,
-        pool: &pool,
+        accel,
+        pool: job.pool(),
         controller: Controller::new(home, motion_speed(scene)),
         view,
         max_spp: args.max_spp,
-        path_settings: PathSettings {
-            max_depth: scene.settings.max_depth.unwrap_or(None),
-            ..PathSettings::default()
-        },
-        sample_settings: SampleSettings {
-            seed: scene.settings.seed.unwrap_or(0),
-            sampler: scene.settings.sampler,
-            filter: scene.settings.filter.unwrap_or_default(),
-            ..SampleSettings::default()
-        },
+        path_settings: settings.path_settings(),
+        sample_settings: settings.samples,
         screenshot: args.screenshot.as_deref(),
         exit_after_frames: args.exit_after_frames,
     };

@@ -54,12 +54,7 @@ pub enum ReadError {
 pub fn read_limit_bytes() -> u64 {
     const MIN: u64 = 256 << 20;
     const MAX: u64 = 16 << 30;
-    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
-        let line = text.lines().find(|line| line.starts_with("MemAvailable:"))?;
-        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-        Some(kib.saturating_mul(1024))
-    });
-    available.map_or(MAX, |bytes| (bytes / 2).clamp(MIN, MAX))
+    crate::memory::available_bytes().map_or(MAX, |bytes| (bytes / 2).clamp(MIN, MAX))
 }
 
 /// Reads the whole file, decompressing it if `gzip`, refusing more than `limit` bytes.

@@ -140,6 +140,7 @@ pub mod interaction;
 pub mod interactive;
 pub mod light;
 pub mod material;
+pub mod memory;
 pub mod mesh;
 pub mod parts;
 mod quiet_panic;
@@ -149,6 +150,8 @@ pub mod region;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod session;
+pub mod settings;
 pub mod texture;
 pub mod triangle;
 

@@ -12,19 +12,9 @@ use glam::Vec3;
 use super::Integrator;
 use crate::accel::Accelerator;
 use crate::ray::Ray;
-use crate::sampling::Sampler;
+use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
-
-/// Which first-hit quantity to show.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AovKind {
-    /// The surface's albedo.
-    Albedo,
-    /// The shading normal facing the camera.
-    Normals,
-    /// The distance to the surface.
-    Depth,
-}
+pub use crate::settings::AovKind;
 
 /// An AOV integrator over a scene and an accelerator built from its vertices.
 pub struct Aov<'a, A: ?Sized> {
@@ -42,6 +32,13 @@ impl<'a, A: Accelerator + ?Sized> Aov<'a, A> {
 
 impl<A: Accelerator + ?Sized> Integrator for Aov<'_, A> {
     fn radiance(&self, ray: &Ray, _sampler: &mut Sampler) -> Vec3 {
+        self.value(ray)
+    }
+}
+
+impl<A: Accelerator + ?Sized> Aov<'_, A> {
+    /// The quantity seen along `ray` (it draws no random numbers).
+    pub fn value(&self, ray: &Ray) -> Vec3 {
         let Some(hit) = super::closest_opaque_hit(self.scene, self.accel, ray) else {
             return Vec3::ZERO;
         };
@@ -56,6 +53,62 @@ impl<A: Accelerator + ?Sized> Integrator for Aov<'_, A> {
                 if n.dot(ray.direction) > 0.0 { -n } else { n }
             }
             AovKind::Depth => Vec3::splat(hit.t * ray.direction.length()),
+        }
+    }
+}
+
+/// An integrator with extra layers: the colour of `inner`, and the first-hit quantities of
+/// `aovs` from the same camera rays of the same samples (Mitsuba's `aov` integrator), so that
+/// the layers cost no pass of their own and match the picture sample for sample. The colour is
+/// exactly `inner`'s: the layers draw no random numbers.
+pub struct WithAovs<'a, A: ?Sized> {
+    inner: &'a dyn Integrator,
+    aovs: Vec<Aov<'a, A>>,
+}
+
+impl<'a, A: Accelerator + ?Sized> WithAovs<'a, A> {
+    /// `inner`'s colour with layers of `kinds`, in that order, over `scene` and `accel`.
+    pub fn new(
+        inner: &'a dyn Integrator,
+        scene: &'a Scene,
+        accel: &'a A,
+        kinds: &[AovKind],
+    ) -> Self {
+        WithAovs { inner, aovs: kinds.iter().map(|&kind| Aov::new(scene, accel, kind)).collect() }
+    }
+}
+
+impl<A: Accelerator + Sync + ?Sized> Integrator for WithAovs<'_, A> {
+    fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
+        self.inner.radiance(ray, sampler)
+    }
+
+    fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
+        self.inner.radiance_each(rays, samplers, out);
+    }
+
+    fn sampler_kind(&self) -> SamplerKind {
+        self.inner.sampler_kind()
+    }
+
+    fn layer_count(&self) -> usize {
+        self.aovs.len()
+    }
+
+    fn radiance_and_layers_each(
+        &self,
+        rays: &[Ray],
+        samplers: &mut [Sampler],
+        out: &mut [Vec3],
+        layers: &mut [Vec3],
+    ) {
+        let count = self.aovs.len();
+        assert_eq!(layers.len(), rays.len() * count, "the layers of each ray");
+        self.inner.radiance_each(rays, samplers, out);
+        for (ray, values) in rays.iter().zip(layers.chunks_exact_mut(count.max(1))) {
+            for (aov, value) in self.aovs.iter().zip(values) {
+                *value = aov.value(ray);
+            }
         }
     }
 }

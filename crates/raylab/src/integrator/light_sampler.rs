@@ -44,7 +44,8 @@ pub struct LightSet {
 }
 
 /// How points on triangle lights are chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum TriangleSampling {
     /// Uniformly by area (Mitsuba's choice): simple, noisy for large lights close by.
     #[default]

@@ -15,7 +15,7 @@ mod path;
 
 use glam::Vec3;
 
-pub use aov::{Aov, AovKind};
+pub use aov::{Aov, AovKind, WithAovs};
 pub use lab::{Lab, Stage};
 pub use light_sampler::{LightSample, LightSet, TriangleSampling};
 pub use path::{Path, PathSettings};
@@ -80,5 +80,28 @@ pub trait Integrator: Sync {
     /// The sampler this integrator's pictures use unless told otherwise.
     fn sampler_kind(&self) -> SamplerKind {
         SamplerKind::Sobol
+    }
+
+    /// How many extra layers (AOVs) it computes beside the colour: none, unless it wraps
+    /// another integrator to add them ([`WithAovs`]).
+    fn layer_count(&self) -> usize {
+        0
+    }
+
+    /// The colour along each ray, as [`radiance_each`](Self::radiance_each) gives it, and
+    /// [`layer_count`](Self::layer_count) layer values for each ray: `layers[i * count + k]` is
+    /// layer `k` of ray `i`, from the same ray and the same sample.
+    ///
+    /// # Panics
+    /// If the slices differ in length, or `layers` does not hold `count` values per ray.
+    fn radiance_and_layers_each(
+        &self,
+        rays: &[Ray],
+        samplers: &mut [Sampler],
+        out: &mut [Vec3],
+        layers: &mut [Vec3],
+    ) {
+        assert_eq!(layers.len(), rays.len() * self.layer_count(), "the layers of each ray");
+        self.radiance_each(rays, samplers, out);
     }
 }

@@ -21,6 +21,7 @@ use crate::ray::Ray;
 use crate::render::{Accumulator, SampleSettings};
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
+use crate::settings::IntegratorKind;
 
 /// What a frame computes: the lab's light model at one of its stages, path tracing, or a
 /// first-hit image (see [`crate::integrator`]).
@@ -39,17 +40,15 @@ pub enum ViewMode {
 }
 
 impl ViewMode {
-    /// The mode a command-line integrator name (`lab`, `path`, `albedo`, `normals`, `depth`)
-    /// names; `lab` shows `stage`.
-    pub fn from_name(name: &str, stage: Stage) -> Option<ViewMode> {
-        Some(match name {
-            "lab" => ViewMode::Lab(stage),
-            "path" => ViewMode::Path,
-            "albedo" => ViewMode::Albedo,
-            "normals" => ViewMode::Normals,
-            "depth" => ViewMode::Depth,
-            _ => return None,
-        })
+    /// The mode that shows what `integrator` computes; `lab` shows `stage`.
+    pub fn of(integrator: IntegratorKind, stage: Stage) -> ViewMode {
+        match integrator {
+            IntegratorKind::Lab => ViewMode::Lab(stage),
+            IntegratorKind::Path => ViewMode::Path,
+            IntegratorKind::Aov(AovKind::Albedo) => ViewMode::Albedo,
+            IntegratorKind::Aov(AovKind::Normals) => ViewMode::Normals,
+            IntegratorKind::Aov(AovKind::Depth) => ViewMode::Depth,
+        }
     }
 
     /// How its radiance is shown: the lab's linear clamp, sRGB for the physically based modes.
@@ -491,8 +490,8 @@ mod tests {
             assert_eq!(info.samples, 1, "{mode}");
             assert!(words.iter().any(|&w| w != 0), "{mode} shows something");
         }
-        assert_eq!(ViewMode::from_name("path", Stage::Flat), Some(ViewMode::Path));
-        assert_eq!(ViewMode::from_name("lab", Stage::Flat), Some(ViewMode::Lab(Stage::Flat)));
+        assert_eq!(ViewMode::of(IntegratorKind::Path, Stage::Flat), ViewMode::Path);
+        assert_eq!(ViewMode::of(IntegratorKind::Lab, Stage::Flat), ViewMode::Lab(Stage::Flat));
         assert_eq!(ViewMode::Lab(Stage::Shadows).to_string(), "stage shadows");
     }
 

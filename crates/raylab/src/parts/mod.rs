@@ -367,9 +367,7 @@ pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<Channel>), PartError> 
             ));
         }
         if h.settings != f.settings {
-            // Settings are `key=value` entries separated by "; ": name the ones that differ.
-            let entries = |s: &str| s.split("; ").map(str::to_string).collect::<Vec<_>>();
-            let (these, first_entries) = (entries(&h.settings), entries(&f.settings));
+            let (these, first_entries) = (setting_entries(&h.settings), setting_entries(&f.settings));
             let differ: Vec<String> = these
                 .iter()
                 .zip(&first_entries)
@@ -476,6 +474,18 @@ pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<Channel>), PartError> 
         }
     }
     Ok((header, channels))
+}
+
+/// The entries of a part's settings as `key=value` texts, to name the ones that differ: the
+/// top-level fields of a JSON object (a render identity, see `crate::session`), or `key=value`
+/// entries separated by "; " in any other text.
+fn setting_entries(settings: &str) -> Vec<String> {
+    match serde_json::from_str::<serde_json::Value>(settings) {
+        Ok(serde_json::Value::Object(fields)) => {
+            fields.iter().map(|(key, value)| format!("{key}={value}")).collect()
+        }
+        _ => settings.split("; ").map(str::to_string).collect(),
+    }
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@ use glam::Vec3;
 use image::RgbImage;
 
 use super::SampleSettings;
-use super::passes::add_pass;
+use super::passes::{Pass, add_pass};
 use crate::camera::Camera;
 use crate::film::{Film, FilmError};
 use crate::integrator::Integrator;
@@ -15,6 +15,8 @@ use crate::region::Region;
 pub struct Accumulator {
     /// The sums of the region's pixels.
     pub(super) sum: Film,
+    /// The sums of each extra layer's pixels (see [`with_layers`](Self::with_layers)).
+    layers: Vec<Film>,
     pub(super) samples: u32,
     /// The camera's image size.
     image: (u32, u32),
@@ -48,6 +50,7 @@ impl Accumulator {
         );
         Ok(Accumulator {
             sum: Film::new(region.width(), region.height())?,
+            layers: Vec::new(),
             samples: 0,
             image: (width, height),
             region,
@@ -79,6 +82,45 @@ impl Accumulator {
         accumulator.samples = samples;
         accumulator.settings = settings;
         Ok(accumulator)
+    }
+
+    /// The same accumulator with `count` extra layers (AOVs), summed beside the picture from the
+    /// same samples: for an integrator whose [`layer_count`](Integrator::layer_count) is
+    /// `count`. `sums`, where given, are the layers' sums so far (a checkpoint's); else zero.
+    ///
+    /// # Panics
+    /// If a film of `sums` is not the region's size, or there are sums for another count.
+    pub fn with_layers(mut self, count: usize, sums: Option<Vec<Film>>) -> Result<Self, FilmError> {
+        self.layers = match sums {
+            Some(sums) => {
+                assert_eq!(sums.len(), count, "sums for each layer");
+                for film in &sums {
+                    assert_eq!(
+                        (film.width(), film.height()),
+                        (self.width(), self.height()),
+                        "a layer's sums must be the region's size"
+                    );
+                }
+                sums
+            }
+            None => (0..count)
+                .map(|_| Film::new(self.width(), self.height()))
+                .collect::<Result<_, _>>()?,
+        };
+        Ok(self)
+    }
+
+    /// The sums of each extra layer so far (for a checkpoint).
+    pub fn layer_sums(&self) -> &[Film] {
+        &self.layers
+    }
+
+    /// The mean of extra layer `k`'s samples so far.
+    ///
+    /// # Panics
+    /// If there is no layer `k`.
+    pub fn layer_mean(&self, k: usize) -> Result<Film, FilmError> {
+        mean_of(&self.layers[k], self.mean_factor())
     }
 
     /// Width in pixels of what it holds (the region's).
@@ -121,6 +163,9 @@ impl Accumulator {
     /// Forgets every sample (the camera moved).
     pub fn clear(&mut self) {
         self.sum.pixels_mut().fill(Vec3::ZERO);
+        for layer in &mut self.layers {
+            layer.pixels_mut().fill(Vec3::ZERO);
+        }
         self.discarded = 0;
         self.samples = 0;
     }
@@ -145,9 +190,15 @@ impl Accumulator {
             self.image,
             "the camera's image size must be the accumulator's"
         );
+        assert_eq!(
+            integrator.layer_count(),
+            self.layers.len(),
+            "the accumulator must have the integrator's layers"
+        );
         let (settings, sample, region) = (&self.settings, self.samples, self.region);
+        let (sum, layers) = (self.sum.pixels_mut(), &mut self.layers);
         self.discarded +=
-            add_pass(camera, integrator, settings, sample, region, self.sum.pixels_mut(), progress);
+            add_pass(camera, integrator, Pass { settings, sample, region }, sum, layers, progress);
         self.samples += 1;
     }
 
@@ -159,16 +210,20 @@ impl Accumulator {
 
     /// The mean of the samples so far, as a film.
     pub fn mean(&self) -> Result<Film, FilmError> {
-        let mut film = Film::new(self.width(), self.height())?;
-        let factor = self.mean_factor();
-        for (pixel, sum) in film.pixels_mut().iter_mut().zip(self.sum.pixels()) {
-            *pixel = *sum * factor;
-        }
-        Ok(film)
+        mean_of(&self.sum, self.mean_factor())
     }
 
     /// The mean as 8-bit RGB, shown as the lab shows it (see [`Film::to_rgb8_clamped`]).
     pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {
         self.mean()?.to_rgb8_clamped()
     }
+}
+
+/// Each pixel of `sums` times `factor`, as a film.
+fn mean_of(sums: &Film, factor: f32) -> Result<Film, FilmError> {
+    let mut film = Film::new(sums.width(), sums.height())?;
+    for (pixel, sum) in film.pixels_mut().iter_mut().zip(sums.pixels()) {
+        *pixel = *sum * factor;
+    }
+    Ok(film)
 }

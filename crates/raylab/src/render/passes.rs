@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use super::SampleSettings;
 use crate::camera::{Camera, RayGenerator};
+use crate::film::Film;
 use crate::integrator::Integrator;
 use crate::ray::Ray;
 use crate::region::Region;
@@ -19,15 +20,22 @@ use crate::sampling::{Sampler, SamplerKind};
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
 const MAX_TILE_PIXELS: usize = 64;
 
-/// Adds sample `sample` of every pixel of `region` (of the camera's image) to `pixels`, the
-/// region's pixels row by row.
+/// Which pass: sample `sample` of the pixels of `region` (of the camera's image), drawn as
+/// `settings` say.
+pub(super) struct Pass<'a> {
+    pub settings: &'a SampleSettings,
+    pub sample: u32,
+    pub region: Region,
+}
+
+/// Adds `pass`'s sample of every pixel of its region to `pixels` (the region's pixels row by
+/// row) and of each layer to `layers` (one film of the region each).
 pub(super) fn add_pass(
     camera: &Camera,
     integrator: &(impl Integrator + ?Sized),
-    settings: &SampleSettings,
-    sample: u32,
-    region: Region,
+    Pass { settings, sample, region }: Pass,
     pixels: &mut [Vec3],
+    layers: &mut [Film],
     progress: &(dyn Fn(u32) + Sync),
 ) -> u64 {
     let width = region.width() as usize;
@@ -43,7 +51,19 @@ pub(super) fn add_pass(
             discarded.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
         }
     };
-    pixels.par_chunks_mut(width * band_rows).enumerate().for_each(|(band, pixels)| {
+    assert_eq!(layers.len(), integrator.layer_count(), "a film for each layer");
+    // Each layer's rows, cut into the same bands as the picture's.
+    let band_pixels = width * band_rows;
+    let mut band_layers: Vec<Vec<&mut [Vec3]>> =
+        (0..pixels.len().div_ceil(band_pixels)).map(|_| Vec::new()).collect();
+    for layer in layers.iter_mut() {
+        debug_assert_eq!(layer.pixels().len(), pixels.len());
+        for (band, rows) in band_layers.iter_mut().zip(layer.pixels_mut().chunks_mut(band_pixels)) {
+            band.push(rows);
+        }
+    }
+    let bands = pixels.par_chunks_mut(band_pixels).zip(band_layers.into_par_iter()).enumerate();
+    bands.for_each(|(band, (pixels, mut layers))| {
         let band = Band {
             camera: &rays,
             has_lens: camera.has_lens(),
@@ -57,11 +77,11 @@ pub(super) fn add_pass(
         #[cfg(target_arch = "x86_64")]
         if avx2 {
             // SAFETY: AVX2 was detected above.
-            count(unsafe { band.add_avx2(integrator, pixels) });
+            count(unsafe { band.add_avx2(integrator, pixels, &mut layers) });
             progress((pixels.len() / width) as u32);
             return;
         }
-        count(band.add(integrator, pixels));
+        count(band.add(integrator, pixels, &mut layers));
         progress((pixels.len() / width) as u32);
     });
     discarded.into_inner()
@@ -90,15 +110,26 @@ impl Band<'_> {
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn add_avx2(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) -> u64 {
-        self.add(integrator, pixels)
+    unsafe fn add_avx2(
+        &self,
+        integrator: &(impl Integrator + ?Sized),
+        pixels: &mut [Vec3],
+        layers: &mut [&mut [Vec3]],
+    ) -> u64 {
+        self.add(integrator, pixels, layers)
     }
 
-    /// Adds this pass's sample of every pixel of the band (`pixels`, its rows) tile by tile.
-    #[inline(always)]
+    /// Adds this pass's sample of every pixel of the band (`pixels`, its rows) tile by tile,
+    /// and of each of the integrator's layers (`layers[k]`, the same rows of layer `k`).
     /// Returns how many samples were not finite (NaN or infinite in a channel): they count as
     /// black, so that one bad sample cannot spoil its pixel for good.
-    fn add(&self, integrator: &(impl Integrator + ?Sized), pixels: &mut [Vec3]) -> u64 {
+    #[inline(always)]
+    fn add(
+        &self,
+        integrator: &(impl Integrator + ?Sized),
+        pixels: &mut [Vec3],
+        layers: &mut [&mut [Vec3]],
+    ) -> u64 {
         let mut discarded = 0;
         let (rays, kind, settings, sample) = (self.camera, self.kind, self.settings, self.sample);
         let (width, first_row, has_lens) = (self.width, self.first_row, self.has_lens);
@@ -110,6 +141,9 @@ impl Band<'_> {
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
             std::array::from_fn(|_| Sampler::new(kind, 0, (0, 0), 0));
         let mut colours = [Vec3::ZERO; MAX_TILE_PIXELS];
+        // The layers' values of a tile's rays, ray by ray (empty without layers).
+        let layer_count = layers.len();
+        let mut layer_values = vec![Vec3::ZERO; MAX_TILE_PIXELS * layer_count];
         for tile_x in (0..width).step_by(tile_width) {
             let columns = tile_x..(tile_x + tile_width).min(width);
             let n = columns.len() * rows;
@@ -128,7 +162,27 @@ impl Band<'_> {
                     };
                 }
             }
-            integrator.radiance_each(&tile_rays[..n], &mut samplers[..n], &mut colours[..n]);
+            if layer_count == 0 {
+                integrator.radiance_each(&tile_rays[..n], &mut samplers[..n], &mut colours[..n]);
+            } else {
+                integrator.radiance_and_layers_each(
+                    &tile_rays[..n],
+                    &mut samplers[..n],
+                    &mut colours[..n],
+                    &mut layer_values[..n * layer_count],
+                );
+                let mut values = layer_values.chunks_exact(layer_count);
+                for y in 0..rows {
+                    for x in columns.clone() {
+                        let values = values.next().expect("the layers of each ray");
+                        for (layer, &value) in layers.iter_mut().zip(values) {
+                            if value.is_finite() {
+                                layer[y * width + x] += value;
+                            }
+                        }
+                    }
+                }
+            }
             let mut colour = colours.iter();
             for y in 0..rows {
                 for x in columns.clone() {
@@ -203,9 +257,9 @@ mod tests {
                             first_row: b * band_rows,
                             first_column: 0,
                         };
-                        assert_eq!(band.add(integrator, base), 0);
+                        assert_eq!(band.add(integrator, base, &mut []), 0);
                         // SAFETY: AVX2 was detected above.
-                        assert_eq!(unsafe { band.add_avx2(integrator, wide) }, 0);
+                        assert_eq!(unsafe { band.add_avx2(integrator, wide, &mut []) }, 0);
                     }
                 }
                 let bits = |p: &[Vec3]| -> Vec<[u32; 3]> {

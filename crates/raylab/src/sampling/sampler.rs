@@ -22,7 +22,10 @@ use super::sobol::{laine_karras_permutation, shuffled_scrambled_sobol_2d};
 use super::{pixel_hash, sample_offset};
 
 /// Which numbers a [`Sampler`] hands out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum SamplerKind {
     /// The lab's pixel positions (centre, then R₂), independent numbers after them.
     Lab,

@@ -17,6 +17,7 @@ mod mesh_file;
 mod model;
 mod mtl;
 pub(crate) mod obj;
+mod open;
 pub(crate) mod ply;
 mod scene_file;
 pub mod terrain;
@@ -31,6 +32,7 @@ pub use mesh_file::{
     read_limit_bytes,
 };
 pub use model::model_to_lab;
+pub use open::{LoadOptions, OpenError, OpenedScene};
 pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
 
 use crate::accel::Hit;
@@ -173,8 +175,8 @@ pub struct RenderSettings {
     pub max_depth: Option<Option<u32>>,
     /// The seed.
     pub seed: Option<u64>,
-    /// The integrator's name (`lab`, `path`, `albedo`, `normals`, `depth`).
-    pub integrator: Option<String>,
+    /// The integrator.
+    pub integrator: Option<crate::settings::IntegratorKind>,
     /// The sampler.
     pub sampler: Option<crate::SamplerKind>,
     /// The pixel filter.

@@ -22,6 +22,7 @@ use crate::light::{Light, PointLight};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::sampling::SamplerKind;
+use crate::settings::IntegratorKind;
 
 /// A scene file that cannot be used: the file, where in it, and what is wrong.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -557,16 +558,10 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             }
         };
         if let Some(integrator) = &doc.integrator {
-            let name = integrator.get_ref().as_str();
-            if !["lab", "path", "albedo", "normals", "depth"].contains(&name) {
-                return self.error(
-                    integrator.span(),
-                    format!(
-                        "unknown integrator '{name}': expected lab, path, albedo, normals or depth"
-                    ),
-                );
+            match integrator.get_ref().parse::<IntegratorKind>() {
+                Ok(kind) => settings.integrator = Some(kind),
+                Err(message) => return self.error(integrator.span(), message),
             }
-            settings.integrator = Some(name.to_string());
         }
         if let Some(sampler) = &doc.sampler {
             settings.sampler = Some(

@@ -1,0 +1,648 @@
+//! A render job: a scene with its BVH, threads and resolved settings, rendering frames to
+//! files (see the module documentation of [`crate::session`]).
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use super::{RenderIdentity, ResolvedSettings, SessionError};
+use crate::bvh::{Bvh, SceneBvh};
+use crate::camera::Camera;
+use crate::film::{Display, Film, ToneMap, format_bytes};
+use crate::image_io::{self, ImageFormat, ImageIoError};
+use crate::integrator::{Aov, Integrator, Lab, Path as PathTracer, WithAovs};
+use crate::parts::{self, Channel, Part, PartHeader, PartKind};
+use crate::region::Region;
+use crate::render::Accumulator;
+use crate::scene::Scene;
+use crate::settings::{AovKind, IntegratorKind};
+
+/// Checkpoints: the sums of the samples written beside the output (`NAME.checkpoint.exr`, see
+/// [`checkpoint_path`]) at most every `every`, between passes, and when the render is stopped.
+/// A render that finds its own checkpoint goes on from it; a finished render deletes it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Checkpoints {
+    /// The least time between two checkpoints.
+    pub every: Duration,
+    /// What to record for resuming (the command line, say), stored in each checkpoint.
+    pub command: Option<String>,
+}
+
+/// What a job tells its caller as it goes.
+#[derive(Debug)]
+pub enum Event<'a> {
+    /// A frame's passes begin: `rows` rows of `row_pixels` pixels to render in all (for a
+    /// progress bar), within `time_limit` if there is one.
+    Started {
+        /// Rows in all passes.
+        rows: u64,
+        /// Pixels per row.
+        row_pixels: u64,
+        /// The render's time limit.
+        time_limit: Option<Duration>,
+    },
+    /// Rows just finished (called from the render threads).
+    Rows(u32),
+    /// The frame's passes are over.
+    Finished,
+    /// The output is already rendered, by an earlier run of the same render: it is kept.
+    AlreadyRendered(&'a Path),
+    /// Going on from a checkpoint at `samples` samples per pixel.
+    Resumed {
+        /// The checkpoint.
+        checkpoint: &'a Path,
+        /// Samples per pixel it holds.
+        samples: u32,
+    },
+    /// A checkpoint could not be written (a full disk, say); the render goes on.
+    CheckpointNotWritten(&'a ImageIoError),
+}
+
+/// What rendering a frame did.
+#[derive(Debug)]
+pub struct FrameOutcome {
+    /// The file written (or found already rendered).
+    pub output: PathBuf,
+    /// The camera it was rendered through.
+    pub camera: Camera,
+    /// The picture (the mean of the samples), `None` where the output was already rendered.
+    pub film: Option<Film>,
+    /// Samples per pixel reached.
+    pub samples: u32,
+    /// The first sample this run added (more than 0 when it went on from a checkpoint).
+    pub first_sample: u32,
+    /// Samples that were not finite (NaN or infinite) and count as black.
+    pub discarded: u64,
+    /// The time the passes took (layers included, checkpoints included).
+    pub elapsed: Duration,
+    /// The time checkpoints took.
+    pub checkpoint_time: Duration,
+    /// Whether the stop flag ended it early.
+    pub interrupted: bool,
+    /// The checkpoint, where checkpoints are written (after an interrupt, the one to resume).
+    pub checkpoint: Option<PathBuf>,
+}
+
+/// A scene ready to render: see the module documentation of [`crate::session`].
+pub struct RenderJob<'s> {
+    scene: &'s Scene,
+    settings: ResolvedSettings,
+    pool: rayon::ThreadPool,
+    threads: usize,
+    accel: OnceLock<SceneBvh>,
+    build_time: Duration,
+    /// The part of the image to render ([`Region::full`] where `None`).
+    pub region: Option<Region>,
+    /// Extra layers of `.exr` output, from the same samples.
+    pub aovs: Vec<AovKind>,
+    /// Whether and how often to write checkpoints.
+    pub checkpoints: Option<Checkpoints>,
+    /// Brightness of 8-bit output in stops.
+    pub exposure: f32,
+    /// Tone mapping of 8-bit output.
+    pub tone_map: ToneMap,
+    stop: Option<&'s AtomicBool>,
+}
+
+impl<'s> RenderJob<'s> {
+    /// A job rendering `scene` with `settings` on `threads` threads (0: one per core), its BVH
+    /// built on first use (see [`accel`](Self::accel)).
+    pub fn new(
+        scene: &'s Scene,
+        settings: ResolvedSettings,
+        threads: usize,
+    ) -> Result<RenderJob<'s>, SessionError> {
+        const MAX_THREADS: usize = 1024;
+        if threads > MAX_THREADS {
+            return Err(SessionError::Invalid(format!(
+                "--threads {threads} is more than {MAX_THREADS}"
+            )));
+        }
+        let threads = if threads == 0 { cores() } else { threads };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| SessionError::Invalid(format!("cannot start the render threads: {e}")))?;
+        Ok(RenderJob {
+            scene,
+            settings,
+            pool,
+            threads,
+            accel: OnceLock::new(),
+            build_time: Duration::ZERO,
+            region: None,
+            aovs: Vec::new(),
+            checkpoints: None,
+            exposure: 0.0,
+            tone_map: ToneMap::Clamp,
+            stop: None,
+        })
+    }
+
+    /// Stops the render between passes once `flag` is set (an interrupt handler sets it).
+    pub fn stop_when(&mut self, flag: &'s AtomicBool) {
+        self.stop = Some(flag);
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    /// The resolved settings.
+    pub fn settings(&self) -> &ResolvedSettings {
+        &self.settings
+    }
+
+    /// The render threads.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The thread pool the job renders on.
+    pub fn pool(&self) -> &rayon::ThreadPool {
+        &self.pool
+    }
+
+    /// How long building the BVH took (zero before it is built).
+    pub fn build_time(&self) -> Duration {
+        self.build_time
+    }
+
+    /// The BVH over the scene, built on the job's threads the first time it is asked for:
+    /// refused with one line where the scene has more triangles than a BVH holds, or needs
+    /// more memory to build than the machine has available.
+    pub fn accel(&mut self) -> Result<&SceneBvh, SessionError> {
+        if self.accel.get().is_none() {
+            let (scene, start) = (self.scene, Instant::now());
+            let geometry = &scene.geometry;
+            // A mesh drawn in several places is built over once.
+            check_bvh_memory(&scene.name, geometry.stored_len(), crate::memory::available_bytes())?;
+            let bvh = self
+                .pool
+                .install(|| SceneBvh::build(geometry))
+                .map_err(|e| SessionError::Invalid(format!("{}: {e}", scene.name)))?;
+            self.build_time = start.elapsed();
+            let _ = self.accel.set(bvh);
+        }
+        Ok(self.accel.get().expect("built above"))
+    }
+
+    /// The BVH, where it is built.
+    pub fn built_accel(&self) -> Option<&SceneBvh> {
+        self.accel.get()
+    }
+
+    /// Checks, before any work, that `output` can be written as this job writes it: the
+    /// format from its extension, its folder, `.exr` for layers and for parts of an image, and
+    /// the memory for the picture of `size`.
+    pub fn check_output(&self, output: &Path, size: (u32, u32)) -> Result<(), SessionError> {
+        let format = image_io::check_writable(output)?;
+        if !self.aovs.is_empty() && format != ImageFormat::Exr {
+            return Err(SessionError::Invalid(format!(
+                "--aov writes extra layers into an OpenEXR file: the output must end in .exr, \
+                 not {}",
+                output.display()
+            )));
+        }
+        let region = self.region(size);
+        if region != Region::full(size.0, size.1) && format != ImageFormat::Exr {
+            return Err(SessionError::Invalid(format!(
+                "--tile and --region write a part of the image for `raylab merge`, which needs \
+                 OpenEXR: the output must end in .exr, not {}",
+                output.display()
+            )));
+        }
+        // The sums and their mean, and each layer's.
+        let films = 2 * (1 + self.aovs.len() as u64);
+        let bytes = Film::bytes_needed(region.width(), region.height()).saturating_mul(films);
+        check_memory(bytes, region.width(), region.height())
+    }
+
+    /// The part of an image of `size` this job renders.
+    pub fn region(&self, (width, height): (u32, u32)) -> Region {
+        self.region.unwrap_or(Region::full(width, height))
+    }
+
+    /// The identity of a render through `camera` (see [`RenderIdentity`]).
+    pub fn identity(&self, camera: &Camera) -> RenderIdentity {
+        let s = &self.settings;
+        let sampler = s.samples.sampler.unwrap_or(match s.integrator {
+            IntegratorKind::Lab => crate::sampling::SamplerKind::Lab,
+            _ => crate::sampling::SamplerKind::Sobol,
+        });
+        RenderIdentity::new(
+            camera,
+            s.integrator,
+            s.stage,
+            s.spp,
+            s.samples.seed,
+            sampler,
+            s.samples.filter,
+            s.max_depth,
+            s.light_sampling,
+            self.aovs.clone(),
+        )
+    }
+
+    /// How 8-bit output shows the picture.
+    pub fn display(&self) -> Display {
+        self.settings.display(self.exposure, self.tone_map)
+    }
+
+    fn stopped(&self) -> bool {
+        self.stop.is_some_and(|flag| flag.load(Ordering::Relaxed))
+    }
+
+    /// Renders one frame through `camera` into `output` (an image, or an `.exr` part of the
+    /// image with its header), going on from `resume` (a checkpoint) or from this render's own
+    /// checkpoint where there is one. With the stop flag set, it stops between passes and
+    /// writes what it has ([`FrameOutcome::interrupted`]).
+    pub fn render_frame(
+        &mut self,
+        camera: &Camera,
+        output: &Path,
+        resume: Option<Part>,
+        events: &(dyn Fn(Event) + Sync),
+    ) -> Result<FrameOutcome, SessionError> {
+        let (width, height) = (camera.width, camera.height);
+        self.check_output(output, (width, height))?;
+        self.accel()?;
+        let accel = self.accel.get().expect("built");
+        let (scene, settings, region) = (self.scene, self.settings, self.region((width, height)));
+        let identity = self.identity(camera);
+        let header = PartHeader {
+            kind: PartKind::Image,
+            image: (width, height),
+            region,
+            samples: 0,
+            scene_hash: format!("{:016x}", scene.content_hash()),
+            settings: identity.to_text(),
+            command: self.checkpoints.as_ref().and_then(|c| c.command.clone()),
+        };
+        let checkpoint = self.checkpoints.as_ref().map(|c| (checkpoint_path(output), c.every));
+        // An image that an earlier run of the same render finished (a requeued job, a rerun
+        // after an interrupt) is not rendered again.
+        if checkpoint.is_some()
+            && output.exists()
+            && parts::read_part(output).is_ok_and(|done| {
+                let h = &done.header;
+                (h.kind, h.samples, &h.scene_hash, &h.settings, h.region)
+                    == (PartKind::Image, settings.spp, &header.scene_hash, &header.settings, region)
+            })
+        {
+            events(Event::AlreadyRendered(output));
+            return Ok(FrameOutcome {
+                output: output.to_path_buf(),
+                camera: *camera,
+                film: None,
+                samples: settings.spp,
+                first_sample: settings.spp,
+                discarded: 0,
+                elapsed: Duration::ZERO,
+                checkpoint_time: Duration::ZERO,
+                interrupted: false,
+                checkpoint: checkpoint.map(|(path, _)| path),
+            });
+        }
+        let resume = match (resume, &checkpoint) {
+            (Some(part), _) => Some(part),
+            (None, Some((path, _))) if path.exists() => Some(parts::read_part(path)?),
+            _ => None,
+        };
+
+        // The integrator, with its layers.
+        let lab = Lab::new(scene, accel, settings.stage).for_camera(camera);
+        let path = PathTracer::new(scene, accel, settings.path_settings());
+        let aov;
+        let base: &dyn Integrator = match settings.integrator {
+            IntegratorKind::Lab => &lab,
+            IntegratorKind::Path => &path,
+            IntegratorKind::Aov(kind) => {
+                aov = Aov::new(scene, accel, kind);
+                &aov
+            }
+        };
+        let with_layers = WithAovs::new(base, scene, accel, &self.aovs);
+        let integrator: &dyn Integrator = if self.aovs.is_empty() { base } else { &with_layers };
+
+        let mut accumulator = match resume {
+            Some(part) => resume_from(part, &header, &self.aovs, settings, events)?,
+            None => {
+                let mut accumulator = Accumulator::for_region(width, height, region)?;
+                accumulator.settings = settings.samples;
+                accumulator.with_layers(self.aovs.len(), None)?
+            }
+        };
+        let first_sample = accumulator.samples();
+        let passes = settings.spp.saturating_sub(first_sample) as u64;
+        events(Event::Started {
+            rows: region.height() as u64 * passes,
+            row_pixels: region.width() as u64,
+            time_limit: settings.time_limit,
+        });
+        let start = Instant::now();
+        let mut last_checkpoint = Instant::now();
+        let mut checkpoint_time = Duration::ZERO;
+        // A checkpoint that cannot be written is reported, and the render goes on: its work is
+        // not thrown away for want of a checkpoint.
+        let write_checkpoint = |accumulator: &Accumulator, path: &Path| -> Duration {
+            let start = Instant::now();
+            let state = PartHeader {
+                kind: PartKind::Checkpoint,
+                samples: accumulator.samples(),
+                ..header.clone()
+            };
+            let channels = channels_of(accumulator.sums(), accumulator.layer_sums(), &self.aovs);
+            if let Err(error) =
+                parts::write_exr(path, (width, height), region, channels, Some(&state))
+            {
+                events(Event::CheckpointNotWritten(&error));
+            }
+            start.elapsed()
+        };
+        let mut interrupted = false;
+        self.pool.install(|| {
+            while accumulator.samples() < settings.spp {
+                if self.stopped() {
+                    interrupted = true;
+                    break;
+                }
+                accumulator.add_sample_with_progress(camera, integrator, &|rows| {
+                    events(Event::Rows(rows))
+                });
+                if settings.time_limit.is_some_and(|limit| start.elapsed() >= limit) {
+                    break;
+                }
+                if let Some((path, every)) = &checkpoint
+                    && last_checkpoint.elapsed() >= *every
+                    && accumulator.samples() < settings.spp
+                {
+                    checkpoint_time += write_checkpoint(&accumulator, path);
+                    last_checkpoint = Instant::now();
+                }
+            }
+        });
+        interrupted |= self.stopped();
+        // The work so far is kept first: on a pre-empted node the time left may be short.
+        if interrupted && let Some((path, _)) = &checkpoint {
+            write_checkpoint(&accumulator, path);
+        }
+        let samples = accumulator.samples();
+        if samples == 0 {
+            events(Event::Finished);
+            return Err(SessionError::NothingRendered);
+        }
+        let film = accumulator.mean()?;
+        let layers = (0..self.aovs.len())
+            .map(|k| accumulator.layer_mean(k))
+            .collect::<Result<Vec<_>, _>>()?;
+        let elapsed = start.elapsed();
+        events(Event::Finished);
+
+        if image_io::check_writable(output)? == ImageFormat::Exr {
+            let header = PartHeader { samples, command: None, ..header.clone() };
+            let channels = channels_of(&film, &layers, &self.aovs);
+            parts::write_exr(output, (width, height), region, channels, Some(&header))?;
+        } else {
+            image_io::save_film(output, &film, &self.display())?;
+        }
+        if !interrupted
+            && let Some((path, _)) = &checkpoint
+            && path.exists()
+        {
+            std::fs::remove_file(path).map_err(|source| ImageIoError::Io {
+                action: "delete the finished render's checkpoint",
+                path: path.clone(),
+                source,
+            })?;
+        }
+        Ok(FrameOutcome {
+            output: output.to_path_buf(),
+            camera: *camera,
+            film: Some(film),
+            samples,
+            first_sample,
+            discarded: path.discarded_samples() + accumulator.discarded_samples(),
+            elapsed,
+            checkpoint_time,
+            interrupted,
+            checkpoint: checkpoint.map(|(path, _)| path),
+        })
+    }
+
+    /// Renders frames `first..=last` of the scene's animation, each through the camera
+    /// `camera_at` gives for it, to `pattern` with the frame's number in place (see
+    /// [`frame_path`]); `resume` goes on with the frame whose checkpoint it is. `each` gets
+    /// every frame's outcome. Returns the frame it stopped before, if the stop flag stopped it.
+    pub fn render_frames<E: From<SessionError>>(
+        &mut self,
+        (first, last): (u32, u32),
+        pattern: &Path,
+        camera_at: &dyn Fn(&mut Self, u32) -> Result<Camera, SessionError>,
+        mut resume: Option<Part>,
+        events: &(dyn Fn(Event) + Sync),
+        each: &mut dyn FnMut(&Self, FrameOutcome) -> Result<(), E>,
+    ) -> Result<Option<u32>, E> {
+        if self.scene.keyframes.is_empty() {
+            return Err(SessionError::Invalid(format!(
+                "--frames renders an animation, and {} has no camera keyframes ([[keyframes]] \
+                 in a scene file, see docs/scene-format.md)",
+                self.scene.name
+            ))
+            .into());
+        }
+        frame_path(pattern, first)?;
+        for frame in first..=last {
+            if self.stopped() {
+                return Ok(Some(frame));
+            }
+            let output = frame_path(pattern, frame)?;
+            let camera = camera_at(self, frame)?;
+            let checkpoint = checkpoint_path(&output);
+            let outcome = self.render_frame(
+                &camera,
+                &output,
+                resume.take_if(|s| s.path == checkpoint),
+                events,
+            )?;
+            let interrupted = outcome.interrupted;
+            each(self, outcome)?;
+            if interrupted {
+                return Ok(Some(frame + 1));
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// An accumulator going on from checkpoint `part`, if it is this render's (`header`).
+fn resume_from(
+    part: Part,
+    header: &PartHeader,
+    aovs: &[AovKind],
+    settings: ResolvedSettings,
+    events: &(dyn Fn(Event) + Sync),
+) -> Result<Accumulator, SessionError> {
+    let h = &part.header;
+    let problem = if h.kind != PartKind::Checkpoint {
+        Some("it is not a checkpoint".to_string())
+    } else if h.scene_hash != header.scene_hash {
+        Some("the scene has changed since".to_string())
+    } else if h.settings != header.settings {
+        let file = part.path.display().to_string();
+        // Say why in the identity's terms where it can be read.
+        RenderIdentity::from_text(&file, &h.settings)?;
+        Some(format!("it has other settings ('{}')", h.settings))
+    } else if (h.image, h.region) != (header.image, header.region) {
+        Some(format!("it holds region {} of {}×{}", h.region, h.image.0, h.image.1))
+    } else {
+        None
+    };
+    if let Some(problem) = problem {
+        return Err(SessionError::Checkpoint { path: part.path.clone(), problem });
+    }
+    let (width, height) = (h.region.width(), h.region.height());
+    let missing = |what: &str| SessionError::Checkpoint {
+        path: part.path.clone(),
+        problem: format!("it has no {what} channels"),
+    };
+    let sums = parts::beauty(&part.channels, width, height).ok_or_else(|| missing("R, G and B"))?;
+    let layers = aovs
+        .iter()
+        .map(|kind| {
+            layer_of(&part.channels, *kind, width, height).ok_or_else(|| missing(kind.name()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    events(Event::Resumed { checkpoint: &part.path, samples: h.samples });
+    let accumulator = Accumulator::resume(h.image, h.region, sums, h.samples, settings.samples)?;
+    Ok(accumulator.with_layers(aovs.len(), Some(layers))?)
+}
+
+/// The channels of a picture and its layers (see [`parts::film_channels`]).
+fn channels_of(beauty: &Film, layers: &[Film], aovs: &[AovKind]) -> Vec<Channel> {
+    let named: Vec<(&str, &Film)> = aovs.iter().map(|k| k.name()).zip(layers).collect();
+    parts::film_channels(beauty, &named)
+}
+
+/// Layer `kind` of a part's channels: `NAME.R`, `NAME.G`, `NAME.B`, or `depth.Z` in every
+/// channel (the depth layer is the same in all three).
+fn layer_of(channels: &[Channel], kind: AovKind, width: u32, height: u32) -> Option<Film> {
+    let pixels = width as usize * height as usize;
+    let find = |name: String| channels.iter().find(|c| c.0 == name && c.1.len() == pixels);
+    let name = kind.name();
+    let values: Vec<glam::Vec3> = if kind == AovKind::Depth {
+        find(format!("{name}.Z"))?.1.iter().map(|&z| glam::Vec3::splat(z)).collect()
+    } else {
+        let (r, g, b) =
+            (find(format!("{name}.R"))?, find(format!("{name}.G"))?, find(format!("{name}.B"))?);
+        r.1.iter().zip(&g.1).zip(&b.1).map(|((&r, &g), &b)| glam::Vec3::new(r, g, b)).collect()
+    };
+    Some(Film::from_pixels(width, height, values))
+}
+
+/// Where the checkpoint of a render writing `output` goes: `NAME.checkpoint.exr` beside it.
+pub fn checkpoint_path(output: &Path) -> PathBuf {
+    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    output.with_file_name(format!("{stem}.checkpoint.exr"))
+}
+
+/// The file of frame `frame` of an animation written to `pattern`: its printf-style `%d` or
+/// `%0Nd` replaced by the frame's number (`out_%04d.exr`, frame 7: `out_0007.exr`).
+pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf, SessionError> {
+    let name = pattern.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let missing = || {
+        SessionError::Invalid(format!(
+            "--frames writes a file per frame: the output name needs the frame number's place, \
+             like out_%04d.exr, not {}",
+            pattern.display()
+        ))
+    };
+    let start = name.find('%').ok_or_else(missing)?;
+    let rest = &name[start + 1..];
+    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    if !rest[digits.len()..].starts_with('d') {
+        return Err(missing());
+    }
+    let width: usize = if digits.is_empty() { 0 } else { digits.parse().map_err(|_| missing())? };
+    if width > 10 {
+        return Err(SessionError::Invalid(format!(
+            "{}: at most 10 digits for the frame number",
+            pattern.display()
+        )));
+    }
+    let number = format!("{frame:0width$}");
+    let file = format!("{}{number}{}", &name[..start], &rest[digits.len() + 1..]);
+    if file.contains('%') {
+        return Err(SessionError::Invalid(format!(
+            "{}: one frame number place only",
+            pattern.display()
+        )));
+    }
+    Ok(pattern.with_file_name(file))
+}
+
+/// The number of threads the machine runs at once.
+fn cores() -> usize {
+    std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
+}
+
+/// Refuses a `width×height` picture that needs more memory (`bytes`) than the machine has
+/// available.
+pub fn check_memory(bytes: u64, width: u32, height: u32) -> Result<(), SessionError> {
+    match crate::memory::available_bytes() {
+        Some(available) if bytes > available => Err(SessionError::OutOfMemory(format!(
+            "image size {width}×{height} needs {} of memory, but only {} is available",
+            format_bytes(bytes),
+            format_bytes(available)
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Whether a BVH over `triangles` fits in `available` bytes (unknown: assumed to fit).
+fn check_bvh_memory(
+    name: &str,
+    triangles: usize,
+    available: Option<u64>,
+) -> Result<(), SessionError> {
+    let bytes = Bvh::build_bytes_estimate(triangles);
+    match available {
+        Some(available) if bytes > available => Err(SessionError::OutOfMemory(format!(
+            "{name}: {triangles} triangles need about {} of memory for the BVH, but only {} is \
+             available",
+            format_bytes(bytes),
+            format_bytes(available)
+        ))),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bvh_larger_than_the_memory_is_one_line_error() {
+        let error = check_bvh_memory("big.ply", 200_000_000, Some(8 << 30)).unwrap_err();
+        let message = error.to_string();
+        assert!(message.starts_with("big.ply: 200000000 triangles need about"), "{message}");
+        assert!(!message.contains('\n'), "{message}");
+        assert!(check_bvh_memory("small.obj", 1000, Some(8 << 30)).is_ok());
+        assert!(check_bvh_memory("unknown.obj", 200_000_000, None).is_ok());
+    }
+
+    #[test]
+    fn checkpoints_sit_beside_the_output_and_frames_are_numbered() {
+        assert_eq!(checkpoint_path(Path::new("out/a.exr")), Path::new("out/a.checkpoint.exr"));
+        assert_eq!(checkpoint_path(Path::new("b.png")), Path::new("b.checkpoint.exr"));
+        let path = |p: &str, f| frame_path(Path::new(p), f).map(|p| p.display().to_string());
+        assert_eq!(path("out/f_%04d.exr", 7).unwrap(), "out/f_0007.exr");
+        assert_eq!(path("%d.png", 12).unwrap(), "12.png");
+        assert_eq!(path("a%2d_b.exr", 123).unwrap(), "a123_b.exr");
+        assert!(path("out.exr", 1).unwrap_err().to_string().contains("like out_%04d.exr"));
+        assert!(path("out_%04x.exr", 1).is_err());
+        assert!(path("out_%d_%d.exr", 1).is_err());
+    }
+}

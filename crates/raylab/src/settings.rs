@@ -1,0 +1,137 @@
+//! What a render computes, by name: the integrator choice that scene files, the command line,
+//! `raylab view` and the render session share.
+//!
+//! | name | [`IntegratorKind`] | computes |
+//! |---|---|---|
+//! | `lab` | `Lab` | the lab's light model (point light, shadows, ambient term) |
+//! | `path` | `Path` | path tracing (area lights, indirect light, glossy and specular materials) |
+//! | `albedo`, `normals`, `depth` | `Aov(AovKind)` | what the camera sees first (arbitrary output variables) |
+//!
+//! When nothing names one, a scene with area lights is path-traced and any other scene gets the
+//! lab's model ([`IntegratorKind::default_for`]).
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+/// Which first-hit quantity an AOV (arbitrary output variable) shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AovKind {
+    /// The surface's albedo.
+    Albedo,
+    /// The shading normal facing the camera.
+    Normals,
+    /// The distance to the surface.
+    Depth,
+}
+
+impl AovKind {
+    /// Every kind, in the order of the command line's help.
+    pub const ALL: [AovKind; 3] = [AovKind::Albedo, AovKind::Normals, AovKind::Depth];
+
+    /// Its name: `albedo`, `normals` or `depth` (also its layer's name in an OpenEXR file).
+    pub fn name(self) -> &'static str {
+        match self {
+            AovKind::Albedo => "albedo",
+            AovKind::Normals => "normals",
+            AovKind::Depth => "depth",
+        }
+    }
+}
+
+impl fmt::Display for AovKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for AovKind {
+    type Err = String;
+
+    fn from_str(name: &str) -> Result<AovKind, String> {
+        AovKind::ALL
+            .into_iter()
+            .find(|kind| kind.name() == name)
+            .ok_or_else(|| format!("unknown AOV '{name}': expected albedo, normals or depth"))
+    }
+}
+
+/// Which integrator computes a picture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum IntegratorKind {
+    /// The lab's light model, at the stage the render settings give.
+    Lab,
+    /// The path tracer.
+    Path,
+    /// A first-hit image.
+    Aov(AovKind),
+}
+
+impl IntegratorKind {
+    /// The integrator of a scene that names none: `path` where some surface emits (area
+    /// lights, which the lab's model ignores), else `lab`.
+    pub fn default_for(has_area_lights: bool) -> IntegratorKind {
+        if has_area_lights { IntegratorKind::Path } else { IntegratorKind::Lab }
+    }
+
+    /// Its name, as scene files and the command line write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Lab => "lab",
+            IntegratorKind::Path => "path",
+            IntegratorKind::Aov(kind) => kind.name(),
+        }
+    }
+
+    /// Whether its pictures are shown as the lab shows them (linear values clamped, no sRGB
+    /// encoding) rather than as physically based renders are (sRGB).
+    pub fn shows_linear(self) -> bool {
+        self == IntegratorKind::Lab
+    }
+}
+
+impl fmt::Display for IntegratorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for IntegratorKind {
+    type Err = String;
+
+    fn from_str(name: &str) -> Result<IntegratorKind, String> {
+        match name {
+            "lab" => Ok(IntegratorKind::Lab),
+            "path" => Ok(IntegratorKind::Path),
+            other => other.parse().map(IntegratorKind::Aov).map_err(|_| {
+                format!("unknown integrator '{name}': expected lab, path, albedo, normals or depth")
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_read_back_and_unknown_names_say_what_is_known() {
+        for kind in [IntegratorKind::Lab, IntegratorKind::Path]
+            .into_iter()
+            .chain(AovKind::ALL.map(IntegratorKind::Aov))
+        {
+            assert_eq!(kind.name().parse::<IntegratorKind>(), Ok(kind));
+        }
+        let error = "whitted".parse::<IntegratorKind>().unwrap_err();
+        assert_eq!(
+            error,
+            "unknown integrator 'whitted': expected lab, path, albedo, normals or depth"
+        );
+        assert!("lab".parse::<AovKind>().unwrap_err().contains("albedo, normals or depth"));
+        assert_eq!(IntegratorKind::default_for(true), IntegratorKind::Path);
+        assert_eq!(IntegratorKind::default_for(false), IntegratorKind::Lab);
+    }
+}
