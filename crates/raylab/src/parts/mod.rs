@@ -367,7 +367,8 @@ pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<Channel>), PartError> 
             ));
         }
         if h.settings != f.settings {
-            let (these, first_entries) = (setting_entries(&h.settings), setting_entries(&f.settings));
+            let (these, first_entries) =
+                (setting_entries(&h.settings), setting_entries(&f.settings));
             let differ: Vec<String> = these
                 .iter()
                 .zip(&first_entries)
