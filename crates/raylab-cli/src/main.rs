@@ -4,11 +4,13 @@
 mod args;
 mod bench_cmd;
 mod embree_columns;
+mod headless;
 mod merge_cmd;
 mod progress;
 mod render_cmd;
 mod render_state;
 mod scene_args;
+mod screenshot;
 mod stats;
 mod system;
 mod view_cmd;
@@ -75,6 +77,19 @@ fn main() -> ExitCode {
             eprintln!("raylab: error: {}", one_line_error(&error));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Prints a command's report to standard output. The work is done by then: a closed or full
+/// standard output is not worth a failure, but it must not be a panic either (`println!`
+/// would panic).
+fn print_report(report: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(report.as_bytes()) {
+        Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(anyhow::Error::new(error).context("cannot print the report to standard output"))
+        }
+        _ => Ok(()),
     }
 }
 

@@ -1,9 +1,8 @@
 //! `raylab merge`: the parts of a render assembled into the whole image.
 
-use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use raylab::film::ToneMap;
 use raylab::session;
@@ -40,10 +39,5 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         merged.parts,
         merged.samples
     );
-    match std::io::stdout().lock().write_all(report.as_bytes()) {
-        Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(error).context("cannot print the report to standard output")
-        }
-        _ => Ok(()),
-    }
+    crate::print_report(&report)
 }

@@ -1,11 +1,12 @@
 //! The render's progress bar.
 
 use std::io::IsTerminal;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, RwLock};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use raylab::session::Event;
 
 /// Renders longer than this get a progress bar (on a terminal).
 const PROGRESS_AFTER: Duration = Duration::from_millis(500);
@@ -73,5 +74,44 @@ impl Progress {
 
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+}
+
+/// A render job's events on the console: a progress bar per frame, and its notes (resumed,
+/// already rendered, a checkpoint not written) on standard error.
+#[derive(Default)]
+pub struct FrameProgress {
+    bar: RwLock<Option<Progress>>,
+}
+
+impl FrameProgress {
+    /// Shows `event`.
+    pub fn on(&self, event: Event) {
+        match event {
+            Event::Started { rows, row_pixels, time_limit } => {
+                *self.bar.write().expect("no panic holds it") =
+                    Some(Progress::new(rows, row_pixels, time_limit));
+            }
+            Event::Rows(rows) => {
+                if let Some(bar) = &*self.bar.read().expect("no panic holds it") {
+                    bar.advance(rows);
+                }
+            }
+            Event::Finished => {
+                if let Some(bar) = self.bar.write().expect("no panic holds it").take() {
+                    bar.finish();
+                }
+            }
+            Event::AlreadyRendered(output) => {
+                eprintln!("raylab: {} is already rendered", output.display());
+            }
+            Event::Resumed { checkpoint, samples } => eprintln!(
+                "raylab: going on from {} at {samples} samples per pixel",
+                checkpoint.display()
+            ),
+            Event::CheckpointNotWritten(error) => {
+                eprintln!("raylab: warning: no checkpoint written: {error}");
+            }
+        }
     }
 }

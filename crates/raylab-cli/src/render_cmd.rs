@@ -1,26 +1,23 @@
 //! `raylab render`: one frame to an image file.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use std::sync::RwLock;
-
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::Args;
-use raylab::camera::tidy;
-use raylab::film::{ToneMap, format_bytes};
-use raylab::parts::{self, Part, PartKind};
+use raylab::film::ToneMap;
+use raylab::parts::Part;
 use raylab::session::{
-    Checkpoints, Event, FrameOutcome, MAX_SPP, RenderJob, RenderOptions, ResolvedSettings,
+    Checkpoints, Event, FrameOutcome, FrameSummary, MAX_SPP, RenderJob, RenderOptions,
+    ResolvedSettings,
 };
 use raylab::settings::{AovKind, IntegratorKind};
 use raylab::{Filter, Region, SamplerKind, TriangleSampling};
 
 use crate::args;
-use crate::progress::Progress;
+use crate::progress::FrameProgress;
 use crate::render_state::{self, Command, Interrupted};
-use crate::scene_args::{STAGES_HELP, SceneArgs, Setup, tidy_vec3};
+use crate::scene_args::{STAGES_HELP, SceneArgs, Setup};
 
 #[derive(Args, Debug)]
 // An option given twice takes its last value, so that a script's defaults (the farm scripts'
@@ -66,8 +63,8 @@ pub struct RenderArgs {
     sampler: Option<SamplerKind>,
 
     /// Pixel filter: box (each pixel the mean over its area) or gaussian (σ = 0.5 px, radius 2).
-    #[arg(long, value_name = "NAME", value_parser = ["box", "gaussian"])]
-    filter: Option<String>,
+    #[arg(long, value_name = "NAME")]
+    filter: Option<Filter>,
 
     /// Extra layers for .exr output, comma-separated: albedo, normals, depth (the first hit's,
     /// averaged over the same samples as the image).
@@ -132,32 +129,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         };
         return render(args, command, None);
     };
-    let part = parts::read_part(state)?;
-    if part.header.kind != PartKind::Checkpoint {
-        bail!("{}: not a checkpoint (it is a finished image)", state.display());
-    }
-    let Some(json) = &part.header.command else {
-        bail!("{}: the checkpoint records no command line to resume", state.display());
-    };
-    let command = Command::from_json(state, json)?;
-    let recorded = <Recorded as clap::Parser>::try_parse_from(
-        std::iter::once("raylab render".to_string()).chain(command.arguments.iter().cloned()),
-    )
-    .map_err(|e| {
-        let text = e.to_string();
-        anyhow::anyhow!(
-            "{}: its recorded command line no longer parses: {}",
-            state.display(),
-            text.lines().next().unwrap_or("").trim_start_matches("error: ")
-        )
-    })?;
-    std::env::set_current_dir(&command.directory).with_context(|| {
-        format!(
-            "{}: cannot go back to the directory the render started in, {}",
-            state.display(),
-            command.directory.display()
-        )
-    })?;
+    let (recorded, command, part) = render_state::recorded::<Recorded>(state)?;
     render(&recorded.args, Some(command), Some(part))
 }
 
@@ -174,10 +146,7 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         max_depth: args.max_depth.map(|d| u32::try_from(d).ok()),
         seed: args.seed,
         sampler: args.sampler,
-        filter: args.filter.as_deref().map(|name| match name {
-            "gaussian" => Filter::GAUSSIAN,
-            _ => Filter::Box,
-        }),
+        filter: args.filter,
         light_sampling: args.light_sampling,
         time_limit: args.time_limit,
     };
@@ -203,33 +172,8 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
     let stop = render_state::interrupt_flag()?;
     job.stop_when(&stop);
 
-    let progress: RwLock<Option<Progress>> = RwLock::new(None);
-    let events = |event: Event| match event {
-        Event::Started { rows, row_pixels, time_limit } => {
-            *progress.write().expect("no panic holds it") =
-                Some(Progress::new(rows, row_pixels, time_limit));
-        }
-        Event::Rows(rows) => {
-            if let Some(bar) = &*progress.read().expect("no panic holds it") {
-                bar.advance(rows);
-            }
-        }
-        Event::Finished => {
-            if let Some(bar) = progress.write().expect("no panic holds it").take() {
-                bar.finish();
-            }
-        }
-        Event::AlreadyRendered(output) => {
-            eprintln!("raylab: {} is already rendered", output.display());
-        }
-        Event::Resumed { checkpoint, samples } => eprintln!(
-            "raylab: going on from {} at {samples} samples per pixel",
-            checkpoint.display()
-        ),
-        Event::CheckpointNotWritten(error) => {
-            eprintln!("raylab: warning: no checkpoint written: {error}");
-        }
-    };
+    let progress = FrameProgress::default();
+    let events = |event: Event| progress.on(event);
     let Some((first, last)) = args.frames else {
         let camera = cameras.camera(setup.first_camera(), scene, setup.is_model, job.accel()?)?;
         let outcome = job.render_frame(&camera, &args.output, state, &events)?;
@@ -258,11 +202,12 @@ fn report_frame(
     job: &RenderJob,
     outcome: FrameOutcome,
 ) -> Result<()> {
-    let FrameOutcome { output, camera, film, samples: spp, first_sample, discarded, .. } = outcome;
-    let Some(film) = film else { return Ok(()) }; // already rendered
-    let (scene, settings) = (&setup.scene, job.settings());
-    let (width, height) = (camera.width, camera.height);
-    let region = job.region((width, height));
+    let FrameOutcome { ref output, ref camera, samples: spp, first_sample, discarded, .. } =
+        outcome;
+    if outcome.film.is_none() {
+        return Ok(()); // already rendered
+    }
+    let region = job.region((camera.width, camera.height));
     if discarded > 0 {
         let total = region.pixels() * (spp - first_sample) as u64;
         eprintln!(
@@ -281,79 +226,13 @@ fn report_frame(
         }
         return Err(Interrupted { report }.into());
     }
-    let elapsed = outcome.elapsed;
     if outcome.checkpoint.is_some() && !outcome.checkpoint_time.is_zero() {
         eprintln!(
             "raylab: checkpoints took {:.1} ms of {:.1} ms",
             outcome.checkpoint_time.as_secs_f64() * 1e3,
-            elapsed.as_secs_f64() * 1e3
+            outcome.elapsed.as_secs_f64() * 1e3
         );
     }
-    let samples = region.pixels() as f64 * (spp - first_sample) as f64;
-    let what = match settings.integrator {
-        IntegratorKind::Lab => format!("stage {}", settings.stage),
-        IntegratorKind::Path => format!(
-            "path tracing, max depth {}",
-            settings.max_depth.map_or("unlimited".to_string(), |d| d.to_string())
-        ),
-        other => other.to_string(),
-    };
-    let spp_text = if spp == 1 { String::new() } else { format!(", {spp} samples per pixel") };
-    let size = if region != Region::full(width, height) {
-        format!("region {region} of {width}×{height}")
-    } else {
-        format!("{width}×{height}")
-    };
-    let threads = job.threads();
-    let mut report = format!(
-        "{}: {size}, {} ({} triangles) {what}{spp_text}, {:.1} ms on {threads} thread{} (+{:.1} \
-         ms BVH build), {:.2} M samples/s\n{camera}\n",
-        output.display(),
-        scene.name,
-        scene.geometry.len(),
-        elapsed.as_secs_f64() * 1e3,
-        if threads == 1 { "" } else { "s" },
-        job.build_time().as_secs_f64() * 1e3,
-        samples / elapsed.as_secs_f64().max(1e-9) / 1e6,
-    );
-    let (texture_bytes, images) = scene.texture_bytes();
-    let textures = if images == 0 {
-        String::new()
-    } else {
-        let plural = if images == 1 { "" } else { "s" };
-        format!(", {images} texture{plural} {}", format_bytes(texture_bytes))
-    };
-    let geometry = &scene.geometry;
-    let instances = if geometry.is_instanced() {
-        let placed = geometry.instances().iter().filter(|x| x.placement.is_some()).count();
-        format!(" ({} triangles stored; {placed} instances)", geometry.stored_len())
-    } else {
-        String::new()
-    };
-    let bvh_bytes = job.built_accel().map_or(0, |bvh| bvh.bytes() as u64);
-    report += &format!(
-        "scene loaded in {:.1} ms; memory: geometry {}{instances}, BVH {}{textures}\n",
-        setup.load.as_secs_f64() * 1e3,
-        format_bytes(geometry.bytes()),
-        format_bytes(bvh_bytes),
-    );
-    if settings.integrator == IntegratorKind::Lab {
-        let light = scene.lab_light();
-        report +=
-            &format!("light at {} power {}\n", tidy_vec3(light.position), tidy(light.power.x));
-    }
-    let extension = output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if matches!(extension.as_deref(), Some("exr" | "pfm")) {
-        let mean = film.pixels().iter().map(|p| p.as_dvec3()).sum::<glam::DVec3>()
-            / film.pixels().len() as f64;
-        report += &format!("mean radiance ({:.6}, {:.6}, {:.6})\n", mean.x, mean.y, mean.z);
-    }
-    // The image is written; a closed or full standard output is not worth a failure, but it
-    // must not be a panic either (`println!` would panic).
-    match std::io::stdout().lock().write_all(report.as_bytes()) {
-        Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(error).context("cannot print the report to standard output")
-        }
-        _ => Ok(()),
-    }
+    let report = FrameSummary { job, outcome: &outcome, load_time: setup.load }.to_string();
+    crate::print_report(&report)
 }

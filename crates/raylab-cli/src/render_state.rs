@@ -18,6 +18,7 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use anyhow::{Context, Result, bail};
+use raylab::parts::{self, Part, PartKind};
 use serde::{Deserialize, Serialize};
 
 /// The exit status of an interrupted render (128 + SIGINT, the shell's convention).
@@ -95,6 +96,39 @@ impl Command {
             format!("{}: its recorded command line cannot be read", state.display())
         })
     }
+}
+
+/// What checkpoint `state` records for resuming: the command line parsed again as `P` (the
+/// arguments after `raylab render`), the command, and the checkpoint itself; the working
+/// directory is the one the render started in.
+pub fn recorded<P: clap::Parser>(state: &Path) -> Result<(P, Command, Part)> {
+    let part = parts::read_part(state)?;
+    if part.header.kind != PartKind::Checkpoint {
+        bail!("{}: not a checkpoint (it is a finished image)", state.display());
+    }
+    let Some(json) = &part.header.command else {
+        bail!("{}: the checkpoint records no command line to resume", state.display());
+    };
+    let command = Command::from_json(state, json)?;
+    let recorded = P::try_parse_from(
+        std::iter::once("raylab render".to_string()).chain(command.arguments.iter().cloned()),
+    )
+    .map_err(|e| {
+        let text = e.to_string();
+        anyhow::anyhow!(
+            "{}: its recorded command line no longer parses: {}",
+            state.display(),
+            text.lines().next().unwrap_or("").trim_start_matches("error: ")
+        )
+    })?;
+    std::env::set_current_dir(&command.directory).with_context(|| {
+        format!(
+            "{}: cannot go back to the directory the render started in, {}",
+            state.display(),
+            command.directory.display()
+        )
+    })?;
+    Ok((recorded, command, part))
 }
 
 #[cfg(test)]

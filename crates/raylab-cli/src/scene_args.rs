@@ -4,7 +4,6 @@
 use anyhow::Result;
 use clap::Args;
 use glam::Vec3;
-use raylab::camera::tidy;
 use raylab::scene::{CameraSettings, LoadOptions, OpenedScene};
 use raylab::session::CameraOptions;
 use raylab::{Scene, Stage};
@@ -146,9 +145,4 @@ impl Setup {
     pub fn first_camera(&self) -> Option<CameraSettings> {
         self.scene.camera.or(self.scene.keyframes.first().map(|k| k.camera))
     }
-}
-
-/// A vector as `(x, y, z)` with [`tidy`] numbers.
-pub fn tidy_vec3(v: Vec3) -> String {
-    format!("({}, {}, {})", tidy(v.x), tidy(v.y), tidy(v.z))
 }

@@ -5,19 +5,16 @@
 //! connect them.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
-use raylab::interactive::{
-    Controller, FrameRenderer, Motion, Pose, View, ViewMode, rgb8_from_0rgb,
-};
+use raylab::interactive::{Controller, Pose, View, ViewMode};
 use raylab::session::{self, RenderJob, RenderOptions, ResolvedSettings};
 use raylab::settings::IntegratorKind;
 use raylab::{Film, PathSettings, SampleSettings, Scene, SceneBvh, image_io};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs};
-use crate::{stats, view_window};
+use crate::view_window;
 
 /// The key map, printed by `raylab view --help` and the H key.
 pub const KEYS_HELP: &str = "\
@@ -154,7 +151,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         exit_after_frames: args.exit_after_frames,
     };
     if args.headless {
-        headless(session, args.frames, args.still)
+        crate::headless::headless(session, args.frames, args.still)
     } else {
         view_window::run(session)
     }
@@ -165,166 +162,4 @@ pub fn run(args: &ViewArgs) -> Result<()> {
 fn motion_speed(scene: &Scene) -> f32 {
     let diagonal = scene.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
     if diagonal.is_finite() && diagonal > 0.0 { diagonal / 4.0 } else { 1.0 }
-}
-
-/// Simulated frames per second of the headless path.
-const HEADLESS_FPS: u32 = 60;
-
-/// The keys the headless path holds from frame `frame` to the next (at 60 frames per second): the
-/// camera swings its yaw ±20° while moving forward and back, and the light sweeps left and
-/// right, so that every frame shows a new view (and new shadows).
-fn scripted_motions(frame: u32) -> [(Motion, bool); 6] {
-    // 60°/s: right for ⅓ s (0 → 20°), left for ⅔ s (→ −20°), right for ⅓ s (→ 0), over again.
-    let swing = frame % 80;
-    let turn_right = !(20..60).contains(&swing);
-    let forward = frame % 120 < 60;
-    let light_right = forward;
-    [
-        (Motion::TurnRight, turn_right),
-        (Motion::TurnLeft, !turn_right),
-        (Motion::Forward, forward),
-        (Motion::Back, !forward),
-        (Motion::LightRight, light_right),
-        (Motion::LightLeft, !light_right),
-    ]
-}
-
-/// `raylab view --headless`: the window's frames without the window, one line per frame, then
-/// the median.
-fn headless(mut session: Session, frames: u32, still: bool) -> Result<()> {
-    let Session { scene, accel, pool, ref mut controller, mut view, .. } = session;
-    // Benchmarks measure full-resolution frames: no budget.
-    let mut renderer = FrameRenderer::new(None, session.max_spp);
-    renderer.path_settings = session.path_settings;
-    renderer.sample_settings = session.sample_settings;
-    let mut times = Vec::with_capacity(frames as usize);
-    let mut words = Vec::new();
-    let run_start = Instant::now();
-    for frame in 0..frames {
-        // Simulated time: the path is the same on every machine.
-        let at = Duration::from_secs(frame as u64) / HEADLESS_FPS;
-        if !still {
-            for (motion, held) in scripted_motions(frame) {
-                match (held, controller.is_held(motion)) {
-                    (true, false) => controller.press(motion, at),
-                    (false, true) => controller.release(motion, at),
-                    _ => {}
-                }
-            }
-            controller.advance(at);
-            view.pose = controller.pose();
-        }
-        if renderer.is_done(&view) {
-            println!("the picture has all its {} samples per pixel: stopping", session.max_spp);
-            break;
-        }
-        let info = pool.install(|| renderer.frame(scene, accel, &view, &mut words))?;
-        let ms = info.render_time.as_secs_f64() * 1e3;
-        times.push(ms);
-        println!(
-            "frame {}: {ms:.2} ms, {}×{}, {} spp{}",
-            frame + 1,
-            view.width,
-            view.height,
-            info.samples,
-            if info.moving { ", moving" } else { "" }
-        );
-    }
-    let total = run_start.elapsed();
-    let summary = summarize(&mut times);
-    println!(
-        "{} frames of {} ({} triangles) at {}×{} on {} thread{}: median {:.2} ms ({:.1} frames \
-         per second), mean {:.2} ms, 10th–90th percentile {:.2}–{:.2} ms; {:.2} s in all",
-        times.len(),
-        scene.name,
-        scene.geometry.len(),
-        view.width,
-        view.height,
-        pool.current_num_threads(),
-        if pool.current_num_threads() == 1 { "" } else { "s" },
-        summary.median,
-        1e3 / summary.median,
-        summary.mean,
-        summary.p10,
-        summary.p90,
-        total.as_secs_f64(),
-    );
-    if let Some(path) = session.screenshot {
-        save_screenshot(path, &words, view.width, view.height)?;
-        println!("screenshot: {}", path.display());
-    }
-    Ok(())
-}
-
-struct Summary {
-    median: f64,
-    mean: f64,
-    p10: f64,
-    p90: f64,
-}
-
-/// Median, mean and 10th and 90th percentiles (nearest rank) of frame times.
-fn summarize(times: &mut [f64]) -> Summary {
-    let median = stats::median(times);
-    let mean = times.iter().sum::<f64>() / times.len() as f64;
-    Summary {
-        median,
-        mean,
-        p10: stats::nearest_rank(times, 0.1),
-        p90: stats::nearest_rank(times, 0.9),
-    }
-}
-
-/// Writes a window buffer of `0x00RRGGBB` words to an image file (whole, or not at all).
-pub fn save_screenshot(path: &Path, words: &[u32], width: u32, height: u32) -> Result<()> {
-    image_io::save_rgb8(path, &rgb8_from_0rgb(words, width, height))
-        .with_context(|| format!("cannot write the screenshot {}", path.display()))
-}
-
-/// The first `raylab-view-N.png` in the current folder that does not exist yet.
-pub fn next_screenshot_path() -> Result<PathBuf> {
-    for n in 1..100_000 {
-        let path = PathBuf::from(format!("raylab-view-{n}.png"));
-        if !path.try_exists().unwrap_or(true) {
-            return Ok(path);
-        }
-    }
-    bail!("cannot find a free screenshot name: raylab-view-1.png to raylab-view-99999.png exist")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_scripted_path_swings_and_returns() {
-        let mut c = Controller::new(
-            Pose { position: glam::Vec3::ZERO, yaw: 0.0, pitch: 0.0, light: glam::Vec3::ZERO },
-            1.0,
-        );
-        let mut max_yaw = 0.0f32;
-        for frame in 0..=240 {
-            let at = Duration::from_secs(frame as u64) / HEADLESS_FPS;
-            for (motion, held) in scripted_motions(frame) {
-                if held { c.press(motion, at) } else { c.release(motion, at) }
-            }
-            c.advance(at);
-            max_yaw = max_yaw.max(c.pose().yaw.abs());
-        }
-        // Four seconds: three whole swings, two forward-and-back and light sweeps.
-        assert!((max_yaw - 20f32.to_radians()).abs() < 0.02, "{}", max_yaw.to_degrees());
-        assert!(c.pose().yaw.abs() < 0.02, "{}", c.pose().yaw);
-        assert!(
-            c.pose().position.length() < 0.05 && c.pose().light.length() < 0.05,
-            "{:?}",
-            c.pose()
-        );
-    }
-
-    #[test]
-    fn summaries_use_the_median() {
-        let s = summarize(&mut [5.0, 1.0, 3.0, 100.0]);
-        assert_eq!((s.median, s.mean, s.p10, s.p90), (4.0, 27.25, 1.0, 100.0));
-        assert_eq!(summarize(&mut [2.0, 9.0, 4.0]).median, 4.0);
-    }
 }

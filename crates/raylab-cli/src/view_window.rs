@@ -21,7 +21,8 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy}
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-use crate::view_cmd::{KEYS_HELP, Session, next_screenshot_path, save_screenshot};
+use crate::screenshot::{next_screenshot_path, save_screenshot};
+use crate::view_cmd::{KEYS_HELP, Session};
 
 /// A moving frame should take at most this long: 30 frames per second with room to spare.
 const MOVING_BUDGET: Duration = Duration::from_millis(25);

@@ -25,6 +25,19 @@ pub enum Filter {
     },
 }
 
+impl std::str::FromStr for Filter {
+    type Err = String;
+
+    /// `box`, or `gaussian` ([`Filter::GAUSSIAN`]).
+    fn from_str(name: &str) -> Result<Filter, String> {
+        match name {
+            "box" => Ok(Filter::Box),
+            "gaussian" => Ok(Filter::GAUSSIAN),
+            other => Err(format!("unknown filter '{other}': expected box or gaussian")),
+        }
+    }
+}
+
 impl Filter {
     /// Mitsuba's default Gaussian: σ = 0.5 px, radius 2 px.
     pub const GAUSSIAN: Filter = Filter::Gaussian { sigma: 0.5, radius: 2.0 };

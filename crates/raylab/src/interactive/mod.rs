@@ -16,6 +16,8 @@
 
 mod controller;
 mod frame;
+mod script;
 
 pub use controller::{Controller, MAX_PITCH, Motion, Pose, SPEED_STEP, TURN_RATE};
 pub use frame::{FrameInfo, FrameRenderer, MAX_SCALE, View, ViewMode, next_scale, rgb8_from_0rgb};
+pub use script::{HEADLESS_FPS, scripted_motions};

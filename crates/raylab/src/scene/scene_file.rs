@@ -572,16 +572,10 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             );
         }
         if let Some(filter) = &doc.filter {
-            settings.filter = Some(match filter.get_ref().as_str() {
-                "box" => Filter::Box,
-                "gaussian" => Filter::GAUSSIAN,
-                other => {
-                    return self.error(
-                        filter.span(),
-                        format!("unknown filter '{other}': expected box or gaussian"),
-                    );
-                }
-            });
+            match filter.get_ref().parse::<Filter>() {
+                Ok(parsed) => settings.filter = Some(parsed),
+                Err(message) => return self.error(filter.span(), message),
+            }
         }
         Ok(settings)
     }

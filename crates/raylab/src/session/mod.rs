@@ -33,6 +33,7 @@ mod camera_options;
 mod identity;
 mod job;
 mod merge;
+mod summary;
 
 use std::time::Duration;
 
@@ -42,6 +43,7 @@ pub use job::{
     Checkpoints, Event, FrameOutcome, RenderJob, check_memory, checkpoint_path, frame_path,
 };
 pub use merge::{MergeReport, merge_parts};
+pub use summary::FrameSummary;
 
 use crate::film::{Display, ToneMap};
 use crate::filter::Filter;
