@@ -204,7 +204,7 @@ mod x86 {
             return None;
         }
         let watertight = WatertightRay::new(ray);
-        // SAFETY (the whole body): the caller's guarantee; `first` steps by `W` below 16, ids
+        // SAFETY: (the whole body) the caller's guarantee; `first` steps by `W` below 16, ids
         // are as aligned as the rows, and every store writes `W` floats into an array of `W`.
         unsafe {
             let lanes = RayBroadcast::<V>::new(&watertight);

@@ -306,8 +306,9 @@ mod tests {
         type Kernel = fn(&WatertightRay, &Record, f32) -> RecordHits;
         let kernels: [(&str, Isa, Kernel); 3] = [
             ("sse2", Isa::Sse2, sse),
-            // SAFETY (both): called only where `is_supported` said so.
+            // SAFETY: (both) called only where `is_supported` said so.
             ("avx2", Isa::Avx2, |r, c, t| unsafe { avx2(r, c, t) }),
+            // SAFETY: as above.
             ("avx512", Isa::Avx512, |r, c, t| unsafe { avx512(r, c, t) }),
         ];
         for (name, isa, _) in &kernels {

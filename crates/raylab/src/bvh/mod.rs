@@ -471,7 +471,7 @@ impl Accelerator for Bvh {
     fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         if let Some(flat) = &self.flat {
             return match self.isa {
-                // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+                // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
                 #[cfg(target_arch = "x86_64")]
                 Isa::Avx512 => unsafe { flat::closest_hit_avx512(flat, ray) },
                 // SAFETY: the ISA was checked when it was set (as above).
@@ -483,7 +483,7 @@ impl Accelerator for Bvh {
             };
         }
         match self.isa {
-            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::closest_hit_avx512(&self.wide, ray) },
             // SAFETY: the ISA was checked when it was set (as above).
@@ -499,7 +499,7 @@ impl Accelerator for Bvh {
     fn occluded(&self, ray: &Ray) -> bool {
         if let Some(flat) = &self.flat {
             return match self.isa {
-                // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+                // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
                 #[cfg(target_arch = "x86_64")]
                 Isa::Avx512 => unsafe { flat::occluded_avx512(flat, ray) },
                 // SAFETY: the ISA was checked when it was set (as above).
@@ -511,7 +511,7 @@ impl Accelerator for Bvh {
             };
         }
         match self.isa {
-            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::occluded_avx512(&self.wide, ray) },
             // SAFETY: the ISA was checked when it was set (as above).
@@ -529,7 +529,7 @@ impl Accelerator for Bvh {
     /// those of [`closest_hit`](Self::closest_hit).
     fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         match self.isa {
-            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::closest_hits_avx512(&self.wide, rays, hits) },
             // SAFETY: the ISA was checked when it was set (as above).
@@ -546,7 +546,7 @@ impl Accelerator for Bvh {
     /// are exactly those of [`occluded`](Self::occluded).
     fn occluded_each(&self, rays: &[Ray], occluded: &mut [bool]) {
         match self.isa {
-            // SAFETY (all arms): `with_isa` and `build` only set an ISA the CPU supports.
+            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx512 => unsafe { entry::occluded_each_avx512(&self.wide, rays, occluded) },
             // SAFETY: the ISA was checked when it was set (as above).

@@ -45,8 +45,8 @@ pub(crate) unsafe fn packet_leaf_scalar<K: NodeKernel>(
         // SAFETY: the caller guarantees `K`'s instruction set.
         let triangle_ray = &unsafe { prepare_triangle_ray::<K>(&rays.triangle_ray(i)) };
         if occlusion {
-            // SAFETY: the caller guarantees `K`'s instruction set.
             let t_max = rays.triangle_limit[i];
+            // SAFETY: the caller guarantees `K`'s instruction set.
             if unsafe { leaf_occluded::<K>(bvh, offset, triangle_ray, t_max) } {
                 *open &= !(1 << i);
             }
@@ -156,8 +156,8 @@ impl Chunk {
         rays: &[Ray],
         out: &mut [Q::Answer],
     ) {
-        // SAFETY: the caller guarantees `K`'s instruction set.
         for i in bits(self.alone) {
+            // SAFETY: the caller guarantees `K`'s instruction set.
             out[i] = unsafe { Q::alone::<K>(bvh, &rays[i]) };
         }
         let all = self.lanes.all();

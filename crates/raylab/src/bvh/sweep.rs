@@ -93,7 +93,7 @@ unsafe fn sweep_sse2<const N: usize>(
 ) -> Option<(usize, usize, f32)> {
     use std::arch::x86_64::*;
     let bins = binned.len();
-    // SAFETY (the whole body): SSE2, the caller's guarantee; every load and store is of a
+    // SAFETY: (the whole body) SSE2, the caller's guarantee; every load and store is of a
     // 16-byte local or array element.
     unsafe {
         let counts = |k: usize| {

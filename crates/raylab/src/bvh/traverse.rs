@@ -72,7 +72,7 @@ impl<T: Copy> Stack<T> {
         // Bounds-checks the write at `top` before anything moves.
         self.entries[top] = std::mem::MaybeUninit::new(entry);
         let mut i = top;
-        // SAFETY (both reads): `first <= i - 1 < top`, below `len`, so initialized.
+        // SAFETY: (both reads) `first <= i - 1 < top`, below `len`, so initialized.
         while i > first && distance(unsafe { self.entries[i - 1].assume_init() }) < distance(entry)
         {
             self.entries[i] = self.entries[i - 1];
@@ -266,7 +266,7 @@ pub(crate) unsafe fn closest_hit_counted<K: NodeKernel, C: Counter>(
     let box_ray = RayBoxTest::new(ray);
     let margin = box_ray.margin(&bvh.root);
     let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-    // SAFETY (both): the caller guarantees `K`'s instruction set.
+    // SAFETY: (both) the caller guarantees `K`'s instruction set.
     let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
     // SAFETY: as above.
     let box_ray = unsafe { K::prepare(&box_ray, margin) };
@@ -386,7 +386,7 @@ pub(crate) unsafe fn occluded_counted<K: NodeKernel, C: Counter>(
     let box_ray = RayBoxTest::new(ray);
     let margin = box_ray.margin(&bvh.root);
     let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-    // SAFETY (both): the caller guarantees `K`'s instruction set.
+    // SAFETY: (both) the caller guarantees `K`'s instruction set.
     let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
     // SAFETY: as above.
     let box_ray = unsafe { K::prepare(&box_ray, margin) };
