@@ -120,6 +120,31 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+//! ## A render session
+//!
+//! [`session`] is what the `raylab` command renders through: open any scene by name
+//! ([`Scene::open`]), resolve its settings with your overrides by one rule, and let a
+//! [`RenderJob`](session::RenderJob) build the BVH, render on its threads and write the image
+//! (or an OpenEXR part, with checkpoints, AOV layers and a progress callback):
+//!
+//! ```
+//! use raylab::Scene;
+//! use raylab::session::{CameraOptions, RenderJob, RenderOptions, ResolvedSettings};
+//!
+//! let opened = Scene::open("cornell", &Default::default())?;
+//! let settings = ResolvedSettings::resolve(&opened.scene, &RenderOptions::default());
+//! let mut job = RenderJob::new(&opened.scene, settings, 0)?; // 0: a thread per core
+//! let cameras = CameraOptions { size: Some((64, 48)), ..CameraOptions::default() };
+//! let camera = cameras.camera(opened.scene.camera, &opened.scene, opened.is_model, job.accel()?)?;
+//! let output = std::env::temp_dir().join("raylab-doc-example.png");
+//! let outcome = job.render_frame(&camera, &output, None, &|_event| {})?;
+//! assert_eq!((outcome.samples, outcome.interrupted), (1, false)); // the lab's one ray a pixel
+//! # std::fs::remove_file(&output)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! More in `examples/`: rays against an OBJ mesh, a scene built in code, a TOML scene file.
+
 #![warn(missing_docs)]
 
 pub mod accel;

@@ -58,7 +58,7 @@ impl CameraOptions {
         };
         if !focal_length_px.is_finite() {
             return Err(SessionError::Invalid(format!(
-                "--fov {} is too small: the focal length would be infinite",
+                "a field of view of {}° is too small: the focal length would be infinite",
                 self.fov_deg.unwrap_or(0.0)
             )));
         }

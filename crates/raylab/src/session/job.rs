@@ -116,7 +116,7 @@ impl<'s> RenderJob<'s> {
         const MAX_THREADS: usize = 1024;
         if threads > MAX_THREADS {
             return Err(SessionError::Invalid(format!(
-                "--threads {threads} is more than {MAX_THREADS}"
+                "{threads} render threads is more than {MAX_THREADS}"
             )));
         }
         let threads = if threads == 0 { cores() } else { threads };
@@ -201,16 +201,16 @@ impl<'s> RenderJob<'s> {
         let format = image_io::check_writable(output)?;
         if !self.aovs.is_empty() && format != ImageFormat::Exr {
             return Err(SessionError::Invalid(format!(
-                "--aov writes extra layers into an OpenEXR file: the output must end in .exr, \
-                 not {}",
+                "extra layers (AOVs) are written into an OpenEXR file: the output must end in \
+                 .exr, not {}",
                 output.display()
             )));
         }
         let region = self.region(size);
         if region != Region::full(size.0, size.1) && format != ImageFormat::Exr {
             return Err(SessionError::Invalid(format!(
-                "--tile and --region write a part of the image for `raylab merge`, which needs \
-                 OpenEXR: the output must end in .exr, not {}",
+                "a part of the image (a tile or a region) is written for `raylab merge`, which \
+                 needs OpenEXR: the output must end in .exr, not {}",
                 output.display()
             )));
         }
@@ -447,8 +447,8 @@ impl<'s> RenderJob<'s> {
     ) -> Result<Option<u32>, E> {
         if self.scene.keyframes.is_empty() {
             return Err(SessionError::Invalid(format!(
-                "--frames renders an animation, and {} has no camera keyframes ([[keyframes]] \
-                 in a scene file, see docs/scene-format.md)",
+                "frames are an animation's, and {} has no camera keyframes ([[keyframes]] in a \
+                 scene file, see docs/scene-format.md)",
                 self.scene.name
             ))
             .into());
@@ -554,8 +554,8 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf, SessionError> {
     let name = pattern.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let missing = || {
         SessionError::Invalid(format!(
-            "--frames writes a file per frame: the output name needs the frame number's place, \
-             like out_%04d.exr, not {}",
+            "an animation is written a file per frame: the output name needs the frame number's \
+             place, like out_%04d.exr, not {}",
             pattern.display()
         ))
     };
