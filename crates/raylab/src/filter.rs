@@ -10,8 +10,9 @@ use crate::sampling::square_to_truncated_gaussian;
 
 /// The pixel filter: how a sample's position in and around its pixel is drawn. Samples are
 /// distributed as the filter, so every sample has the same weight (importance-sampled filtering).
-#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "io", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "io", serde(rename_all = "lowercase"))]
 pub enum Filter {
     /// Uniform over the pixel: each pixel is the plain mean of the radiance over its area.
     #[default]

@@ -151,14 +151,19 @@ pub mod accel;
 pub mod bvh;
 pub mod camera;
 pub mod color;
+#[cfg(feature = "io")]
 pub mod file_bytes;
 pub mod film;
 pub mod filter;
 pub mod float;
+#[cfg(feature = "support")]
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod geometry;
+#[cfg(feature = "support")]
+#[doc(hidden)]
 pub mod image_compare;
+#[cfg(feature = "io")]
 pub mod image_io;
 pub mod integrator;
 pub mod interaction;
@@ -167,14 +172,19 @@ pub mod light;
 pub mod material;
 pub mod memory;
 pub mod mesh;
+#[cfg(feature = "io")]
 pub mod parts;
+#[cfg(feature = "io")]
 mod quiet_panic;
 pub mod ray;
+#[cfg(feature = "support")]
+#[doc(hidden)]
 pub mod ray_sets;
 pub mod region;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+#[cfg(feature = "io")]
 pub mod session;
 pub mod settings;
 pub mod texture;
@@ -197,6 +207,7 @@ pub use ray::{Ray, SurfacePoint};
 pub use region::Region;
 pub use render::{Accumulator, SampleSettings, render, render_samples};
 pub use sampling::{Sampler, SamplerKind, sample_offset};
+#[cfg(feature = "io")]
 pub use scene::{LoadError, LoadedMesh, load_mesh};
 pub use scene::{Scene, SceneError};
 pub use triangle::Triangle;

@@ -55,6 +55,17 @@ impl MeshMaterial {
     pub const DEFAULT_DIFFUSE: Vec3 = Vec3::splat(0.75);
 }
 
+/// A mesh a model draws in several places: its triangles once, in its own space, and where
+/// each copy goes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InstancedMesh {
+    /// The triangles in the mesh's own space. Its material ids index the loaded mesh's
+    /// materials (`LoadedMesh::mesh`); its own `materials` are empty.
+    pub mesh: Mesh,
+    /// Each copy's transform, from the mesh's space into the model's.
+    pub transforms: Vec<glam::Affine3A>,
+}
+
 /// A triangle mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {

@@ -2,6 +2,7 @@
 //! ([`Display`]: exposure, tone mapping, sRGB, 8 bits).
 
 use glam::Vec3;
+#[cfg(feature = "io")]
 use image::RgbImage;
 
 mod display;
@@ -98,6 +99,7 @@ impl Film {
         &mut self.pixels
     }
 
+    #[cfg(feature = "io")]
     /// 8-bit RGB through a [`Display`] transform.
     pub fn to_rgb8(&self, display: &Display) -> Result<RgbImage, FilmError> {
         let mut bytes = Vec::new();
@@ -120,6 +122,7 @@ impl Film {
         Film { width, height, pixels }
     }
 
+    #[cfg(feature = "io")]
     /// 8-bit RGB as the lab displays it: each channel clamped to `[0, 1]`, times 255, rounded to
     /// the nearest level, no gamma.
     pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {

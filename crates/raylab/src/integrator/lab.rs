@@ -26,10 +26,9 @@ use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 
 /// One step of the lab, each adding one idea to the previous.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "io", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "io", serde(rename_all = "lowercase"))]
 pub enum Stage {
     /// The colour ρ of the closest triangle, black where nothing is hit.
     Flat,

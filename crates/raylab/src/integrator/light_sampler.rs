@@ -44,8 +44,9 @@ pub struct LightSet {
 }
 
 /// How points on triangle lights are chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "io", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "io", serde(rename_all = "kebab-case"))]
 pub enum TriangleSampling {
     /// Uniformly by area (Mitsuba's choice): simple, noisy for large lights close by.
     #[default]

@@ -7,6 +7,7 @@
 
 use std::time::{Duration, Instant};
 
+#[cfg(feature = "io")]
 use image::RgbImage;
 
 use glam::Vec3;
@@ -325,6 +326,7 @@ impl<A: Accelerator + ?Sized> Integrator for ShownDepth<'_, A> {
     }
 }
 
+#[cfg(feature = "io")]
 /// An RGB image of a window buffer of `0x00RRGGBB` words, `width×height` of them.
 ///
 /// # Panics

@@ -19,5 +19,7 @@ mod frame;
 mod script;
 
 pub use controller::{Controller, MAX_PITCH, Motion, Pose, SPEED_STEP, TURN_RATE};
-pub use frame::{FrameInfo, FrameRenderer, MAX_SCALE, View, ViewMode, next_scale, rgb8_from_0rgb};
+#[cfg(feature = "io")]
+pub use frame::rgb8_from_0rgb;
+pub use frame::{FrameInfo, FrameRenderer, MAX_SCALE, View, ViewMode, next_scale};
 pub use script::{HEADLESS_FPS, scripted_motions};

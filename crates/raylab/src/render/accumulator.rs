@@ -1,6 +1,7 @@
 //! The film that samples are added into: per-pixel sums, pass by pass.
 
 use glam::Vec3;
+#[cfg(feature = "io")]
 use image::RgbImage;
 
 use super::SampleSettings;
@@ -213,6 +214,7 @@ impl Accumulator {
         mean_of(&self.sum, self.mean_factor())
     }
 
+    #[cfg(feature = "io")]
     /// The mean as 8-bit RGB, shown as the lab shows it (see [`Film::to_rgb8_clamped`]).
     pub fn to_rgb8_clamped(&self) -> Result<RgbImage, FilmError> {
         self.mean()?.to_rgb8_clamped()

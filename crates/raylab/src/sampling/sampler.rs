@@ -22,10 +22,9 @@ use super::sobol::{laine_karras_permutation, shuffled_scrambled_sobol_2d};
 use super::{pixel_hash, sample_offset};
 
 /// Which numbers a [`Sampler`] hands out.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "io", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "io", serde(rename_all = "lowercase"))]
 pub enum SamplerKind {
     /// The lab's pixel positions (centre, then R₂), independent numbers after them.
     Lab,

@@ -30,6 +30,7 @@ use std::path::{Path, PathBuf};
 use super::{obj, ply};
 use crate::file_bytes::ReadError;
 pub use crate::file_bytes::read_limit_bytes;
+pub use crate::mesh::InstancedMesh;
 use crate::mesh::Mesh;
 
 /// The file name endings [`load_mesh`] accepts, in any case.
@@ -50,17 +51,6 @@ pub struct LoadedMesh {
     pub camera: Option<super::CameraSettings>,
     /// The file's point lights (glTF's `KHR_lights_punctual`), in the lab's frame.
     pub lights: Vec<crate::light::PointLight>,
-}
-
-/// A mesh a model draws in several places: its triangles once, in its own space, and where
-/// each copy goes.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct InstancedMesh {
-    /// The triangles in the mesh's own space. Its material ids index the loaded mesh's
-    /// materials ([`LoadedMesh::mesh`]); its own `materials` are empty.
-    pub mesh: Mesh,
-    /// Each copy's transform, from the mesh's space into the model's.
-    pub transforms: Vec<glam::Affine3A>,
 }
 
 impl LoadedMesh {

@@ -10,15 +10,23 @@
 //! y-up; loaders turn them with [`model_to_lab`], a half turn about x that keeps handedness.
 
 mod cornell;
+#[cfg(feature = "io")]
 mod finite;
+#[cfg(feature = "io")]
 pub(crate) mod gltf;
 mod keyframes;
+#[cfg(feature = "io")]
 mod mesh_file;
 mod model;
+#[cfg(feature = "io")]
 mod mtl;
+#[cfg(feature = "io")]
 pub(crate) mod obj;
+#[cfg(feature = "io")]
 mod open;
+#[cfg(feature = "io")]
 pub(crate) mod ply;
+#[cfg(feature = "io")]
 mod scene_file;
 pub mod terrain;
 
@@ -26,13 +34,17 @@ use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
 pub use keyframes::Keyframe;
+#[cfg(feature = "io")]
 pub(crate) use mesh_file::read_file_bytes;
+#[cfg(feature = "io")]
 pub use mesh_file::{
     InstancedMesh, LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh,
     read_limit_bytes,
 };
 pub use model::model_to_lab;
+#[cfg(feature = "io")]
 pub use open::{LoadOptions, OpenError, OpenedScene};
+#[cfg(feature = "io")]
 pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
 
 use crate::accel::Hit;

@@ -11,11 +11,13 @@ use glam::Vec3;
 use glam::Affine3A;
 
 use super::Scene;
-use super::mesh_file::{InstancedMesh, LoadedMesh};
+#[cfg(feature = "io")]
+use super::mesh_file::LoadedMesh;
 use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::light::{Light, PointLight};
-use crate::material::Material;
+use crate::material::{Bsdf, Dielectric, Ggx, Material, Pbr, RoughDielectric};
+use crate::mesh::InstancedMesh;
 use crate::mesh::{Mesh, MeshMaterial};
 
 /// A y-up model point in the lab's y-down frame (a half turn about x).
@@ -39,8 +41,7 @@ impl Scene {
 
     /// [`from_mesh`](Self::from_mesh) with meshes drawn in several places, each stored once.
     fn from_meshes(mesh: &Mesh, instanced: &[InstancedMesh]) -> Scene {
-        let mut materials: Vec<Material> =
-            mesh.materials.iter().map(super::gltf::scene_material).collect();
+        let mut materials: Vec<Material> = mesh.materials.iter().map(scene_material).collect();
         let default = materials.len() as u32;
         materials.push(Material::diffuse("default", MeshMaterial::DEFAULT_DIFFUSE));
         let mut geometry = Geometry::new();
@@ -53,6 +54,7 @@ impl Scene {
         scene
     }
 
+    #[cfg(feature = "io")]
     /// A loaded model file as a scene ([`from_mesh`](Self::from_mesh), its instanced meshes
     /// stored once) with the file's camera and, where it has some, its point lights instead of
     /// the default light.
@@ -123,6 +125,38 @@ impl Camera {
         camera.position = centre - Vec3::Z * fit.max(f32::MIN_POSITIVE);
         camera
     }
+}
+
+/// A loaded mesh's material as a scene's material, emitting its `Ke` (glTF's emission):
+/// diffuse with the file's colour and textures (OBJ, PLY); with glTF's parameters, the
+/// metallic-roughness [`Pbr`] BSDF, or glass (smooth or GGX-rough, of its index of refraction)
+/// where it transmits.
+pub(crate) fn scene_material(mesh_material: &MeshMaterial) -> Material {
+    let mut material = Material {
+        emission: mesh_material.emission,
+        textures: mesh_material.textures.clone(),
+        ..Material::diffuse(&mesh_material.name, mesh_material.diffuse)
+    };
+    let Some(p) = mesh_material.pbr else { return material };
+    let unit = |v: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+    material.bsdf = if p.transmission > 0.5 {
+        let alpha = unit(p.roughness).powi(2);
+        if alpha < 1e-3 {
+            Bsdf::Dielectric(Dielectric { eta: p.ior })
+        } else {
+            Bsdf::RoughDielectric(RoughDielectric {
+                eta: p.ior,
+                distribution: Ggx::new(alpha, alpha),
+            })
+        }
+    } else {
+        Bsdf::Pbr(Pbr {
+            base_color: mesh_material.diffuse.clamp(Vec3::ZERO, Vec3::ONE),
+            metallic: unit(p.metallic),
+            roughness: unit(p.roughness),
+        })
+    };
+    material
 }
 
 #[cfg(test)]

@@ -303,7 +303,8 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                 if material.is_none() {
                     // The file's own materials, as diffuse with their Kd and Ke.
                     let base = materials.len() as u32;
-                    materials.extend(loaded.mesh.materials.iter().map(super::gltf::scene_material));
+                    materials
+                        .extend(loaded.mesh.materials.iter().map(super::model::scene_material));
                     let default = materials.len() as u32;
                     let grey = crate::mesh::MeshMaterial::DEFAULT_DIFFUSE;
                     materials.push(Material::diffuse("default", grey));

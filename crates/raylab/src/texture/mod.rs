@@ -19,6 +19,7 @@
 //! Mitsuba 3 does, so that the two converge to the same image.
 
 mod image;
+#[cfg(feature = "io")]
 mod load;
 mod noise;
 
@@ -27,6 +28,7 @@ use std::sync::Arc;
 use glam::{Affine2, Vec2, Vec3, Vec4};
 
 pub use image::{Level, Texels, TextureImage, Wrap};
+#[cfg(feature = "io")]
 pub use load::{MAX_TEXTURE_SIDE, MAX_TEXTURE_TEXELS, check_size, decode_texture, load_texture};
 pub use noise::{NoiseTexture, Pattern, Perlin};
 

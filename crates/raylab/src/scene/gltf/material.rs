@@ -8,43 +8,9 @@ use std::sync::Arc;
 use glam::{Affine2, Vec2, Vec3};
 
 use super::super::mesh_file::quoted;
-use crate::material::{
-    AlphaMask, Bsdf, Dielectric, Ggx, Material, MaterialTextures, NormalMap, Pbr, RoughDielectric,
-};
+use crate::material::{AlphaMask, MaterialTextures, NormalMap};
 use crate::mesh::{MeshMaterial, PbrParameters};
 use crate::texture::{ImageTexture, Texture, TextureImage, Wrap, decode_texture, load_texture};
-
-/// A loaded mesh's material as a scene's material, emitting its `Ke` (glTF's emission):
-/// diffuse with the file's colour and textures (OBJ, PLY); with glTF's parameters, the
-/// metallic-roughness [`Pbr`] BSDF, or glass (smooth or GGX-rough, of its index of refraction)
-/// where it transmits.
-pub(crate) fn scene_material(mesh_material: &MeshMaterial) -> Material {
-    let mut material = Material {
-        emission: mesh_material.emission,
-        textures: mesh_material.textures.clone(),
-        ..Material::diffuse(&mesh_material.name, mesh_material.diffuse)
-    };
-    let Some(p) = mesh_material.pbr else { return material };
-    let unit = |v: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
-    material.bsdf = if p.transmission > 0.5 {
-        let alpha = unit(p.roughness).powi(2);
-        if alpha < 1e-3 {
-            Bsdf::Dielectric(Dielectric { eta: p.ior })
-        } else {
-            Bsdf::RoughDielectric(RoughDielectric {
-                eta: p.ior,
-                distribution: Ggx::new(alpha, alpha),
-            })
-        }
-    } else {
-        Bsdf::Pbr(Pbr {
-            base_color: mesh_material.diffuse.clamp(Vec3::ZERO, Vec3::ONE),
-            metallic: unit(p.metallic),
-            roughness: unit(p.roughness),
-        })
-    };
-    material
-}
 
 /// The materials of `document` (found at `path`), their textures read from `images`. A texture
 /// that cannot be used (a missing or broken image, a second set of texture coordinates) is left

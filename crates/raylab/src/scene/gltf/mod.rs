@@ -17,8 +17,6 @@
 
 mod material;
 
-pub(crate) use material::scene_material;
-
 use std::collections::HashMap;
 use std::f32::consts::PI;
 use std::path::Path;
