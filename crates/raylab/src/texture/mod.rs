@@ -29,7 +29,9 @@ use glam::{Affine2, Vec2, Vec3, Vec4};
 
 pub use image::{Level, Texels, TextureImage, Wrap};
 #[cfg(feature = "io")]
-pub use load::{MAX_TEXTURE_SIDE, MAX_TEXTURE_TEXELS, check_size, decode_texture, load_texture};
+pub use load::{
+    MAX_TEXTURE_SIDE, MAX_TEXTURE_TEXELS, TextureError, check_size, decode_texture, load_texture,
+};
 pub use noise::{NoiseTexture, Pattern, Perlin};
 
 /// Where a texture is read: what a [`Texture`] needs to know about a hit.

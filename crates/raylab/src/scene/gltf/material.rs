@@ -202,7 +202,7 @@ impl<'a> Images<'a> {
                     return decode_texture(&name, &bytes, srgb).map_err(|e| format!("{name}: {e}"));
                 }
                 let relative = urlencoding::decode(uri).map_err(|e| format!("{uri}: {e}"))?;
-                load_texture(&self.folder.join(relative.as_ref()), srgb)
+                load_texture(&self.folder.join(relative.as_ref()), srgb).map_err(|e| e.to_string())
             }
         }
     }

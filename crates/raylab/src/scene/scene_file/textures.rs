@@ -144,7 +144,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             }
         };
         let image = load_texture(&self.folder.join(&doc.texture), doc.srgb.unwrap_or(!scalar))
-            .or_else(|message| self.error(span.clone(), message))?;
+            .or_else(|error| self.error(span.clone(), error.to_string()))?;
         let mut texture = ImageTexture::obj(Arc::new(image));
         texture.wrap = [wrap; 2];
         texture.transform *= Affine2::from_scale(Vec2::splat(scale));
