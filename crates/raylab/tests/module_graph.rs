@@ -45,6 +45,23 @@ fn the_library_modules_form_a_dag() {
     assert!(cycles.is_empty(), "{}", describe_cycles(&cycles, &edges));
 }
 
+#[test]
+fn the_bvh_submodules_form_a_dag() {
+    // The BVH's files by concept (bounds, build, node, leaf, traverse, packet, refit,
+    // two_level, and isa, simd and queries under them) import downward only.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    collect_rust_files(&root, &root, &mut files);
+    let edges = submodule_edges(&files, &["bvh"]);
+    assert!(
+        edges.iter().any(|e| e.from == "traverse" && e.to == "node"),
+        "the reader found no import of bvh::node from bvh::traverse: {} edges",
+        edges.len()
+    );
+    let cycles = cycles(&edges);
+    assert!(cycles.is_empty(), "{}", describe_cycles(&cycles, &edges));
+}
+
 fn collect_rust_files(root: &Path, dir: &Path, out: &mut Vec<(PathBuf, String)>) {
     let mut entries: Vec<_> = std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
@@ -344,6 +361,16 @@ fn root_reexports(
 /// Every name that a path in this module's non-test code reaches at the crate root, with its
 /// line: `crate::a`, `crate::{a, b::c}`, and `super::…` chains that climb to the root.
 fn outside_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(String, usize)> {
+    absolute_references(tokens, module)
+        .into_iter()
+        .filter_map(|(path, line)| path.first().map(|first| (first.clone(), line)))
+        .collect()
+}
+
+/// Every path in this module's non-test code that starts at the crate root (`crate::…`) or
+/// climbs with `super::…`, as the absolute path it names (`use crate::{a, b::{c, d}}` gives
+/// `[a]`, `[b, c]` and `[b, d]`), with its line.
+fn absolute_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(Vec<String>, usize)> {
     let mut out = Vec::new();
     // The module path at each point: the file's, plus inline `mod name { … }` blocks.
     let mut inline: Vec<(String, usize)> = Vec::new(); // (name, brace depth it closes at)
@@ -371,8 +398,9 @@ fn outside_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(Str
         let preceded_by_path = i > 0 && tokens[i - 1].0 == "::";
         if (token == "crate" || token == "super") && !preceded_by_path {
             // Climb: `crate` goes to the root; each `super` one level up.
-            let here = module.len() + inline.len();
-            let mut level = here;
+            let here: Vec<String> =
+                module.iter().cloned().chain(inline.iter().map(|(name, _)| name.clone())).collect();
+            let mut level = here.len();
             let mut j = i;
             if token == "crate" {
                 level = 0;
@@ -389,35 +417,183 @@ fn outside_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(Str
                 }
                 j -= 1; // back onto the `::` (or the last `super`)
             }
-            if level == 0 && tokens.get(j).is_some_and(|t| t.0 == "::") {
-                j += 1;
-                match tokens.get(j).map(|t| t.0.as_str()) {
-                    Some("{") => {
-                        // A group: the first identifier of each top-level entry.
-                        let end = item_end(tokens, j);
-                        let mut nesting = 0;
-                        let mut at_entry_start = true;
-                        for (t, line) in &tokens[j + 1..end.saturating_sub(1)] {
-                            let t = t.as_str();
-                            match t {
-                                "{" => nesting += 1,
-                                "}" => nesting -= 1,
-                                "," if nesting == 0 => {
-                                    at_entry_start = true;
-                                    continue;
-                                }
-                                _ => {}
-                            }
-                            if at_entry_start && nesting == 0 && t != "self" {
-                                out.push((t.to_owned(), *line));
-                            }
-                            at_entry_start = false;
-                        }
+            if tokens.get(j).is_some_and(|t| t.0 == "::") {
+                for (path, line) in tree_paths(tokens, j + 1) {
+                    if !path.is_empty() || level > 0 {
+                        let mut absolute = here[..level].to_vec();
+                        absolute.extend(path);
+                        out.push((absolute, line));
                     }
-                    Some(name) => out.push((name.to_owned(), tokens[j].1)),
-                    None => {}
                 }
             }
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The paths of the use tree or path that starts at `start` (just after a `::`): `a::b` gives
+/// `[a, b]`; `{a, b::{c, self}}` gives `[a]`, `[b, c]` and `[b]`. A path ends at anything that
+/// is not an identifier followed by `::` (generics, calls, `as`, `;`).
+fn tree_paths(tokens: &[(String, usize)], start: usize) -> Vec<(Vec<String>, usize)> {
+    let is_ident =
+        |t: &str| t.chars().next().is_some_and(|c| c.is_alphabetic() || c == '_') && t != "as";
+    let mut segments = Vec::new();
+    let mut j = start;
+    while let Some((token, line)) = tokens.get(j) {
+        if token == "{" {
+            // A group: each top-level entry, after these segments.
+            let end = item_end(tokens, j).saturating_sub(1); // the closing brace
+            let mut out = Vec::new();
+            let mut entry = j + 1;
+            let mut nesting = 0;
+            for k in j + 1..=end {
+                match tokens[k].0.as_str() {
+                    "{" => nesting += 1,
+                    "}" if nesting > 0 => nesting -= 1,
+                    "," | "}" if nesting == 0 => {
+                        if entry < k {
+                            for (path, line) in tree_paths(&tokens[..k], entry) {
+                                let mut full = segments.clone();
+                                full.extend(path.into_iter().filter(|s| s != "self"));
+                                out.push((full, line));
+                            }
+                        }
+                        entry = k + 1;
+                    }
+                    _ => {}
+                }
+            }
+            return out;
+        }
+        if !is_ident(token) {
+            break;
+        }
+        segments.push(token.clone());
+        if tokens.get(j + 1).is_some_and(|t| t.0 == "::") {
+            j += 2;
+        } else {
+            return vec![(segments, *line)];
+        }
+    }
+    let line = tokens.get(start).map_or(0, |t| t.1);
+    if segments.is_empty() { Vec::new() } else { vec![(segments, line)] }
+}
+
+/// Edges between the submodules of `parent` (`["bvh"]`): the same reading as for the top-level
+/// modules, one level down. The parent's own file is a node of its own, named `parent (mod.rs)`,
+/// for the items it defines; its `pub use` re-exports make no edges (a name it re-exports counts
+/// as the submodule it comes from), its other paths into its submodules (`use node::WideBvh`,
+/// `traverse::closest_hit(..)`) do.
+fn submodule_edges(files: &[(PathBuf, String)], parent: &[&str]) -> BTreeSet<Edge> {
+    let parent: Vec<String> = parent.iter().map(|s| (*s).to_owned()).collect();
+    let own = format!("{} (mod.rs)", parent.join("::"));
+    let children: BTreeSet<String> = files
+        .iter()
+        .map(|(path, _)| module_path_of(path))
+        .filter(|m| m.len() > parent.len() && m.starts_with(&parent))
+        .map(|m| m[parent.len()].clone())
+        .collect();
+    let parent_tokens = files
+        .iter()
+        .find(|(path, _)| module_path_of(path) == parent)
+        .map(|(_, text)| tokens(&strip_comments_and_literals(text)))
+        .unwrap_or_default();
+    let reexports = submodule_reexports(&parent_tokens, &children);
+    let mut test_files = BTreeSet::new();
+    for (path, text) in files {
+        let module = module_path_of(path);
+        for name in test_module_declarations(&tokens(&strip_comments_and_literals(text))) {
+            let mut child = module.clone();
+            child.push(name);
+            test_files.insert(child);
+        }
+    }
+    let mut edges = BTreeSet::new();
+    for (path, text) in files {
+        let module = module_path_of(path);
+        if !module.starts_with(&parent)
+            || (1..=module.len()).any(|n| test_files.contains(&module[..n]))
+        {
+            continue;
+        }
+        let from = module.get(parent.len()).cloned().unwrap_or_else(|| own.clone());
+        let clean = tokens(&strip_comments_and_literals(text));
+        let mut targets: Vec<(String, usize)> = absolute_references(&clean, &module)
+            .into_iter()
+            .filter(|(absolute, _)| absolute.len() > parent.len() && absolute.starts_with(&parent))
+            .map(|(absolute, line)| (absolute[parent.len()].clone(), line))
+            .collect();
+        if module == parent {
+            targets.extend(relative_child_paths(&clean, &children));
+        }
+        for (name, line) in targets {
+            let to = if children.contains(&name) {
+                name
+            } else {
+                reexports.get(&name).cloned().unwrap_or_else(|| own.clone())
+            };
+            if to != from {
+                edges.insert(Edge {
+                    from: from.clone(),
+                    to,
+                    file: path.display().to_string(),
+                    line,
+                });
+            }
+        }
+    }
+    edges
+}
+
+/// What a module file re-exports from its submodules (`pub use node::{A, B};`, also
+/// `pub(crate)`): a name to the submodule it comes from.
+fn submodule_reexports(
+    tokens: &[(String, usize)],
+    children: &BTreeSet<String>,
+) -> BTreeMap<String, String> {
+    let mut map = BTreeMap::new();
+    for (i, _) in tokens.iter().enumerate().filter(|(_, t)| t.0 == "use") {
+        if i > 0 && (tokens[i - 1].0 == "pub" || tokens[i - 1].0 == ")") {
+            let after =
+                if tokens.get(i + 1).is_some_and(|t| t.0 == "self") { i + 3 } else { i + 1 };
+            for (path, _) in tree_paths(tokens, after) {
+                if let (Some(child), Some(name)) = (path.first(), path.last())
+                    && children.contains(child)
+                {
+                    map.insert(name.clone(), child.clone());
+                }
+            }
+        }
+    }
+    map
+}
+
+/// Paths from a module file into its own submodules by their bare names (`use node::X`,
+/// `traverse::f(..)`), outside `pub use` re-exports, `mod` declarations and test code.
+fn relative_child_paths(
+    tokens: &[(String, usize)],
+    children: &BTreeSet<String>,
+) -> Vec<(String, usize)> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < tokens.len() {
+        if let Some(after) = cfg_test_at(tokens, i) {
+            i = item_end(tokens, after);
+            continue;
+        }
+        let token = tokens[i].0.as_str();
+        let reexport = token == "use" && i > 0 && matches!(tokens[i - 1].0.as_str(), "pub" | ")");
+        if reexport || token == "mod" && tokens.get(i + 2).is_some_and(|t| t.0 == ";") {
+            i = item_end(tokens, i);
+            continue;
+        }
+        let preceded_by_path = i > 0 && tokens[i - 1].0 == "::";
+        if children.contains(token)
+            && !preceded_by_path
+            && tokens.get(i + 1).is_some_and(|t| t.0 == "::")
+        {
+            out.push((token.to_owned(), tokens[i].1));
         }
         i += 1;
     }
@@ -495,8 +671,7 @@ fn cycles(edges: &BTreeSet<Edge>) -> Vec<Vec<String>> {
 
 /// A failure message: each cycle's modules and, for each edge inside it, one place it is made.
 fn describe_cycles(cycles: &[Vec<String>], edges: &BTreeSet<Edge>) -> String {
-    let mut message =
-        format!("{} import cycle(s) between top-level modules of src/:", cycles.len());
+    let mut message = format!("{} import cycle(s) between modules of src/:", cycles.len());
     for cycle in cycles {
         message.push_str(&format!("\n\ncycle: {}", cycle.join(", ")));
         let mut seen = BTreeSet::new();
@@ -582,5 +757,36 @@ mod tests {
             edges.iter().map(|e| (e.from.as_str(), e.to.as_str(), e.line)).collect();
         assert_eq!(pairs, vec![("a", "b", 1), ("b", "a", 1)]);
         assert_eq!(cycles(&edges), vec![vec!["a".to_owned(), "b".to_owned()]]);
+    }
+
+    #[test]
+    fn a_cycle_between_submodules_is_found() {
+        // Inside `p`: x -> y by a re-export of the parent, y -> x through `crate::p::x`, and
+        // the parent file's own item reached from z, while the parent uses z by a relative
+        // path: two cycles. `pub use` and `mod` lines of the parent make no edges.
+        let files = crate_of(&[
+            ("lib.rs", "pub mod p; pub mod q;"),
+            (
+                "p/mod.rs",
+                "mod x; mod y; mod z;\npub use y::Thing;\npub struct Own;\nfn f() { z::g() }",
+            ),
+            ("p/x.rs", "use super::Thing;\nuse crate::q::Q;"),
+            ("p/y.rs", "use crate::p::{x::{A, self}, z};"),
+            ("p/z.rs", "use super::Own;"),
+            ("q.rs", "use crate::p::x::A;"),
+        ]);
+        let edges = submodule_edges(&files, &["p"]);
+        let pairs: Vec<_> = edges.iter().map(|e| (e.from.as_str(), e.to.as_str())).collect();
+        assert_eq!(
+            pairs,
+            vec![("p (mod.rs)", "z"), ("x", "y"), ("y", "x"), ("y", "z"), ("z", "p (mod.rs)")]
+        );
+        assert_eq!(
+            cycles(&edges),
+            vec![
+                vec!["p (mod.rs)".to_owned(), "z".to_owned()],
+                vec!["x".to_owned(), "y".to_owned()]
+            ]
+        );
     }
 }

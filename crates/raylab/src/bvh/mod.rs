@@ -1,18 +1,24 @@
 //! A bounding volume hierarchy: ray queries in logarithmic time.
 //!
-//! [`Bvh::build`] makes a binary tree with the binned surface area heuristic (`build`), in
-//! parallel on the current rayon pool, then collapses it into an 8-wide tree (`wide`) whose
-//! nodes test a ray against eight boxes at once with SIMD (`kernels`), and whose leaves are
-//! records of up to eight triangles over a table of the vertices they share (`leaf`), tested in
-//! one pass (`leaf_kernels`). Traversal (`traverse`) visits the nearest child first for the closest
-//! hit and stops at the first hit for occlusion. Scenes of a few dozen triangles (the Cornell
-//! boxes) answer single rays without the tree: every triangle is tested, sixteen per instruction
-//! (`flat`, up to [`BuildSettings::flat_limit`] triangles). Moving geometry keeps its tree:
-//! [`Bvh::refit`] takes the triangles' new vertices and recomputes the boxes bottom-up (`refit`).
+//! The files follow a ray's way through the structure, one concept each:
 //!
-//! The instruction set is picked once, at build time, from what the CPU supports: AVX-512 or AVX2
-//! where present, SSE2 on every other x86-64, portable scalar code elsewhere
-//! ([`Isa::detect`]). Every kernel has a scalar twin, and the tests check that all of them give
+//! | module | what it holds |
+//! |---|---|
+//! | `bounds` | boxes, the conservative slab test of one ray ([`RayBoxTest`]) and of a packet ([`Frustum`]) |
+//! | `build` | [`BuildSettings`]; the binned SAH build of a binary tree, in parallel on the current rayon pool (`build/sweep.rs`: the split sweep); its collapse into the 8-wide tree (`build/collapse.rs`) |
+//! | `node` | the wide node's layout (eight boxes plane by plane, eight child references, drawn in its doc); `node/kernel.rs`: one ray or a packet's bound against eight boxes |
+//! | `leaf` | leaf records of up to eight triangles over a table of the vertices they share; `leaf/kernel.rs` and `leaf/lanes.rs`: a ray against a record in one pass |
+//! | `traverse` | single rays: nearest child first for the closest hit, first hit for occlusion; `traverse/flat.rs`: scenes of a few dozen triangles (the Cornell boxes) answer single rays without the tree, every triangle tested sixteen per instruction (up to [`BuildSettings::flat_limit`] triangles) |
+//! | `packet` | up to 64 coherent rays through the tree together: `rays` (their lanes), `setup`, `bundle` (a packet's bound in ray space), `leaf` and `lanes` (a leaf's triangles against several rays per instruction) |
+//! | `refit` | moving geometry keeps its tree: [`Bvh::refit`] takes new vertices and recomputes the boxes bottom-up |
+//! | `two_level` | [`TwoLevel`]: a tree over instances of bottom accelerators; `scene` ([`SceneBvh`]) picks one or two levels for a scene |
+//! | `isa`, `simd`, `queries` | the instruction sets, the vector lanes every kernel is written in (one trait over SSE, AVX and AVX-512 registers), and the table of query functions a BVH picks once |
+//!
+//! The instruction set is picked once, when a BVH is built, from what the CPU supports: AVX-512
+//! or AVX2 where present, SSE2 on every other x86-64, portable scalar code elsewhere
+//! ([`Isa::detect`], [`Bvh::with_isa`]). The BVH then holds that set's table of query functions
+//! (`queries.rs`, as Embree dispatches), each traversal compiled with the set's target features
+//! around its kernels. Every kernel has a scalar twin, and the tests check that all of them give
 //! the same answers, bit for bit.
 //!
 //! Answers never depend on the tree: the slab test is conservative (a box never loses a hit inside
@@ -34,32 +40,24 @@
 
 mod bounds;
 mod build;
-mod bundle;
-mod flat;
-mod kernels;
-#[cfg(target_arch = "x86_64")]
-mod lanes;
+mod isa;
 mod leaf;
-#[cfg(target_arch = "x86_64")]
-mod leaf_kernels;
+mod node;
 mod packet;
-#[cfg(target_arch = "x86_64")]
-mod packet_kernels;
-mod packet_rays;
-mod packet_setup;
+mod queries;
 mod refit;
 mod scene;
-mod sweep;
+#[cfg(target_arch = "x86_64")]
+mod simd;
 mod traverse;
 mod two_level;
-#[cfg(target_arch = "x86_64")]
-mod watertight_lanes;
-mod wide;
 
 use glam::Vec3;
 
 pub use bounds::{Bounds, Frustum, RayBoxTest};
 pub(crate) use bounds::{FAR_SCALE, SLAB_PAD};
+pub use build::BuildSettings;
+pub use isa::Isa;
 pub use refit::RefitError;
 pub use scene::SceneBvh;
 pub use traverse::TraversalStats;
@@ -67,160 +65,9 @@ pub use two_level::TwoLevel;
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;
-use wide::WideBvh;
-
-/// How a BVH is built: a trade of build time for tracing speed. Never changes the answers.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BuildSettings {
-    /// Bins per axis for the SAH sweep (2 to 256): more bins find better splits, slower.
-    pub bins: usize,
-    /// The most triangles in a leaf (1 to 64). A leaf's records of up to eight triangles are
-    /// tested one pass each.
-    pub max_leaf_size: usize,
-    /// Cost of entering a node, relative to `record_cost`.
-    pub traversal_cost: f32,
-    /// Cost of testing one leaf record (up to eight triangles over up to sixteen vertices).
-    pub record_cost: f32,
-    /// Scenes of at most this many triangles (of non-zero area) also keep them in a flat list,
-    /// and single rays test them all, sixteen per instruction, instead of walking the tree
-    /// (`flat`): faster for a few dozen triangles. `0` always walks the tree.
-    pub flat_limit: usize,
-}
-
-impl BuildSettings {
-    /// Quickest to build: 8 bins.
-    pub const FAST: BuildSettings = BuildSettings {
-        bins: 8,
-        max_leaf_size: 8,
-        traversal_cost: 1.0,
-        record_cost: 1.0,
-        flat_limit: Self::FLAT_LIMIT,
-    };
-    /// The default: 16 bins, leaves of up to 8 triangles.
-    pub const MEDIUM: BuildSettings = BuildSettings {
-        bins: 16,
-        max_leaf_size: 8,
-        traversal_cost: 1.0,
-        record_cost: 1.0,
-        flat_limit: Self::FLAT_LIMIT,
-    };
-    /// Best trees: 32 bins.
-    pub const HIGH: BuildSettings = BuildSettings {
-        bins: 32,
-        max_leaf_size: 8,
-        traversal_cost: 1.0,
-        record_cost: 1.0,
-        flat_limit: Self::FLAT_LIMIT,
-    };
-    /// Every preset with its name.
-    pub const PRESETS: [(&'static str, BuildSettings); 3] =
-        [("fast", Self::FAST), ("medium", Self::MEDIUM), ("high", Self::HIGH)];
-
-    /// The presets' [`flat_limit`](Self::flat_limit): three blocks of sixteen. Measured
-    /// (`raylab bench --flat-limit`, one thread): on the 32-triangle Cornell box the flat list
-    /// traces primary, shadow and diffuse rays 1.3, 1.6 and 1.6 times as fast as the tree; with
-    /// 52 and 72 triangles it wins on shadow and diffuse rays but loses on primary ones; with 112
-    /// the tree is 1.3 to 1.7 times as fast.
-    pub const FLAT_LIMIT: usize = 48;
-
-    /// Scenes below this many triangles get leaves of at most four triangles (see
-    /// [`for_triangles`](Self::for_triangles)).
-    pub const SMALL_SCENE: usize = 4096;
-
-    /// What [`Bvh::new`] builds with: [`MEDIUM`](Self::MEDIUM), with leaves of at most four
-    /// triangles for scenes of fewer than [`SMALL_SCENE`](Self::SMALL_SCENE).
-    ///
-    /// A small scene's tree stays in cache whatever its size, so smaller leaves cost no memory
-    /// traffic and save triangle tests, above all for packets of camera rays (the lab frame
-    /// renders in 22 rather than 28 ms on one thread). On large meshes, leaves of up to eight
-    /// are faster and smaller (measured with the four-triangle blocks that leaf records replaced;
-    /// the 871k-triangle dragon: 56 rather than 63 bytes per triangle then).
-    pub fn for_triangles(triangles: usize) -> BuildSettings {
-        if triangles < Self::SMALL_SCENE {
-            BuildSettings { max_leaf_size: 4, ..Self::MEDIUM }
-        } else {
-            Self::MEDIUM
-        }
-    }
-
-    /// The settings with every field clamped to its valid range.
-    fn clamped(&self) -> BuildSettings {
-        BuildSettings {
-            bins: self.bins.clamp(2, build::MAX_BINS),
-            max_leaf_size: self.max_leaf_size.clamp(1, wide::MAX_LEAF_TRIANGLES),
-            traversal_cost: if self.traversal_cost.is_finite() {
-                self.traversal_cost.max(0.0)
-            } else {
-                1.0
-            },
-            record_cost: if self.record_cost > 0.0 && self.record_cost.is_finite() {
-                self.record_cost
-            } else {
-                1.0
-            },
-            flat_limit: self.flat_limit,
-        }
-    }
-}
-
-impl Default for BuildSettings {
-    fn default() -> Self {
-        Self::MEDIUM
-    }
-}
-
-/// The instruction set of the node kernels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Isa {
-    /// Portable code, one box at a time: the reference.
-    Scalar,
-    /// SSE2: two groups of four boxes (every x86-64 CPU).
-    Sse2,
-    /// AVX2: eight boxes at once.
-    Avx2,
-    /// AVX-512 (F and VL): the AVX2 node kernel, with the rest of traversal compiled for AVX-512.
-    Avx512,
-}
-
-impl Isa {
-    /// The best instruction set this CPU supports.
-    pub fn detect() -> Isa {
-        Isa::ALL.into_iter().rev().find(|isa| isa.is_supported()).unwrap_or(Isa::Scalar)
-    }
-
-    /// Every instruction set, from the most portable.
-    pub const ALL: [Isa; 4] = [Isa::Scalar, Isa::Sse2, Isa::Avx2, Isa::Avx512];
-
-    /// Whether this CPU can run it.
-    pub fn is_supported(self) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        {
-            match self {
-                Isa::Scalar | Isa::Sse2 => true,
-                Isa::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
-                Isa::Avx512 => {
-                    std::arch::is_x86_feature_detected!("avx2")
-                        && std::arch::is_x86_feature_detected!("avx512f")
-                        && std::arch::is_x86_feature_detected!("avx512vl")
-                }
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            self == Isa::Scalar
-        }
-    }
-
-    /// A short name: `scalar`, `sse2`, `avx2`, `avx512`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Isa::Scalar => "scalar",
-            Isa::Sse2 => "sse2",
-            Isa::Avx2 => "avx2",
-            Isa::Avx512 => "avx512",
-        }
-    }
-}
+use node::WideBvh;
+use queries::Queries;
+use traverse::flat::Flat;
 
 /// Sizes of a built BVH.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -233,7 +80,7 @@ pub struct BvhStats {
     /// Wide nodes.
     pub nodes: usize,
     /// Bytes of the leaves' records: each leaf's distinct vertices, three byte indices and the
-    /// caller's index per triangle (see `bvh/leaf.rs`).
+    /// caller's index per triangle (see `bvh/leaf`).
     pub leaf_bytes: usize,
     /// Bytes of the flat list of a small scene's triangles (see
     /// [`BuildSettings::flat_limit`]), `0` for none.
@@ -243,7 +90,7 @@ pub struct BvhStats {
 impl BvhStats {
     /// Bytes of the BVH: nodes, the leaves' records, and a small scene's flat list.
     pub fn bytes(&self) -> usize {
-        self.nodes * size_of::<wide::WideNode>() + self.leaf_bytes + self.flat_bytes
+        self.nodes * size_of::<node::WideNode>() + self.leaf_bytes + self.flat_bytes
     }
 }
 
@@ -281,14 +128,15 @@ fn check_triangle_count(triangles: usize) -> Result<(), BuildError> {
 pub struct Bvh {
     wide: WideBvh,
     /// The triangles in a flat list, for scenes of at most `flat_limit` triangles.
-    flat: Option<flat::Flat>,
-    isa: Isa,
+    flat: Option<Flat>,
+    /// The query functions of the instruction set in use, chosen once.
+    queries: Queries,
     stats: BvhStats,
 }
 
 impl std::fmt::Debug for Bvh {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Bvh").field("isa", &self.isa).field("stats", &self.stats).finish()
+        f.debug_struct("Bvh").field("isa", &self.isa()).field("stats", &self.stats).finish()
     }
 }
 
@@ -337,30 +185,29 @@ impl Bvh {
         let flat = (indexed_triangles <= settings.flat_limit).then(|| {
             let mut indices = binary.order.clone();
             indices.sort_unstable();
-            flat::Flat::new(triangles, &indices)
+            Flat::new(triangles, &indices)
         });
-        let wide = wide::collapse(&binary, |i| triangles[i as usize], |i| i);
+        let wide = build::collapse(&binary, |i| triangles[i as usize], |i| i);
         let stats = BvhStats {
             triangles: triangles.len(),
             indexed_triangles,
             nodes: wide.nodes.len(),
             leaf_bytes: wide.leaves.bytes(),
-            flat_bytes: flat.as_ref().map_or(0, flat::Flat::bytes),
+            flat_bytes: flat.as_ref().map_or(0, Flat::bytes),
         };
-        Bvh { wide, flat, isa: Isa::detect(), stats }
+        let queries = Queries::for_isa(Isa::detect()).expect("the detected instruction set");
+        Bvh { wide, flat, queries, stats }
     }
 
     /// The same tree traversed with another instruction set, or `None` if this CPU lacks it.
     pub fn with_isa(mut self, isa: Isa) -> Option<Bvh> {
-        isa.is_supported().then(|| {
-            self.isa = isa;
-            self
-        })
+        self.queries = Queries::for_isa(isa)?;
+        Some(self)
     }
 
     /// The instruction set in use.
     pub fn isa(&self) -> Isa {
-        self.isa
+        self.queries.isa
     }
 
     /// Sizes of the tree.
@@ -377,7 +224,7 @@ impl Bvh {
     pub fn closest_hit_counted(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<Hit> {
         stats.rays += 1;
         // SAFETY: the scalar kernel needs no special instructions.
-        unsafe { traverse::closest_hit_counted::<kernels::Scalar, _>(&self.wide, ray, stats) }
+        unsafe { traverse::closest_hit_counted::<isa::Scalar, _>(&self.wide, ray, stats) }
     }
 
     /// Whether the ray is occluded, exactly as [`occluded`](Accelerator::occluded) answers it,
@@ -385,142 +232,29 @@ impl Bvh {
     pub fn occluded_counted(&self, ray: &Ray, stats: &mut TraversalStats) -> bool {
         stats.rays += 1;
         // SAFETY: the scalar kernel needs no special instructions.
-        unsafe { traverse::occluded_counted::<kernels::Scalar, _>(&self.wide, ray, stats) }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-mod entry {
-    //! One copy of each traversal per instruction set, compiled with that set enabled.
-    use super::kernels::{Avx2, Avx512, Sse};
-    use super::wide::WideBvh;
-    use super::{packet, traverse};
-    use crate::accel::Hit;
-    use crate::ray::Ray;
-
-    pub(super) fn closest_hit_sse2(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-        // SAFETY: SSE2 is part of x86-64.
-        unsafe { traverse::closest_hit::<Sse>(bvh, ray) }
-    }
-
-    pub(super) fn occluded_sse2(bvh: &WideBvh, ray: &Ray) -> bool {
-        // SAFETY: SSE2 is part of x86-64.
-        unsafe { traverse::occluded::<Sse>(bvh, ray) }
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn closest_hit_avx2(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-        // SAFETY: this function's caller checked AVX2 support.
-        unsafe { traverse::closest_hit::<Avx2>(bvh, ray) }
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn occluded_avx2(bvh: &WideBvh, ray: &Ray) -> bool {
-        // SAFETY: this function's caller checked AVX2 support.
-        unsafe { traverse::occluded::<Avx2>(bvh, ray) }
-    }
-
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    pub(super) unsafe fn closest_hit_avx512(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { traverse::closest_hit::<Avx512>(bvh, ray) }
-    }
-
-    pub(super) fn closest_hits_sse2(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
-        // SAFETY: SSE2 is part of x86-64.
-        unsafe { packet::closest_hits::<Sse>(bvh, rays, out) }
-    }
-
-    pub(super) fn occluded_each_sse2(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
-        // SAFETY: SSE2 is part of x86-64.
-        unsafe { packet::occluded_each::<Sse>(bvh, rays, out) }
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn closest_hits_avx2(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
-        // SAFETY: this function's caller checked AVX2 support.
-        unsafe { packet::closest_hits::<Avx2>(bvh, rays, out) }
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn occluded_each_avx2(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
-        // SAFETY: this function's caller checked AVX2 support.
-        unsafe { packet::occluded_each::<Avx2>(bvh, rays, out) }
-    }
-
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    pub(super) unsafe fn closest_hits_avx512(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
-        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { packet::closest_hits::<Avx512>(bvh, rays, out) }
-    }
-
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    pub(super) unsafe fn occluded_each_avx512(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
-        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { packet::occluded_each::<Avx512>(bvh, rays, out) }
-    }
-
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    pub(super) unsafe fn occluded_avx512(bvh: &WideBvh, ray: &Ray) -> bool {
-        // SAFETY: this function's caller checked AVX2 and AVX-512 F/VL support.
-        unsafe { traverse::occluded::<Avx512>(bvh, ray) }
+        unsafe { traverse::occluded_counted::<isa::Scalar, _>(&self.wide, ray, stats) }
     }
 }
 
 impl Accelerator for Bvh {
     fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        if let Some(flat) = &self.flat {
-            return match self.isa {
-                // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx512 => unsafe { flat::closest_hit_avx512(flat, ray) },
-                // SAFETY: the ISA was checked when it was set (as above).
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx2 => unsafe { flat::closest_hit_avx2(flat, ray) },
-                #[cfg(target_arch = "x86_64")]
-                Isa::Sse2 => flat::closest_hit_sse2(flat, ray),
-                _ => flat::closest_hit_scalar(flat, ray),
-            };
-        }
-        match self.isa {
-            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { entry::closest_hit_avx512(&self.wide, ray) },
-            // SAFETY: the ISA was checked when it was set (as above).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { entry::closest_hit_avx2(&self.wide, ray) },
-            #[cfg(target_arch = "x86_64")]
-            Isa::Sse2 => entry::closest_hit_sse2(&self.wide, ray),
-            // SAFETY: the scalar kernel needs no special instructions.
-            _ => unsafe { traverse::closest_hit::<kernels::Scalar>(&self.wide, ray) },
+        // SAFETY: `queries` is the table of an instruction set this CPU supports
+        // (`Queries::for_isa`).
+        unsafe {
+            match &self.flat {
+                Some(flat) => (self.queries.flat_closest_hit)(flat, ray),
+                None => (self.queries.closest_hit)(&self.wide, ray),
+            }
         }
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        if let Some(flat) = &self.flat {
-            return match self.isa {
-                // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx512 => unsafe { flat::occluded_avx512(flat, ray) },
-                // SAFETY: the ISA was checked when it was set (as above).
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx2 => unsafe { flat::occluded_avx2(flat, ray) },
-                #[cfg(target_arch = "x86_64")]
-                Isa::Sse2 => flat::occluded_sse2(flat, ray),
-                _ => flat::occluded_scalar(flat, ray),
-            };
-        }
-        match self.isa {
-            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { entry::occluded_avx512(&self.wide, ray) },
-            // SAFETY: the ISA was checked when it was set (as above).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { entry::occluded_avx2(&self.wide, ray) },
-            #[cfg(target_arch = "x86_64")]
-            Isa::Sse2 => entry::occluded_sse2(&self.wide, ray),
-            // SAFETY: the scalar kernel needs no special instructions.
-            _ => unsafe { traverse::occluded::<kernels::Scalar>(&self.wide, ray) },
+        // SAFETY: as above.
+        unsafe {
+            match &self.flat {
+                Some(flat) => (self.queries.flat_occluded)(flat, ray),
+                None => (self.queries.occluded)(&self.wide, ray),
+            }
         }
     }
 
@@ -528,35 +262,15 @@ impl Accelerator for Bvh {
     /// as an 8×8 tile of camera rays or of shadow rays toward one light. The answers are exactly
     /// those of [`closest_hit`](Self::closest_hit).
     fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        match self.isa {
-            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { entry::closest_hits_avx512(&self.wide, rays, hits) },
-            // SAFETY: the ISA was checked when it was set (as above).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { entry::closest_hits_avx2(&self.wide, rays, hits) },
-            #[cfg(target_arch = "x86_64")]
-            Isa::Sse2 => entry::closest_hits_sse2(&self.wide, rays, hits),
-            // SAFETY: the scalar kernel needs no special instructions.
-            _ => unsafe { packet::closest_hits::<kernels::Scalar>(&self.wide, rays, hits) },
-        }
+        // SAFETY: as above.
+        unsafe { (self.queries.closest_hits)(&self.wide, rays, hits) }
     }
 
     /// Occlusion in packets of up to 64, as [`closest_hits`](Self::closest_hits); the answers
     /// are exactly those of [`occluded`](Self::occluded).
     fn occluded_each(&self, rays: &[Ray], occluded: &mut [bool]) {
-        match self.isa {
-            // SAFETY: (all arms) `with_isa` and `build` only set an ISA the CPU supports.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { entry::occluded_each_avx512(&self.wide, rays, occluded) },
-            // SAFETY: the ISA was checked when it was set (as above).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { entry::occluded_each_avx2(&self.wide, rays, occluded) },
-            #[cfg(target_arch = "x86_64")]
-            Isa::Sse2 => entry::occluded_each_sse2(&self.wide, rays, occluded),
-            // SAFETY: the scalar kernel needs no special instructions.
-            _ => unsafe { packet::occluded_each::<kernels::Scalar>(&self.wide, rays, occluded) },
-        }
+        // SAFETY: as above.
+        unsafe { (self.queries.occluded_each)(&self.wide, rays, occluded) }
     }
 }
 

@@ -15,11 +15,12 @@
 
 use glam::Vec3;
 
+use super::Bvh;
 use super::bounds::Bounds;
+use super::build::hittable;
 use super::leaf::Leaves;
-use super::wide::{Child, WIDTH, decode, encode_leaf};
-use super::{Bvh, flat};
-use crate::triangle::is_degenerate;
+use super::node::{Child, EMPTY, WIDTH, decode, encode_leaf};
+use super::traverse::flat::Flat;
 
 /// Why [`Bvh::refit`] could not move the triangles.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -50,11 +51,6 @@ impl std::fmt::Display for RefitError {
 }
 
 impl std::error::Error for RefitError {}
-
-/// Whether a triangle can be hit at all: finite vertices and non-zero area.
-pub(super) fn hittable(triangle: [Vec3; 3]) -> bool {
-    triangle.iter().all(|v| v.is_finite()) && !is_degenerate(triangle)
-}
 
 impl Bvh {
     /// Moves the triangles to `triangles` (the same ones, in the same order, with new vertices)
@@ -132,7 +128,7 @@ impl Bvh {
         }
         for (node, bounds) in self.wide.nodes.iter_mut().zip(&child_bounds) {
             for (k, &b) in bounds.iter().enumerate() {
-                if node.children[k] != super::wide::EMPTY {
+                if node.children[k] != EMPTY {
                     node.set_bounds(k, b);
                 }
             }
@@ -144,7 +140,7 @@ impl Bvh {
     }
 }
 
-impl flat::Flat {
+impl Flat {
     /// The flat list's part of [`Bvh::refit`]: every lane's triangle as given, or parked on NaN.
     pub(super) fn refit(&mut self, triangles: &[[Vec3; 3]]) {
         for (block, ids) in self.blocks_and_ids_mut() {

@@ -2,8 +2,9 @@
 
 use glam::Vec3;
 
-use super::kernels::{NodeKernel, Scalar};
-use super::wide::{Child, WideNode, decode};
+use super::isa::Scalar;
+use super::node::kernel::NodeKernel;
+use super::node::{Child, WideNode, decode};
 use super::*;
 
 /// A small deterministic generator (PCG-style LCG) for test data.
@@ -34,7 +35,7 @@ fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {
                 [f32::NEG_INFINITY; 8],
                 [f32::NEG_INFINITY; 8],
             ],
-            children: [wide::EMPTY; 8],
+            children: [node::EMPTY; 8],
         };
         let origin = (rng.vec() * 4.0 - 2.0).round() * 0.5; // On a grid: shares planes with boxes.
         for slot in 0..8 {
@@ -106,7 +107,7 @@ fn scalar_kernel_agrees_with_the_box_test() {
             let expected = box_ray.enter_with_margin(&node.bounds(k), t_limit, margin).is_some();
             assert_eq!(mask & (1 << k) != 0, expected);
             // Unused slots are never entered.
-            if node.children[k] == wide::EMPTY {
+            if node.children[k] == node::EMPTY {
                 assert!(!expected);
             }
         }
@@ -142,7 +143,7 @@ fn the_margin_test_enters_every_box_the_per_box_test_enters() {
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn sse2_kernel_agrees_with_its_scalar_twin() {
-    use super::kernels::Sse;
+    use super::isa::Sse;
     // SAFETY: SSE2 is part of x86-64.
     check_kernel::<Sse>(|node, ray, t| unsafe { Sse::enter(node, ray, t) });
 }
@@ -150,7 +151,7 @@ fn sse2_kernel_agrees_with_its_scalar_twin() {
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn avx2_kernel_agrees_with_its_scalar_twin() {
-    use super::kernels::Avx2;
+    use super::isa::Avx2;
     if !Isa::Avx2.is_supported() {
         eprintln!("skipped: this CPU has no AVX2");
         return;
@@ -236,7 +237,7 @@ fn check_frustum_kernel<K: NodeKernel>(
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn sse2_frustum_kernel_agrees_with_its_scalar_twin() {
-    use super::kernels::Sse;
+    use super::isa::Sse;
     // SAFETY: SSE2 is part of x86-64.
     check_frustum_kernel::<Sse>(|node, f, t| unsafe { Sse::enter_frustum(node, f, t) });
 }
@@ -244,7 +245,7 @@ fn sse2_frustum_kernel_agrees_with_its_scalar_twin() {
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn avx2_frustum_kernel_agrees_with_its_scalar_twin() {
-    use super::kernels::Avx2;
+    use super::isa::Avx2;
     if !Isa::Avx2.is_supported() {
         eprintln!("skipped: this CPU has no AVX2");
         return;
@@ -443,8 +444,8 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
             let mut ray = Ray::new(origin, target - origin);
             ray.t_min = if r % 5 == 0 { 0.5 * rng.next() } else { 0.0 };
             ray.t_max = [f32::INFINITY, 1.0, 0.5 + rng.next()][r % 3];
-            let closest = flat::closest_hit_scalar(flat, &ray);
-            let occluded = flat::occluded_scalar(flat, &ray);
+            let closest = traverse::flat::closest_hit_scalar(flat, &ray);
+            let occluded = traverse::flat::occluded_scalar(flat, &ray);
             assert_eq!(closest, brute.closest_hit(&ray), "scalar twin, case {case}: {ray:?}");
             assert_eq!(occluded, brute.occluded(&ray), "scalar twin, case {case}: {ray:?}");
             if let Some(h) = closest {

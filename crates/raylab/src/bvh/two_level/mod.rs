@@ -15,7 +15,7 @@
 //! top level lets a later instance's hit at exactly the best `t` through and keeps the first.
 //!
 //! The answers are those of the same bottom-level test made instance by instance, whatever the
-//! bottom accelerator: a [`TwoLevel<BruteForce>`](super::BruteForce) and a
+//! bottom accelerator: a [`TwoLevel<BruteForce>`](crate::BruteForce) and a
 //! [`TwoLevel<Bvh>`](crate::Bvh) agree exactly (`tests/instancing.rs`).
 
 use std::cell::Cell;

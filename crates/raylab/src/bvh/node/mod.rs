@@ -1,4 +1,6 @@
-//! The 8-wide BVH: the binary tree collapsed so that one node test covers eight boxes.
+//! The 8-wide tree's layout: nodes of eight boxes and eight child references, tested by one
+//! kernel call each (`node/kernel.rs`); the build makes them by collapsing a binary tree
+//! (`build/collapse.rs`).
 //!
 //! # Node layout
 //! A [`WideNode`] is 224 bytes, 32-byte aligned: six rows of eight floats, the boxes' planes stored
@@ -14,18 +16,13 @@
 //!   `EMPTY`.
 //!
 //! For example `0x8000_0011` is a leaf whose first record starts at word 17 of the arena.
-//!
-//! # Collapsing
-//! Each wide node takes a binary node's two children and repeatedly opens the interior child of
-//! largest surface area until it has eight children or only leaves are left, so that the boxes a
-//! ray is most likely to enter are tested together (Wald et al., "Getting Rid of Packets", 2008;
-//! Embree's BVH8 builder does the same). Nodes are laid out depth first, each subtree contiguous.
 
 use glam::Vec3;
 
-use super::bounds::Bounds;
-use super::build::BinaryBvh;
-use super::leaf::Leaves;
+pub(crate) mod kernel;
+
+use crate::bvh::bounds::Bounds;
+use crate::bvh::leaf::Leaves;
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 8;
@@ -72,7 +69,7 @@ pub(crate) fn encode_leaf(offset: u32) -> u32 {
 }
 
 impl WideNode {
-    const UNUSED: WideNode = WideNode {
+    pub(crate) const UNUSED: WideNode = WideNode {
         planes: [
             [f32::INFINITY; WIDTH],
             [f32::INFINITY; WIDTH],
@@ -116,89 +113,6 @@ impl WideBvh {
     /// The union of the root's child boxes.
     pub(crate) fn root_bounds(&self) -> Bounds {
         (0..WIDTH).fold(Bounds::EMPTY, |b, k| b.union(self.nodes[0].bounds(k)))
-    }
-}
-
-/// Collapses `binary` (built over `prim_ids`' triangles) into a wide BVH.
-///
-/// `triangle(i)` gives the vertices of build primitive `i`, and `prim_ids[i]` its caller's index.
-pub(crate) fn collapse(
-    binary: &BinaryBvh,
-    triangle: impl Fn(u32) -> [Vec3; 3],
-    prim_ids: impl Fn(u32) -> u32,
-) -> WideBvh {
-    let mut wide = WideBvh {
-        nodes: Vec::with_capacity(binary.nodes.len() / 4 + 1),
-        leaves: Leaves::with_capacity(binary.order.len()),
-        root: Bounds::EMPTY,
-    };
-    wide.nodes.push(WideNode::UNUSED);
-    if binary.nodes.is_empty() {
-        return wide;
-    }
-    let collapser = Collapser { binary, triangle: &triangle, prim_ids: &prim_ids };
-    if binary.nodes[0].is_leaf() {
-        // A single leaf: a root with one child.
-        let child = collapser.emit_leaf(0, &mut wide);
-        wide.nodes[0].children[0] = child;
-        wide.nodes[0].set_bounds(0, binary.nodes[0].bounds);
-    } else {
-        collapser.emit_node(0, 0, &mut wide);
-    }
-    wide.root = wide.root_bounds();
-    wide
-}
-
-struct Collapser<'a, T, I> {
-    binary: &'a BinaryBvh,
-    triangle: &'a T,
-    prim_ids: &'a I,
-}
-
-impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Collapser<'_, T, I> {
-    /// Fills wide node `slot` from binary interior node `node`.
-    fn emit_node(&self, node: usize, slot: usize, wide: &mut WideBvh) {
-        let nodes = &self.binary.nodes;
-        let mut children = vec![node + 1, nodes[node].first_or_right as usize];
-        while children.len() < WIDTH {
-            // Open the interior child of largest area.
-            let widest = children
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| !nodes[**c].is_leaf())
-                .max_by(|a, b| {
-                    nodes[*a.1].bounds.half_area().total_cmp(&nodes[*b.1].bounds.half_area())
-                })
-                .map(|(k, _)| k);
-            let Some(k) = widest else { break };
-            let opened = children.swap_remove(k);
-            children.push(opened + 1);
-            children.push(nodes[opened].first_or_right as usize);
-        }
-        // Keep the depth-first order of the binary tree among siblings.
-        children.sort_unstable();
-        for (k, &child) in children.iter().enumerate() {
-            let reference = if nodes[child].is_leaf() {
-                self.emit_leaf(child, wide)
-            } else {
-                let index = wide.nodes.len();
-                wide.nodes.push(WideNode::UNUSED);
-                self.emit_node(child, index, wide);
-                index as u32
-            };
-            wide.nodes[slot].children[k] = reference;
-            wide.nodes[slot].set_bounds(k, nodes[child].bounds);
-        }
-    }
-
-    /// Writes binary leaf `node`'s triangles as records; returns its reference.
-    fn emit_leaf(&self, node: usize, wide: &mut WideBvh) -> u32 {
-        let leaf = self.binary.nodes[node];
-        let first = leaf.first_or_right as usize;
-        let prims = &self.binary.order[first..first + leaf.count as usize];
-        let triangles: Vec<(u32, [Vec3; 3])> =
-            prims.iter().map(|&prim| ((self.prim_ids)(prim), (self.triangle)(prim))).collect();
-        encode_leaf(wide.leaves.push_leaf(&triangles))
     }
 }
 

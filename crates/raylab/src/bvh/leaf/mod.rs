@@ -37,6 +37,10 @@
 
 use glam::Vec3;
 
+pub(crate) mod kernel;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod lanes;
+
 use crate::triangle::WatertightRay;
 
 /// The most distinct vertices in one record: two AVX registers of each coordinate (or one

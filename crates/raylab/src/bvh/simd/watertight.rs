@@ -5,7 +5,7 @@
 //! [`watertight_sheared`], starts from corners already in the ray's frame ([`shear_point`]), so
 //! that a leaf record can transform each of its shared vertices once.
 
-use super::lanes::{LaneMask, Lanes};
+use super::{LaneMask, Lanes};
 use crate::triangle::WatertightRay;
 
 /// The watertight test's inputs, one test per lane: the lanes are either triangles against one

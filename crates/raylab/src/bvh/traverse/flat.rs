@@ -5,7 +5,7 @@
 //! children, pops them and tests a leaf block of four triangles in each, every step a branch that
 //! incoherent rays mispredict. Three AVX-512 watertight tests of sixteen triangles cover the same
 //! scene with no branch but the loop's. So for scenes of at most
-//! [`BuildSettings::flat_limit`](super::BuildSettings::flat_limit) triangles a [`Bvh`](super::Bvh)
+//! [`BuildSettings::flat_limit`](crate::bvh::BuildSettings::flat_limit) triangles a [`Bvh`](crate::bvh::Bvh)
 //! also keeps [`Flat`]: the triangles in index order, sixteen to a block, and answers single rays
 //! from it.
 //!
@@ -26,7 +26,7 @@
 //! skipped), as in the tree.
 //!
 //! ## The answer is the tree's and brute force's
-//! Each lane runs the watertight test's own arithmetic ([`watertight_lanes_with`](super::watertight_lanes::watertight_lanes_with)),
+//! Each lane runs the watertight test's own arithmetic ([`watertight_lanes_with`](crate::bvh::simd::watertight_lanes_with)),
 //! lanes whose edge functions round to zero go to [`WatertightRay::intersect`]'s double-precision
 //! path, and hits are merged in index order, keeping the smallest `t` and, at equal `t`, the lowest
 //! index. So `t`, triangle and barycentrics are bit for bit [`BruteForce`](crate::BruteForce)'s.
@@ -35,8 +35,9 @@
 
 use glam::Vec3;
 
-use super::traverse::can_hit;
+use super::can_hit;
 use crate::accel::Hit;
+use crate::bvh::isa::Scalar;
 use crate::ray::Ray;
 use crate::triangle::{TriangleBlock, WatertightRay};
 
@@ -141,18 +142,39 @@ pub(crate) fn occluded_scalar(flat: &Flat, ray: &Ray) -> bool {
     })
 }
 
-#[cfg(target_arch = "x86_64")]
-pub(crate) use x86::{closest_hit_avx2, closest_hit_avx512, closest_hit_sse2};
-#[cfg(target_arch = "x86_64")]
-pub(crate) use x86::{occluded_avx2, occluded_avx512, occluded_sse2};
+/// The flat list's tests per instruction set; the scalar twins are [`closest_hit_scalar`] and
+/// [`occluded_scalar`].
+pub(crate) trait FlatKernel {
+    /// The closest hit among the list's triangles.
+    ///
+    /// # Safety
+    /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
+    unsafe fn closest_hit(flat: &Flat, ray: &Ray) -> Option<Hit>;
+    /// Whether any of the list's triangles is hit.
+    ///
+    /// # Safety
+    /// As for [`closest_hit`](Self::closest_hit).
+    unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool;
+}
+
+impl FlatKernel for Scalar {
+    #[inline(always)]
+    unsafe fn closest_hit(flat: &Flat, ray: &Ray) -> Option<Hit> {
+        closest_hit_scalar(flat, ray)
+    }
+    #[inline(always)]
+    unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool {
+        occluded_scalar(flat, ray)
+    }
+}
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::{__m128, __m256, __m512};
 
     use super::*;
-    use crate::bvh::lanes::{LaneMask, Lanes};
-    use crate::bvh::watertight_lanes::{LaneHits, RayBroadcast, watertight_lanes_with};
+    use crate::bvh::isa::{Avx2, Avx512, Sse};
+    use crate::bvh::simd::{LaneHits, LaneMask, Lanes, RayBroadcast, watertight_lanes_with};
 
     /// The lane test of lanes `first..first + W` of `block` for hits below `t_max`.
     ///
@@ -294,45 +316,25 @@ mod x86 {
         false
     }
 
-    pub(crate) fn closest_hit_sse2(flat: &Flat, ray: &Ray) -> Option<Hit> {
-        // SAFETY: SSE2 is part of x86-64; an `__m128` holds 4 floats.
-        unsafe { closest_hit::<__m128, 4>(flat, ray) }
+    /// SSE2's four lanes, AVX2's eight, AVX-512's sixteen.
+    macro_rules! flat_kernel {
+        ($isa:ty, $register:ty, $lanes:literal) => {
+            impl FlatKernel for $isa {
+                #[inline(always)]
+                unsafe fn closest_hit(flat: &Flat, ray: &Ray) -> Option<Hit> {
+                    // SAFETY: the caller's guarantee of the instruction set; the register
+                    // holds `$lanes` floats.
+                    unsafe { closest_hit::<$register, $lanes>(flat, ray) }
+                }
+                #[inline(always)]
+                unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool {
+                    // SAFETY: as above.
+                    unsafe { occluded::<$register, $lanes>(flat, ray) }
+                }
+            }
+        };
     }
-
-    pub(crate) fn occluded_sse2(flat: &Flat, ray: &Ray) -> bool {
-        // SAFETY: SSE2 is part of x86-64; an `__m128` holds 4 floats.
-        unsafe { occluded::<__m128, 4>(flat, ray) }
-    }
-
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[target_feature(enable = "avx2")]
-    pub(crate) unsafe fn closest_hit_avx2(flat: &Flat, ray: &Ray) -> Option<Hit> {
-        // SAFETY: the caller checked AVX2; an `__m256` holds 8 floats.
-        unsafe { closest_hit::<__m256, 8>(flat, ray) }
-    }
-
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[target_feature(enable = "avx2")]
-    pub(crate) unsafe fn occluded_avx2(flat: &Flat, ray: &Ray) -> bool {
-        // SAFETY: the caller checked AVX2; an `__m256` holds 8 floats.
-        unsafe { occluded::<__m256, 8>(flat, ray) }
-    }
-
-    /// # Safety
-    /// The CPU must support AVX2 and AVX-512 F and VL.
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    pub(crate) unsafe fn closest_hit_avx512(flat: &Flat, ray: &Ray) -> Option<Hit> {
-        // SAFETY: the caller checked AVX-512; an `__m512` holds 16 floats.
-        unsafe { closest_hit::<__m512, 16>(flat, ray) }
-    }
-
-    /// # Safety
-    /// The CPU must support AVX2 and AVX-512 F and VL.
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    pub(crate) unsafe fn occluded_avx512(flat: &Flat, ray: &Ray) -> bool {
-        // SAFETY: the caller checked AVX-512; an `__m512` holds 16 floats.
-        unsafe { occluded::<__m512, 16>(flat, ray) }
-    }
+    flat_kernel!(Sse, __m128, 4);
+    flat_kernel!(Avx2, __m256, 8);
+    flat_kernel!(Avx512, __m512, 16);
 }

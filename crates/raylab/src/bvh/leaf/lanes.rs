@@ -1,4 +1,4 @@
-//! One ray against a leaf record's triangles (see `leaf`), by the x86 instruction sets.
+//! One ray against a leaf record's triangles (see `bvh/leaf`), by the x86 instruction sets.
 //!
 //! Every kernel first takes the record's distinct vertices into the ray's frame, once each
 //! ([`shear_point`]), then lays the triangles' corners out one triangle per lane from that
@@ -14,17 +14,16 @@
 //! - SSE2: the table is transformed four vertices at a time into arrays, and each pass of four
 //!   triangles reads its corners from them.
 //!
-//! The scalar twin is [`record_hits_scalar`](super::leaf::record_hits_scalar): each value is
+//! The scalar twin is [`record_hits_scalar`](super::record_hits_scalar): each value is
 //! computed by the same operations in the same order, so the kernels agree with it bit for bit
 //! (the tests in `bvh/tests.rs` check every kernel this machine supports).
 
 use std::arch::x86_64::*;
 
-use super::kernels::TriangleRay;
-use super::lanes::Lanes;
-use super::leaf::{RECORD_TRIANGLES, RECORD_VERTICES, Record, RecordHits};
-use super::watertight_lanes::{
-    LaneHits, RayBroadcast, ShearedLanes, shear_point, watertight_sheared,
+use super::kernel::TriangleRay;
+use super::{RECORD_TRIANGLES, RECORD_VERTICES, Record, RecordHits};
+use crate::bvh::simd::{
+    LaneHits, Lanes, RayBroadcast, ShearedLanes, shear_point, watertight_sheared,
 };
 
 /// The bits of the first `n` lanes (`n <= 8`).

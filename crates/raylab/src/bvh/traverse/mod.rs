@@ -1,17 +1,25 @@
 //! Single-ray traversal of the wide BVH: closest hit (nearest child first) and any hit.
 //!
 //! Both are generic over the node kernel and `#[inline(always)]`, so each instruction set gets its
-//! own copy compiled with that set enabled (see the `#[target_feature]` entry points below): the
+//! own copy compiled with that set enabled (the tables of `bvh/queries.rs`): the
 //! triangle pre-test is then vectorized for the same set too.
 
-use super::bounds::{FAR_SCALE, RayBoxTest};
-use super::kernels::{NodeKernel, TriangleRay, prepare_triangle_ray};
-use super::leaf::Leaves;
-use super::wide::{Child, EMPTY, WIDTH, WideBvh, decode};
+pub(crate) mod flat;
+
 use crate::accel::Hit;
+use crate::bvh::bounds::{FAR_SCALE, RayBoxTest};
+use crate::bvh::leaf::Leaves;
+use crate::bvh::leaf::kernel::{RecordKernel, TriangleRay, prepare_triangle_ray};
+use crate::bvh::node::kernel::NodeKernel;
+use crate::bvh::node::{Child, EMPTY, WIDTH, WideBvh, decode};
 use crate::float::next_float_up;
 use crate::ray::Ray;
 use crate::triangle::WatertightRay;
+
+/// A single ray's kernels: the node test and the leaf records' test of one instruction set.
+pub(crate) trait Kernel: NodeKernel + RecordKernel {}
+
+impl<K: NodeKernel + RecordKernel> Kernel for K {}
 
 /// Stack entries: the wide tree is at most ~80 levels deep (the builder bounds the binary depth),
 /// and each level pushes at most seven siblings.
@@ -23,7 +31,7 @@ const STACK_SIZE: usize = 640;
 /// Invariant: the entries below `len` are initialized. `push` writes entry `len` before counting
 /// it, `pop` and `push_sorted` only move or read entries below `len`, so reads never see an
 /// uninitialized entry and no other bookkeeping is needed.
-pub(super) struct Stack<T: Copy> {
+pub(crate) struct Stack<T: Copy> {
     entries: [std::mem::MaybeUninit<T>; STACK_SIZE],
     len: usize,
 }
@@ -87,7 +95,7 @@ impl<T: Copy> Stack<T> {
 /// or NaN direction never hit a triangle (the triangle test rejects them too); the slab kernels
 /// may then assume a finite origin and a finite `1/d` on the dominant axis.
 #[inline(always)]
-pub(super) fn can_hit(ray: &Ray) -> bool {
+pub(crate) fn can_hit(ray: &Ray) -> bool {
     ray.t_min <= ray.t_max
         && ray.origin.is_finite()
         && !ray.direction.is_nan()
@@ -107,7 +115,7 @@ pub struct TraversalStats {
     pub leaves: u64,
     /// Records in the leaves entered (occlusion may stop inside a leaf: then its remaining
     /// records are counted without being tested). A record holds up to 16 triangles over up to
-    /// 16 vertices (`bvh/leaf.rs`).
+    /// 16 vertices (`bvh/leaf`).
     pub records: u64,
 }
 
@@ -181,7 +189,7 @@ impl Closest {
     /// # Safety
     /// The CPU must support `K`'s instruction set.
     #[inline(always)]
-    pub unsafe fn leaf<K: NodeKernel>(
+    pub unsafe fn leaf<K: Kernel>(
         &mut self,
         bvh: &WideBvh,
         offset: u32,
@@ -223,7 +231,7 @@ impl Closest {
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(super) unsafe fn leaf_occluded<K: NodeKernel>(
+pub(crate) unsafe fn leaf_occluded<K: Kernel>(
     bvh: &WideBvh,
     offset: u32,
     triangle_ray: &TriangleRay<K::RecordRay>,
@@ -245,7 +253,7 @@ pub(super) unsafe fn leaf_occluded<K: NodeKernel>(
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+pub(crate) unsafe fn closest_hit<K: Kernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
     // SAFETY: the caller's guarantee.
     unsafe { closest_hit_counted::<K, ()>(bvh, ray, &mut ()) }
 }
@@ -255,7 +263,7 @@ pub(crate) unsafe fn closest_hit<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Opt
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn closest_hit_counted<K: NodeKernel, C: Counter>(
+pub(crate) unsafe fn closest_hit_counted<K: Kernel, C: Counter>(
     bvh: &WideBvh,
     ray: &Ray,
     counter: &mut C,
@@ -365,7 +373,7 @@ fn prefetch_child(bvh: &WideBvh, child: u32) {
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
+pub(crate) unsafe fn occluded<K: Kernel>(bvh: &WideBvh, ray: &Ray) -> bool {
     // SAFETY: the caller's guarantee.
     unsafe { occluded_counted::<K, ()>(bvh, ray, &mut ()) }
 }
@@ -375,7 +383,7 @@ pub(crate) unsafe fn occluded<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn occluded_counted<K: NodeKernel, C: Counter>(
+pub(crate) unsafe fn occluded_counted<K: Kernel, C: Counter>(
     bvh: &WideBvh,
     ray: &Ray,
     counter: &mut C,

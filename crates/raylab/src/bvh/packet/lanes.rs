@@ -1,16 +1,13 @@
-//! The packet kernels of the x86 instruction sets: a packet's frustum against a node's eight
-//! boxes ([`FrustumBroadcast`]) and a leaf's triangles against the packet's rays, `L` rays per
-//! instruction ([`packet_leaf_lanes`]). Their scalar twins are [`Frustum::enter`] and
-//! [`packet_leaf_scalar`](super::packet::packet_leaf_scalar); the node kernels that call them
-//! are in `kernels`.
+//! The packet leaf kernel of the x86 instruction sets: a leaf's triangles against the packet's
+//! rays, `L` rays per instruction ([`packet_leaf_lanes`]). Its scalar twin is
+//! [`packet_leaf_scalar`](super::leaf::packet_leaf_scalar); the kernel types that call it are in
+//! `packet/leaf.rs`, and the packet's node test (`FrustumBroadcast`) is with the node kernels.
 
-use super::bounds::{Bounds, FAR_SCALE, Frustum, SLAB_PAD};
-use super::kernels::plane_rows;
-use super::lanes::Lanes;
-use super::leaf::RECORD_VERTICES;
-use super::packet_rays::{PACKET, PacketRays};
-use super::watertight_lanes::{RayLanes, ShearedLanes, shear_point, watertight_sheared};
-use super::wide::{WideBvh, WideNode};
+use super::rays::{PACKET, PacketRays};
+use crate::bvh::bounds::{Bounds, FAR_SCALE, SLAB_PAD};
+use crate::bvh::leaf::RECORD_VERTICES;
+use crate::bvh::node::WideBvh;
+use crate::bvh::simd::{Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
 
 /// The lanes of a packet row from `base` on.
 ///
@@ -24,14 +21,14 @@ unsafe fn lanes<V: Lanes>(row: &[f32; PACKET], base: usize) -> V {
     unsafe { V::loadu(row.as_ptr().add(base)) }
 }
 
-/// [`NodeKernel::packet_leaf`] with `L` rays per register `V`: the slab test of the leaf's box
+/// [`PacketKernel::packet_leaf`](super::leaf::PacketKernel::packet_leaf) with `L` rays per register `V`: the slab test of the leaf's box
 /// and the watertight test of each of its triangles, for `L` rays at a time, by the same
-/// operations as the single-ray tests ([`RayBoxTest::enter`], [`watertight_sheared`]).
+/// operations as the single-ray tests ([`RayBoxTest::enter`](crate::bvh::RayBoxTest::enter), [`watertight_sheared`]).
 ///
 /// # Safety
 /// The CPU must support `V`'s instruction set, which holds `L` (4, 8 or 16) floats.
 #[inline(always)]
-pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
+pub(crate) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
     rays: &mut PacketRays,
     open: &mut u64,
     occlusion: bool,
@@ -236,107 +233,6 @@ pub(super) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
             if occlusion && *open == 0 {
                 return;
             }
-        }
-    }
-}
-
-/// A vector in three registers of equal lanes.
-///
-/// # Safety
-/// The CPU must support `V`'s instruction set.
-#[inline(always)]
-unsafe fn splat3<V: Lanes>(v: glam::Vec3) -> [V; 3] {
-    // SAFETY: the caller's guarantee.
-    unsafe { [V::splat(v.x), V::splat(v.y), V::splat(v.z)] }
-}
-
-/// The least and greatest products of two intervals, as `bounds::interval_product`.
-///
-/// # Safety
-/// The CPU must support `V`'s instruction set.
-#[inline(always)]
-unsafe fn interval_product<V: Lanes>(a_lo: V, a_hi: V, i_lo: V, i_hi: V) -> (V, V) {
-    // SAFETY: the caller's guarantee.
-    unsafe {
-        let (p0, p1) = (a_lo.mul(i_lo), a_lo.mul(i_hi));
-        let (p2, p3) = (a_hi.mul(i_lo), a_hi.mul(i_hi));
-        (p0.min(p1).min(p2.min(p3)), p0.max(p1).max(p2.max(p3)))
-    }
-}
-
-/// A packet's bound broadcast into vector registers.
-#[derive(Clone, Copy)]
-pub(crate) struct FrustumBroadcast<V> {
-    origin_lo: [V; 3],
-    origin_hi: [V; 3],
-    inv_lo: [V; 3],
-    inv_hi: [V; 3],
-    t_min: V,
-    near_rows: [usize; 3],
-    far_rows: [usize; 3],
-    pad_axes: [bool; 3],
-}
-
-impl<V: Lanes> FrustumBroadcast<V> {
-    /// # Safety
-    /// The CPU must support `V`'s instruction set.
-    #[inline(always)]
-    pub(super) unsafe fn new(f: &Frustum) -> Self {
-        let (near_rows, far_rows) = plane_rows(f.negative);
-        // SAFETY: the caller's guarantee.
-        unsafe {
-            FrustumBroadcast {
-                origin_lo: splat3(f.origin_lo),
-                origin_hi: splat3(f.origin_hi),
-                inv_lo: splat3(f.inv_lo),
-                inv_hi: splat3(f.inv_hi),
-                t_min: V::splat(f.t_min),
-                near_rows,
-                far_rows,
-                pad_axes: f.pad_axes,
-            }
-        }
-    }
-
-    /// [`Frustum::enter`] for the children from `first` on that `V` holds: their mask (bit 0 for child
-    /// `first`), and their entries written to `out[first..]`.
-    ///
-    /// # Safety
-    /// The CPU must support `V`'s instruction set; `first` is 0, or 4 for a 4-lane `V`.
-    #[inline(always)]
-    pub(super) unsafe fn enter(
-        &self,
-        node: &WideNode,
-        t_limit: f32,
-        first: usize,
-        out: &mut [f32],
-    ) -> u32 {
-        // SAFETY: the caller's guarantee; loads read one register of a 32-byte aligned row
-        // of 8 from `first`, which is aligned to the register size.
-        unsafe {
-            let scale = V::splat(FAR_SCALE);
-            let mut near = self.t_min;
-            let mut far = V::splat(t_limit);
-            let mut reach = V::splat(0.0);
-            for axis in 0..3 {
-                let np = V::load(node.planes[self.near_rows[axis]][first..].as_ptr());
-                let fp = V::load(node.planes[self.far_rows[axis]][first..].as_ptr());
-                let (o_lo, o_hi) = (self.origin_lo[axis], self.origin_hi[axis]);
-                let (i_lo, i_hi) = (self.inv_lo[axis], self.inv_hi[axis]);
-                let (tn_lo, tn_hi) = interval_product(np.sub(o_hi), np.sub(o_lo), i_lo, i_hi);
-                let (tf_lo, tf_hi) = interval_product(fp.sub(o_hi), fp.sub(o_lo), i_lo, i_hi);
-                near = tn_lo.max(near);
-                far = tf_hi.mul(scale).min(far);
-                if self.pad_axes[axis] {
-                    let axis_reach = tn_lo.abs().max(tn_hi.abs()).max(tf_lo.abs().max(tf_hi.abs()));
-                    reach = reach.max(axis_reach);
-                }
-            }
-            let pad = reach.mul(V::splat(SLAB_PAD));
-            let near = near.sub(pad);
-            let far = far.add(pad);
-            near.store(out[first..].as_mut_ptr());
-            near.le_mask(far) << first
         }
     }
 }

@@ -4,7 +4,7 @@
 //! bound of its rays that is conservative in floating point), so the cost of the upper tree is
 //! shared by all the rays. A leaf's box is then tested per ray, exactly as single-ray traversal
 //! tests it, and its triangles are tested against the rays that enter it by the same watertight
-//! test, several rays per instruction ([`NodeKernel::packet_leaf`]). Every ray gets exactly the
+//! test, several rays per instruction ([`PacketKernel::packet_leaf`]). Every ray gets exactly the
 //! answer that [`closest_hit`] or [`occluded`] gives it alone: no box that one of its rays enters
 //! is ever pruned, and ties at equal `t` go to the lowest triangle index as always.
 //!
@@ -13,57 +13,20 @@
 //! rays is split by these first; rays that cannot join a packet (a zero direction component,
 //! nothing to hit) or that are alone in their group are traced one by one.
 
-use super::bounds::{Bounds, Frustum};
-use super::kernels::{NodeKernel, prepare_triangle_ray};
-use super::packet_rays::{PACKET, PacketRays, Shared};
-use super::packet_setup;
-use super::traverse::{Closest, Stack, closest_hit, leaf_occluded, occluded};
-use super::wide::{Child, WideBvh, decode};
-use crate::accel::Hit;
-use crate::ray::Ray;
+mod bundle;
+#[cfg(target_arch = "x86_64")]
+mod lanes;
+pub(crate) mod leaf;
+pub(crate) mod rays;
+mod setup;
 
-/// The scalar twin of [`NodeKernel::packet_leaf`]: ray by ray, the single-ray tests.
-///
-/// # Safety
-/// The CPU must support `K`'s instruction set.
-#[inline(always)]
-pub(crate) unsafe fn packet_leaf_scalar<K: NodeKernel>(
-    rays: &mut PacketRays,
-    open: &mut u64,
-    occlusion: bool,
-    bvh: &WideBvh,
-    bounds: &Bounds,
-    offset: u32,
-) {
-    let mut rest = *open;
-    while rest != 0 {
-        let i = rest.trailing_zeros() as usize;
-        rest &= rest - 1;
-        if rays.box_ray(i).enter(bounds, rays.box_limit[i]).is_none() {
-            continue;
-        }
-        // SAFETY: the caller guarantees `K`'s instruction set.
-        let triangle_ray = &unsafe { prepare_triangle_ray::<K>(&rays.triangle_ray(i)) };
-        if occlusion {
-            let t_max = rays.triangle_limit[i];
-            // SAFETY: the caller guarantees `K`'s instruction set.
-            if unsafe { leaf_occluded::<K>(bvh, offset, triangle_ray, t_max) } {
-                *open &= !(1 << i);
-            }
-        } else {
-            let mut closest = Closest {
-                best: rays.best(i),
-                triangle_limit: rays.triangle_limit[i],
-                box_limit: rays.box_limit[i],
-            };
-            // SAFETY: the caller guarantees `K`'s instruction set.
-            unsafe { closest.leaf::<K>(bvh, offset, triangle_ray) };
-            if let Some(h) = closest.best {
-                rays.offer(i, h.t, h.triangle, h.b1, h.b2);
-            }
-        }
-    }
-}
+use crate::accel::Hit;
+use crate::bvh::bounds::Frustum;
+use crate::bvh::node::{Child, WideBvh, decode};
+use crate::bvh::traverse::{Stack, closest_hit, occluded};
+use crate::ray::Ray;
+use leaf::PacketKernel;
+use rays::{PACKET, PacketRays, Shared};
 
 /// A chunk of up to [`PACKET`] rays, prepared once (lane `i` for ray `i`) and sorted into
 /// groups of one direction octant and dominant axis: the rays that can be traced together.
@@ -131,9 +94,9 @@ impl Chunk {
         self.groups = [0; 24];
         self.present = 0;
         self.alone = 0;
-        let groups = packet_setup::fill(&mut self.lanes, rays);
+        let groups = setup::fill(&mut self.lanes, rays);
         for (i, &group) in groups[..rays.len()].iter().enumerate() {
-            if group == packet_setup::ALONE {
+            if group == setup::ALONE {
                 self.alone |= 1 << i;
             } else {
                 self.groups[group as usize] |= 1 << i;
@@ -141,7 +104,7 @@ impl Chunk {
             }
         }
         for group in bits(self.present as u64) {
-            self.shared[group] = packet_setup::shared(group as u8);
+            self.shared[group] = setup::shared(group as u8);
         }
     }
 
@@ -150,7 +113,7 @@ impl Chunk {
     /// # Safety
     /// The CPU must support `K`'s instruction set.
     #[inline(always)]
-    unsafe fn trace<K: NodeKernel, Q: Query>(
+    unsafe fn trace<K: PacketKernel, Q: Query>(
         &mut self,
         bvh: &WideBvh,
         rays: &[Ray],
@@ -203,9 +166,9 @@ trait Query {
     type Answer;
     /// # Safety
     /// The CPU must support `K`'s instruction set (for this whole trait).
-    unsafe fn alone<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Self::Answer;
+    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> Self::Answer;
     /// Traces a packet of at least two rays; returns what [`answer`](Self::answer) needs.
-    unsafe fn packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64;
+    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64;
     /// The answer of lane `j` of a traced packet.
     fn answer(rays: &PacketRays, traced: u64, j: usize) -> Self::Answer;
 }
@@ -217,13 +180,13 @@ impl Query for ClosestHits {
     type Answer = Option<Hit>;
 
     #[inline(always)]
-    unsafe fn alone<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
         // SAFETY: the caller's guarantee.
         unsafe { closest_hit::<K>(bvh, ray) }
     }
 
     #[inline(always)]
-    unsafe fn packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
         // SAFETY: the caller's guarantee.
         unsafe { closest_packet::<K>(bvh, rays) };
         0
@@ -242,14 +205,14 @@ impl Query for OccludedEach {
     type Answer = bool;
 
     #[inline(always)]
-    unsafe fn alone<K: NodeKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
+    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
         // SAFETY: the caller's guarantee.
         unsafe { occluded::<K>(bvh, ray) }
     }
 
     /// The rays still open: not occluded.
     #[inline(always)]
-    unsafe fn packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
         // SAFETY: the caller's guarantee.
         unsafe { occluded_packet::<K>(bvh, rays) }
     }
@@ -269,7 +232,7 @@ type Entry = (u32, f32, u32);
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn closest_hits<K: NodeKernel>(
+pub(crate) unsafe fn closest_hits<K: PacketKernel>(
     bvh: &WideBvh,
     rays: &[Ray],
     out: &mut [Option<Hit>],
@@ -289,7 +252,7 @@ pub(crate) unsafe fn closest_hits<K: NodeKernel>(
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
+unsafe fn closest_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let all = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
@@ -348,7 +311,7 @@ unsafe fn closest_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn occluded_each<K: NodeKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+pub(crate) unsafe fn occluded_each<K: PacketKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
     assert_eq!(rays.len(), out.len(), "one answer per ray");
     let mut chunk = Chunk::take();
     for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
@@ -364,7 +327,7 @@ pub(crate) unsafe fn occluded_each<K: NodeKernel>(bvh: &WideBvh, rays: &[Ray], o
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-unsafe fn occluded_packet<K: NodeKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+unsafe fn occluded_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
     let mut open = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));

@@ -1,12 +1,12 @@
 //! The SAH sweep of the binned build: which split of a node's bins is cheapest.
 //!
 //! [`sweep`] takes a node's bins (per bin, per axis, the box and count of the primitives whose
-//! centroids fall in it) and weighs every split position, as [`build`](super::build) describes:
-//! the SSE2 version weighs the three axes at once, one per lane, and [`sweep_scalar`] is its twin.
+//! centroids fall in it) and weighs every split position, as [`build`](super) describes:
+//! the SSE2 version weighs the three axes at once, one per lane, and `sweep_scalar` is its twin.
 
 #[cfg(any(test, not(target_arch = "x86_64")))]
-use super::build::records;
-use super::build::{Aabb, Bin, MAX_BINS};
+use super::records;
+use super::{Aabb, Bin, MAX_BINS};
 
 /// Bin counts up to this (the `fast` and `medium` presets' 8 and 16, `high`'s 32) sweep with
 /// short arrays.

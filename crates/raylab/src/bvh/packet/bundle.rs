@@ -27,8 +27,8 @@
 
 use glam::Vec3;
 
-use super::bounds::{Bounds, Frustum};
-use super::leaf::{RECORD_TRIANGLES, RECORD_VERTICES, Record};
+use crate::bvh::bounds::{Bounds, Frustum};
+use crate::bvh::leaf::{RECORD_TRIANGLES, RECORD_VERTICES, Record};
 
 /// The relative margin of the cull (see the module documentation).
 const MARGIN: f32 = 1e-4;

@@ -1,12 +1,12 @@
 //! The rays of a packet, lane by lane, with their search state: what packet traversal
-//! (`packet`) and the packet kernels (`packet_kernels`) share.
+//! (`packet`) and the packet kernels (`packet/leaf.rs`, `packet/lanes.rs`) share.
 
 use glam::Vec3;
 
-use super::bounds::{FAR_SCALE, Frustum, RayBoxTest};
 use super::bundle::LineBundle;
-use super::traverse::can_hit;
 use crate::accel::Hit;
+use crate::bvh::bounds::{FAR_SCALE, Frustum, RayBoxTest};
+use crate::bvh::traverse::can_hit;
 use crate::float::next_float_up;
 use crate::ray::Ray;
 use crate::triangle::WatertightRay;
@@ -33,7 +33,7 @@ pub(crate) struct PacketRays {
     pub shear: [[f32; PACKET]; 3],
     /// The watertight test's `t_min` ([`WatertightRay`]).
     pub triangle_t_min: [f32; PACKET],
-    /// Triangles are accepted below this (see [`Closest`]).
+    /// Triangles are accepted below this (see [`Closest`](crate::bvh::traverse::Closest)).
     pub triangle_limit: [f32; PACKET],
     /// Boxes are entered up to this.
     pub box_limit: [f32; PACKET],
@@ -78,7 +78,7 @@ impl PacketRays {
     /// Prepares `ray` in lane `i`, and returns its group (direction octant and dominant axis,
     /// `0..24`) with what the group's rays share, or `None` if it cannot join a packet.
     ///
-    /// The scalar twin of [`packet_setup::fill`], which fills every lane at once.
+    /// The scalar twin of [`fill`](super::setup::fill), which fills every lane at once.
     #[cfg_attr(not(test), expect(dead_code, reason = "the scalar twin of `fill`"))]
     pub(super) fn set_lane(&mut self, i: usize, ray: &Ray) -> Option<(usize, Shared)> {
         let box_ray = RayBoxTest::new(ray);

@@ -1,19 +1,20 @@
-//! Ray/box tests of one ray against the eight children of a [`WideNode`].
+//! The node kernels: one ray, or a packet's bound, against the eight boxes of a [`WideNode`].
 //!
 //! Each kernel computes, for every child, the same values as [`RayBoxTest::enter_with_margin`]
 //! (the scalar twin) in the same order of operations: per axis `tn = (near plane − o)·(1/d)`
 //! folded into `near = max(tn, near)` and `tf = (far plane − o)·(1/d)` into `far = min(tf, far)`,
 //! then `near − margin <= far + margin`, with the ray's one margin for every box. x86's
 //! `maxps`/`minps` return their second operand when the first is NaN, which is how the scalar
-//! `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face plane): the tests in
+//! `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face plane). A packet's bound
+//! is tested against the boxes as [`Frustum::enter`] does, with interval arithmetic. The tests in
 //! `bvh/tests.rs` check that all kernels agree bit for bit.
+//!
+//! The kernels are implemented for the instruction-set types of `bvh/isa.rs`; the leaf records'
+//! kernels are in `leaf/kernel.rs`, the packet leaves' in `packet/leaf.rs`.
 
-use super::bounds::{Bounds, Frustum, RayBoxTest};
-use super::leaf::{Record, RecordHits, record_hits_scalar};
-use super::packet::packet_leaf_scalar;
-use super::packet_rays::PacketRays;
-use super::wide::{WIDTH, WideBvh, WideNode};
-use crate::triangle::WatertightRay;
+use super::{WIDTH, WideNode};
+use crate::bvh::bounds::{Frustum, RayBoxTest};
+use crate::bvh::isa::Scalar;
 
 /// Which children a ray enters, and where.
 pub(crate) trait NodeKernel: Sized {
@@ -33,26 +34,6 @@ pub(crate) trait NodeKernel: Sized {
     /// # Safety
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
     unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]);
-
-    /// Tests the rays of a packet in `open` that enter `bounds` against the triangles of the
-    /// leaf inside it: for the closest hit (`occlusion` false: each ray's best hit is offered
-    /// every hit), or for occlusion (rays hit are taken out of `open`). Decides exactly as the
-    /// single-ray tests do; the scalar twin is [`packet_leaf_scalar`].
-    ///
-    /// # Safety
-    /// As for [`enter`](Self::enter).
-    #[inline(always)]
-    unsafe fn packet_leaf(
-        rays: &mut PacketRays,
-        open: &mut u64,
-        occlusion: bool,
-        bvh: &WideBvh,
-        bounds: &Bounds,
-        offset: u32,
-    ) {
-        // SAFETY: the caller's guarantee.
-        unsafe { packet_leaf_scalar::<Self>(rays, open, occlusion, bvh, bounds, offset) }
-    }
 
     /// A packet's bound, prepared for this kernel once per packet.
     type Frustum: Copy;
@@ -74,47 +55,6 @@ pub(crate) trait NodeKernel: Sized {
         frustum: &Self::Frustum,
         t_limit: f32,
     ) -> (u32, [f32; WIDTH]);
-
-    /// What a ray's triangle tests need, in this kernel's registers, prepared once per ray.
-    type RecordRay: Copy;
-
-    /// Prepares a ray for [`record_hits`](Self::record_hits).
-    ///
-    /// # Safety
-    /// As for [`enter`](Self::enter).
-    unsafe fn prepare_record_ray(ray: &WatertightRay) -> Self::RecordRay;
-
-    /// The hits of a ray on the triangles of a leaf record below `t_max`, as
-    /// [`WatertightRay::intersect`] decides them. The records must hold no zero-area triangles
-    /// (the BVH leaves them out). The scalar twin is [`record_hits_scalar`].
-    ///
-    /// # Safety
-    /// As for [`enter`](Self::enter).
-    unsafe fn record_hits(
-        ray: &TriangleRay<Self::RecordRay>,
-        record: &Record,
-        t_max: f32,
-    ) -> RecordHits;
-}
-
-/// A ray prepared for the triangle tests of a kernel whose per-ray form is `R`: the scalar test's
-/// setup (for the triangles a kernel leaves undecided) and the kernel's.
-#[derive(Clone, Copy)]
-pub(crate) struct TriangleRay<R> {
-    pub ray: WatertightRay,
-    pub lanes: R,
-}
-
-/// Prepares `ray` for `K`'s triangle tests.
-///
-/// # Safety
-/// As for [`NodeKernel::enter`].
-#[inline(always)]
-pub(crate) unsafe fn prepare_triangle_ray<K: NodeKernel>(
-    ray: &WatertightRay,
-) -> TriangleRay<K::RecordRay> {
-    // SAFETY: the caller's guarantee.
-    TriangleRay { ray: *ray, lanes: unsafe { K::prepare_record_ray(ray) } }
 }
 
 /// Plane rows of the near and far planes per axis: the box's min for a positive direction.
@@ -127,20 +67,8 @@ pub(super) fn plane_rows(negative: [bool; 3]) -> ([usize; 3], [usize; 3]) {
     ([near(0), near(1), near(2)], [far(0), far(1), far(2)])
 }
 
-/// The scalar twin: [`RayBoxTest::enter_with_margin`] per child.
-pub(crate) struct Scalar;
-
 impl NodeKernel for Scalar {
     type Ray = (RayBoxTest, f32);
-    type RecordRay = ();
-
-    #[inline(always)]
-    unsafe fn prepare_record_ray(_: &WatertightRay) {}
-
-    #[inline(always)]
-    unsafe fn record_hits(ray: &TriangleRay<()>, record: &Record, t_max: f32) -> RecordHits {
-        record_hits_scalar(&ray.ray, record, t_max)
-    }
 
     #[inline(always)]
     unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> (RayBoxTest, f32) {
@@ -190,19 +118,13 @@ impl NodeKernel for Scalar {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use x86::{Avx2, Avx512, Sse};
-#[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
 
     use super::*;
-    use crate::bvh::lanes::Lanes;
-    use crate::bvh::leaf_kernels::{record_hits_avx2, record_hits_sse};
-    use crate::bvh::packet_kernels::{FrustumBroadcast, packet_leaf_lanes};
-    use crate::bvh::watertight_lanes::RayBroadcast;
-
-    /// Eight children with two 4-wide SSE halves: every x86-64 CPU has SSE2.
-    pub(crate) struct Sse;
+    use crate::bvh::bounds::{FAR_SCALE, SLAB_PAD};
+    use crate::bvh::isa::{Avx2, Avx512, Sse};
+    use crate::bvh::simd::Lanes;
 
     /// A ray broadcast into vector registers, with its box margin.
     #[derive(Clone, Copy)]
@@ -250,19 +172,6 @@ mod x86 {
         type Frustum = FrustumBroadcast<__m128>;
 
         #[inline(always)]
-        unsafe fn packet_leaf(
-            rays: &mut PacketRays,
-            open: &mut u64,
-            occlusion: bool,
-            bvh: &WideBvh,
-            bounds: &Bounds,
-            offset: u32,
-        ) {
-            // SAFETY: the caller's guarantee.
-            unsafe { packet_leaf_lanes::<__m128, 4>(rays, open, occlusion, bvh, bounds, offset) }
-        }
-
-        #[inline(always)]
         unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum {
             // SAFETY: SSE2 is part of x86-64.
             unsafe { FrustumBroadcast::new(frustum) }
@@ -281,23 +190,6 @@ mod x86 {
                     | frustum.enter(node, t_limit, 4, &mut out);
                 (mask, out)
             }
-        }
-
-        type RecordRay = RayBroadcast<__m128>;
-
-        #[inline(always)]
-        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RayBroadcast<__m128> {
-            // SAFETY: SSE2 is part of x86-64.
-            unsafe { RayBroadcast::new(ray) }
-        }
-
-        #[inline(always)]
-        unsafe fn record_hits(
-            ray: &TriangleRay<RayBroadcast<__m128>>,
-            record: &Record,
-            t_max: f32,
-        ) -> RecordHits {
-            record_hits_sse(ray, record, t_max)
         }
 
         #[inline(always)]
@@ -336,25 +228,9 @@ mod x86 {
         }
     }
 
-    /// All eight children in one AVX2 register.
-    pub(crate) struct Avx2;
-
     impl NodeKernel for Avx2 {
         type Ray = Broadcast<__m256>;
         type Frustum = FrustumBroadcast<__m256>;
-
-        #[inline(always)]
-        unsafe fn packet_leaf(
-            rays: &mut PacketRays,
-            open: &mut u64,
-            occlusion: bool,
-            bvh: &WideBvh,
-            bounds: &Bounds,
-            offset: u32,
-        ) {
-            // SAFETY: the caller's guarantee.
-            unsafe { packet_leaf_lanes::<__m256, 8>(rays, open, occlusion, bvh, bounds, offset) }
-        }
 
         #[inline(always)]
         unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum {
@@ -374,24 +250,6 @@ mod x86 {
                 let mask = frustum.enter(node, t_limit, 0, &mut out);
                 (mask, out)
             }
-        }
-
-        type RecordRay = RayBroadcast<__m256>;
-
-        #[inline(always)]
-        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RayBroadcast<__m256> {
-            // SAFETY: the caller checked AVX2 support (this function's contract).
-            unsafe { RayBroadcast::new(ray) }
-        }
-
-        #[inline(always)]
-        unsafe fn record_hits(
-            ray: &TriangleRay<RayBroadcast<__m256>>,
-            record: &Record,
-            t_max: f32,
-        ) -> RecordHits {
-            // SAFETY: the caller checked AVX2 support (this function's contract).
-            unsafe { record_hits_avx2::<false>(ray, record, t_max) }
         }
 
         #[inline(always)]
@@ -425,26 +283,10 @@ mod x86 {
         }
     }
 
-    /// AVX2's node kernel, leaf records with AVX-512 VL's two-table permute, and packet leaves
-    /// 16 rays per instruction with AVX-512.
-    pub(crate) struct Avx512;
-
+    /// AVX2's node kernel (eight boxes fill one AVX register).
     impl NodeKernel for Avx512 {
         type Ray = <Avx2 as NodeKernel>::Ray;
         type Frustum = <Avx2 as NodeKernel>::Frustum;
-
-        #[inline(always)]
-        unsafe fn packet_leaf(
-            rays: &mut PacketRays,
-            open: &mut u64,
-            occlusion: bool,
-            bvh: &WideBvh,
-            bounds: &Bounds,
-            offset: u32,
-        ) {
-            // SAFETY: the caller checked AVX-512 F support (this function's contract).
-            unsafe { packet_leaf_lanes::<__m512, 16>(rays, open, occlusion, bvh, bounds, offset) }
-        }
 
         #[inline(always)]
         unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum {
@@ -462,24 +304,6 @@ mod x86 {
             unsafe { Avx2::enter_frustum(node, frustum, t_limit) }
         }
 
-        type RecordRay = RayBroadcast<__m256>;
-
-        #[inline(always)]
-        unsafe fn prepare_record_ray(ray: &WatertightRay) -> RayBroadcast<__m256> {
-            // SAFETY: the caller checked AVX-512 F support (this function's contract).
-            unsafe { RayBroadcast::new(ray) }
-        }
-
-        #[inline(always)]
-        unsafe fn record_hits(
-            ray: &TriangleRay<RayBroadcast<__m256>>,
-            record: &Record,
-            t_max: f32,
-        ) -> RecordHits {
-            // SAFETY: the caller checked AVX-512 F support (this function's contract).
-            unsafe { record_hits_avx2::<true>(ray, record, t_max) }
-        }
-
         #[inline(always)]
         unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
             // SAFETY: as above.
@@ -490,6 +314,108 @@ mod x86 {
         unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
             // SAFETY: as above.
             unsafe { Avx2::enter(node, ray, t_limit) }
+        }
+    }
+
+    /// A vector in three registers of equal lanes.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    unsafe fn splat3<V: Lanes>(v: glam::Vec3) -> [V; 3] {
+        // SAFETY: the caller's guarantee.
+        unsafe { [V::splat(v.x), V::splat(v.y), V::splat(v.z)] }
+    }
+
+    /// The least and greatest products of two intervals, as `bounds::interval_product`.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set.
+    #[inline(always)]
+    unsafe fn interval_product<V: Lanes>(a_lo: V, a_hi: V, i_lo: V, i_hi: V) -> (V, V) {
+        // SAFETY: the caller's guarantee.
+        unsafe {
+            let (p0, p1) = (a_lo.mul(i_lo), a_lo.mul(i_hi));
+            let (p2, p3) = (a_hi.mul(i_lo), a_hi.mul(i_hi));
+            (p0.min(p1).min(p2.min(p3)), p0.max(p1).max(p2.max(p3)))
+        }
+    }
+
+    /// A packet's bound broadcast into vector registers.
+    #[derive(Clone, Copy)]
+    pub(crate) struct FrustumBroadcast<V> {
+        origin_lo: [V; 3],
+        origin_hi: [V; 3],
+        inv_lo: [V; 3],
+        inv_hi: [V; 3],
+        t_min: V,
+        near_rows: [usize; 3],
+        far_rows: [usize; 3],
+        pad_axes: [bool; 3],
+    }
+
+    impl<V: Lanes> FrustumBroadcast<V> {
+        /// # Safety
+        /// The CPU must support `V`'s instruction set.
+        #[inline(always)]
+        pub(super) unsafe fn new(f: &Frustum) -> Self {
+            let (near_rows, far_rows) = plane_rows(f.negative);
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                FrustumBroadcast {
+                    origin_lo: splat3(f.origin_lo),
+                    origin_hi: splat3(f.origin_hi),
+                    inv_lo: splat3(f.inv_lo),
+                    inv_hi: splat3(f.inv_hi),
+                    t_min: V::splat(f.t_min),
+                    near_rows,
+                    far_rows,
+                    pad_axes: f.pad_axes,
+                }
+            }
+        }
+
+        /// [`Frustum::enter`] for the children from `first` on that `V` holds: their mask (bit 0 for child
+        /// `first`), and their entries written to `out[first..]`.
+        ///
+        /// # Safety
+        /// The CPU must support `V`'s instruction set; `first` is 0, or 4 for a 4-lane `V`.
+        #[inline(always)]
+        pub(super) unsafe fn enter(
+            &self,
+            node: &WideNode,
+            t_limit: f32,
+            first: usize,
+            out: &mut [f32],
+        ) -> u32 {
+            // SAFETY: the caller's guarantee; loads read one register of a 32-byte aligned row
+            // of 8 from `first`, which is aligned to the register size.
+            unsafe {
+                let scale = V::splat(FAR_SCALE);
+                let mut near = self.t_min;
+                let mut far = V::splat(t_limit);
+                let mut reach = V::splat(0.0);
+                for axis in 0..3 {
+                    let np = V::load(node.planes[self.near_rows[axis]][first..].as_ptr());
+                    let fp = V::load(node.planes[self.far_rows[axis]][first..].as_ptr());
+                    let (o_lo, o_hi) = (self.origin_lo[axis], self.origin_hi[axis]);
+                    let (i_lo, i_hi) = (self.inv_lo[axis], self.inv_hi[axis]);
+                    let (tn_lo, tn_hi) = interval_product(np.sub(o_hi), np.sub(o_lo), i_lo, i_hi);
+                    let (tf_lo, tf_hi) = interval_product(fp.sub(o_hi), fp.sub(o_lo), i_lo, i_hi);
+                    near = tn_lo.max(near);
+                    far = tf_hi.mul(scale).min(far);
+                    if self.pad_axes[axis] {
+                        let axis_reach =
+                            tn_lo.abs().max(tn_hi.abs()).max(tf_lo.abs().max(tf_hi.abs()));
+                        reach = reach.max(axis_reach);
+                    }
+                }
+                let pad = reach.mul(V::splat(SLAB_PAD));
+                let near = near.sub(pad);
+                let far = far.add(pad);
+                near.store(out[first..].as_mut_ptr());
+                near.le_mask(far) << first
+            }
         }
     }
 }

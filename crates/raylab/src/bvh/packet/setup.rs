@@ -8,8 +8,8 @@
 //! (selects only), sixteen lanes per AVX-512 instruction in the instruction sets' entry points.
 //! The values are those of `set_lane`, bit for bit (the test below compares them).
 
-use super::bounds::FAR_SCALE;
-use super::packet_rays::{PACKET, PacketRays};
+use super::rays::{PACKET, PacketRays};
+use crate::bvh::bounds::FAR_SCALE;
 use crate::ray::Ray;
 
 /// A lane that cannot join a packet (nothing to hit, a zero direction component or a

@@ -1,0 +1,133 @@
+//! The packet leaves' kernels: the rays of a packet against the triangles of a leaf, several
+//! rays per instruction (`packet/lanes.rs`), deciding as the single-ray tests do; the scalar
+//! twin, [`packet_leaf_scalar`], runs them ray by ray.
+
+use super::rays::PacketRays;
+use crate::bvh::bounds::Bounds;
+use crate::bvh::isa::Scalar;
+use crate::bvh::leaf::kernel::prepare_triangle_ray;
+use crate::bvh::node::WideBvh;
+use crate::bvh::traverse::{Closest, Kernel, leaf_occluded};
+
+/// The packet leaf test, per instruction set: by default [`packet_leaf_scalar`].
+pub(crate) trait PacketKernel: Kernel {
+    /// Tests the rays of a packet in `open` that enter `bounds` against the triangles of the
+    /// leaf inside it: for the closest hit (`occlusion` false: each ray's best hit is offered
+    /// every hit), or for occlusion (rays hit are taken out of `open`). Decides exactly as the
+    /// single-ray tests do; the scalar twin is [`packet_leaf_scalar`].
+    ///
+    /// # Safety
+    /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
+    #[inline(always)]
+    unsafe fn packet_leaf(
+        rays: &mut PacketRays,
+        open: &mut u64,
+        occlusion: bool,
+        bvh: &WideBvh,
+        bounds: &Bounds,
+        offset: u32,
+    ) {
+        // SAFETY: the caller's guarantee.
+        unsafe { packet_leaf_scalar::<Self>(rays, open, occlusion, bvh, bounds, offset) }
+    }
+}
+
+impl PacketKernel for Scalar {}
+
+/// The scalar twin of [`PacketKernel::packet_leaf`]: ray by ray, the single-ray tests.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn packet_leaf_scalar<K: Kernel>(
+    rays: &mut PacketRays,
+    open: &mut u64,
+    occlusion: bool,
+    bvh: &WideBvh,
+    bounds: &Bounds,
+    offset: u32,
+) {
+    let mut rest = *open;
+    while rest != 0 {
+        let i = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        if rays.box_ray(i).enter(bounds, rays.box_limit[i]).is_none() {
+            continue;
+        }
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        let triangle_ray = &unsafe { prepare_triangle_ray::<K>(&rays.triangle_ray(i)) };
+        if occlusion {
+            let t_max = rays.triangle_limit[i];
+            // SAFETY: the caller guarantees `K`'s instruction set.
+            if unsafe { leaf_occluded::<K>(bvh, offset, triangle_ray, t_max) } {
+                *open &= !(1 << i);
+            }
+        } else {
+            let mut closest = Closest {
+                best: rays.best(i),
+                triangle_limit: rays.triangle_limit[i],
+                box_limit: rays.box_limit[i],
+            };
+            // SAFETY: the caller guarantees `K`'s instruction set.
+            unsafe { closest.leaf::<K>(bvh, offset, triangle_ray) };
+            if let Some(h) = closest.best {
+                rays.offer(i, h.t, h.triangle, h.b1, h.b2);
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::*;
+
+    use super::*;
+    use crate::bvh::isa::{Avx2, Avx512, Sse};
+    use crate::bvh::packet::lanes::packet_leaf_lanes;
+
+    impl PacketKernel for Sse {
+        #[inline(always)]
+        unsafe fn packet_leaf(
+            rays: &mut PacketRays,
+            open: &mut u64,
+            occlusion: bool,
+            bvh: &WideBvh,
+            bounds: &Bounds,
+            offset: u32,
+        ) {
+            // SAFETY: the caller's guarantee.
+            unsafe { packet_leaf_lanes::<__m128, 4>(rays, open, occlusion, bvh, bounds, offset) }
+        }
+    }
+
+    impl PacketKernel for Avx2 {
+        #[inline(always)]
+        unsafe fn packet_leaf(
+            rays: &mut PacketRays,
+            open: &mut u64,
+            occlusion: bool,
+            bvh: &WideBvh,
+            bounds: &Bounds,
+            offset: u32,
+        ) {
+            // SAFETY: the caller's guarantee.
+            unsafe { packet_leaf_lanes::<__m256, 8>(rays, open, occlusion, bvh, bounds, offset) }
+        }
+    }
+
+    /// 16 rays per instruction.
+    impl PacketKernel for Avx512 {
+        #[inline(always)]
+        unsafe fn packet_leaf(
+            rays: &mut PacketRays,
+            open: &mut u64,
+            occlusion: bool,
+            bvh: &WideBvh,
+            bounds: &Bounds,
+            offset: u32,
+        ) {
+            // SAFETY: the caller checked AVX-512 F support (this function's contract).
+            unsafe { packet_leaf_lanes::<__m512, 16>(rays, open, occlusion, bvh, bounds, offset) }
+        }
+    }
+}
