@@ -7,6 +7,7 @@
 use glam::Vec2;
 
 use crate::sampling::square_to_truncated_gaussian;
+use crate::unknown_name::UnknownName;
 
 /// The pixel filter: how a sample's position in and around its pixel is drawn. Samples are
 /// distributed as the filter, so every sample has the same weight (importance-sampled filtering).
@@ -27,14 +28,14 @@ pub enum Filter {
 }
 
 impl std::str::FromStr for Filter {
-    type Err = String;
+    type Err = UnknownName;
 
     /// `box`, or `gaussian` ([`Filter::GAUSSIAN`]).
-    fn from_str(name: &str) -> Result<Filter, String> {
+    fn from_str(name: &str) -> Result<Filter, UnknownName> {
         match name {
             "box" => Ok(Filter::Box),
             "gaussian" => Ok(Filter::GAUSSIAN),
-            other => Err(format!("unknown filter '{other}': expected box or gaussian")),
+            other => Err(UnknownName::new("filter", other, "box or gaussian")),
         }
     }
 }

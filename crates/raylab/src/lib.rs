@@ -189,6 +189,7 @@ pub mod session;
 pub mod settings;
 pub mod texture;
 pub mod triangle;
+pub mod unknown_name;
 
 pub use accel::{Accelerator, BruteForce, Hit};
 pub use bvh::{BuildSettings, Bvh, SceneBvh};
@@ -201,7 +202,7 @@ pub use integrator::{
 };
 pub use interaction::SurfaceInteraction;
 pub use light::{Light, PointLight};
-pub use material::{Bsdf, Material};
+pub use material::{Bsdf, Material, MaterialError};
 pub use mesh::{Mesh, MeshMaterial};
 pub use ray::{Ray, SurfacePoint};
 pub use region::Region;
@@ -211,3 +212,4 @@ pub use sampling::{Sampler, SamplerKind, sample_offset};
 pub use scene::{LoadError, LoadedMesh, load_mesh};
 pub use scene::{Scene, SceneError};
 pub use triangle::Triangle;
+pub use unknown_name::UnknownName;

@@ -13,6 +13,8 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::unknown_name::UnknownName;
+
 /// Which first-hit quantity an AOV (arbitrary output variable) shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "io", derive(serde::Serialize, serde::Deserialize))]
@@ -47,13 +49,13 @@ impl fmt::Display for AovKind {
 }
 
 impl FromStr for AovKind {
-    type Err = String;
+    type Err = UnknownName;
 
-    fn from_str(name: &str) -> Result<AovKind, String> {
+    fn from_str(name: &str) -> Result<AovKind, UnknownName> {
         AovKind::ALL
             .into_iter()
             .find(|kind| kind.name() == name)
-            .ok_or_else(|| format!("unknown AOV '{name}': expected albedo, normals or depth"))
+            .ok_or_else(|| UnknownName::new("AOV", name, "albedo, normals or depth"))
     }
 }
 
@@ -100,14 +102,14 @@ impl fmt::Display for IntegratorKind {
 }
 
 impl FromStr for IntegratorKind {
-    type Err = String;
+    type Err = UnknownName;
 
-    fn from_str(name: &str) -> Result<IntegratorKind, String> {
+    fn from_str(name: &str) -> Result<IntegratorKind, UnknownName> {
         match name {
             "lab" => Ok(IntegratorKind::Lab),
             "path" => Ok(IntegratorKind::Path),
             other => other.parse().map(IntegratorKind::Aov).map_err(|_| {
-                format!("unknown integrator '{name}': expected lab, path, albedo, normals or depth")
+                UnknownName::new("integrator", name, "lab, path, albedo, normals or depth")
             }),
         }
     }
@@ -127,10 +129,12 @@ mod tests {
         }
         let error = "whitted".parse::<IntegratorKind>().unwrap_err();
         assert_eq!(
-            error,
+            error.to_string(),
             "unknown integrator 'whitted': expected lab, path, albedo, normals or depth"
         );
-        assert!("lab".parse::<AovKind>().unwrap_err().contains("albedo, normals or depth"));
+        assert!(
+            "lab".parse::<AovKind>().unwrap_err().to_string().contains("albedo, normals or depth")
+        );
         assert_eq!(IntegratorKind::default_for(true), IntegratorKind::Path);
         assert_eq!(IntegratorKind::default_for(false), IntegratorKind::Lab);
     }

@@ -2,6 +2,7 @@
 //! lab's plain clamp), and exact rounding.
 
 use crate::color::linear_to_srgb;
+use crate::unknown_name::UnknownName;
 
 /// How a film's linear radiance becomes 8-bit pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,13 +50,13 @@ pub enum ToneMap {
 }
 
 impl std::str::FromStr for ToneMap {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownName;
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
         match s {
             "clamp" => Ok(ToneMap::Clamp),
             "reinhard" => Ok(ToneMap::Reinhard),
             "aces" => Ok(ToneMap::Aces),
-            _ => Err(format!("unknown tone mapping '{s}': expected clamp, reinhard or aces")),
+            _ => Err(UnknownName::new("tone mapping", s, "clamp, reinhard or aces")),
         }
     }
 }
@@ -114,6 +115,6 @@ mod tests {
         assert!(aces.level(0.0) == 0 && aces.level(100.0) == 255 && aces.level(0.5) > 100);
         assert_eq!(Display::SRGB.level(0.18), 118);
         assert_eq!("aces".parse::<ToneMap>(), Ok(ToneMap::Aces));
-        assert!("filmic".parse::<ToneMap>().unwrap_err().contains("reinhard"));
+        assert!("filmic".parse::<ToneMap>().unwrap_err().to_string().contains("reinhard"));
     }
 }

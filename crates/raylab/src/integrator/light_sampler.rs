@@ -20,6 +20,7 @@ use crate::sampling::{
 };
 use crate::scene::Scene;
 use crate::texture::{Texture, TextureQuery};
+use crate::unknown_name::UnknownName;
 
 /// Every light of a scene, ready to be sampled: point lights, the emissive triangles (area
 /// lights) and the environment, chosen by power.
@@ -57,12 +58,12 @@ pub enum TriangleSampling {
 }
 
 impl std::str::FromStr for TriangleSampling {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownName;
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
         match s {
             "area" => Ok(TriangleSampling::Area),
             "solid-angle" => Ok(TriangleSampling::SolidAngle),
-            _ => Err(format!("unknown light sampling '{s}': expected area or solid-angle")),
+            _ => Err(UnknownName::new("light sampling", s, "area or solid-angle")),
         }
     }
 }

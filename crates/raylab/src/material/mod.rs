@@ -208,16 +208,14 @@ impl Material {
     }
 
     /// Checks that every parameter is finite and in its range, naming the first that is not.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), MaterialError> {
         if !self.emission.is_finite() || self.emission.min_element() < 0.0 {
-            return Err(format!("emission {} must be finite and not negative", self.emission));
+            return Err(MaterialError::Emission(self.emission));
         }
         if self.two_sided && matches!(self.bsdf, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_)) {
             // As Mitsuba's twosided: a material that transmits already has two sides, and
             // mirroring its back into its front would turn every exit into an entry.
-            return Err(
-                "twosided cannot hold a dielectric: it transmits, and has two sides already".into(),
-            );
+            return Err(MaterialError::TwoSidedDielectric);
         }
         self.bsdf.validate()
     }
@@ -363,20 +361,16 @@ impl Bsdf {
         }
     }
 
-    fn validate(&self) -> Result<(), String> {
+    fn validate(&self) -> Result<(), MaterialError> {
         let positive_ior = |eta: f32| {
-            if eta.is_finite() && eta > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("the relative index of refraction {eta} must be finite and above 0"))
-            }
+            if eta.is_finite() && eta > 0.0 { Ok(()) } else { Err(MaterialError::Ior(eta)) }
         };
         let roughness = |g: &Ggx| {
             if g.alpha_u.is_finite() && g.alpha_v.is_finite() && g.alpha_u > 0.0 && g.alpha_v > 0.0
             {
                 Ok(())
             } else {
-                Err(format!("alpha ({}, {}) must be finite and above 0", g.alpha_u, g.alpha_v))
+                Err(MaterialError::Roughness { alpha_u: g.alpha_u, alpha_v: g.alpha_v })
             }
         };
         let conductor = |c: &Conductor| {
@@ -389,10 +383,7 @@ impl Bsdf {
             {
                 unit_interval("specular_reflectance", c.specular_reflectance)
             } else {
-                Err(format!(
-                    "eta {} and k {} must be finite, not negative and not both 0",
-                    c.eta, c.k
-                ))
+                Err(MaterialError::Conductor { eta: c.eta, k: c.k })
             }
         };
         match self {
@@ -412,12 +403,50 @@ impl Bsdf {
 }
 
 /// Checks that a colour is finite with every channel in `[0, 1]`.
-fn unit_interval(name: &str, value: Vec3) -> Result<(), String> {
+fn unit_interval(name: &'static str, value: Vec3) -> Result<(), MaterialError> {
     if value.is_finite() && value.min_element() >= 0.0 && value.max_element() <= 1.0 {
         Ok(())
     } else {
-        Err(format!("{name} {value} must be between 0 and 1 in every channel"))
+        Err(MaterialError::OutOfRange { name, value })
     }
+}
+
+/// Why a material's parameters cannot be rendered: the first parameter out of its range.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MaterialError {
+    /// Emission must be finite and not negative.
+    #[error("emission {0} must be finite and not negative")]
+    Emission(Vec3),
+    /// A two-sided material around a dielectric.
+    #[error("twosided cannot hold a dielectric: it transmits, and has two sides already")]
+    TwoSidedDielectric,
+    /// A relative index of refraction that is not finite and positive.
+    #[error("the relative index of refraction {0} must be finite and above 0")]
+    Ior(f32),
+    /// A microfacet roughness that is not finite and positive.
+    #[error("alpha ({alpha_u}, {alpha_v}) must be finite and above 0")]
+    Roughness {
+        /// Along the tangent.
+        alpha_u: f32,
+        /// Along the bitangent.
+        alpha_v: f32,
+    },
+    /// A conductor's complex index of refraction that is negative, not finite or zero.
+    #[error("eta {eta} and k {k} must be finite, not negative and not both 0")]
+    Conductor {
+        /// The real part.
+        eta: Vec3,
+        /// The imaginary part (absorption).
+        k: Vec3,
+    },
+    /// A colour or factor outside `[0, 1]`.
+    #[error("{name} {value} must be between 0 and 1 in every channel")]
+    OutOfRange {
+        /// The parameter's name in scene files.
+        name: &'static str,
+        /// Its value.
+        value: Vec3,
+    },
 }
 
 /// `cos θ` of a local direction.

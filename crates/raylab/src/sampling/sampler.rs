@@ -20,6 +20,7 @@ use glam::Vec2;
 use super::pcg::{Pcg32, mix64, u32_to_unit};
 use super::sobol::{laine_karras_permutation, shuffled_scrambled_sobol_2d};
 use super::{pixel_hash, sample_offset};
+use crate::unknown_name::UnknownName;
 
 /// Which numbers a [`Sampler`] hands out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -50,13 +51,13 @@ impl SamplerKind {
 }
 
 impl std::str::FromStr for SamplerKind {
-    type Err = String;
+    type Err = UnknownName;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Self::ALL
             .iter()
             .find(|(name, _)| *name == s)
             .map(|(_, kind)| *kind)
-            .ok_or_else(|| format!("unknown sampler '{s}': expected lab, independent or sobol"))
+            .ok_or_else(|| UnknownName::new("sampler", s, "lab, independent or sobol"))
     }
 }
 
@@ -242,6 +243,6 @@ mod tests {
             assert_eq!(name.parse::<SamplerKind>(), Ok(kind));
             assert_eq!(kind.name(), name);
         }
-        assert!("halton".parse::<SamplerKind>().unwrap_err().contains("sobol"));
+        assert!("halton".parse::<SamplerKind>().unwrap_err().to_string().contains("sobol"));
     }
 }

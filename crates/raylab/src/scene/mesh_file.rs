@@ -244,6 +244,7 @@ pub fn load_mesh(path: &Path) -> Result<LoadedMesh, LoadError> {
 
 /// Reads the whole file, decompressing it if `gzip`, within [`read_limit_bytes`]: for other
 /// readers of untrusted files (the ray-set files).
+#[cfg(feature = "support")]
 pub(crate) fn read_file_bytes(path: &Path, gzip: bool) -> Result<Vec<u8>, LoadError> {
     read_bytes(path, gzip, read_limit_bytes())
 }

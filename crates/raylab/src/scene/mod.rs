@@ -34,7 +34,7 @@ use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
 pub use keyframes::Keyframe;
-#[cfg(feature = "io")]
+#[cfg(feature = "support")]
 pub(crate) use mesh_file::read_file_bytes;
 #[cfg(feature = "io")]
 pub use mesh_file::{
@@ -364,7 +364,7 @@ impl Scene {
             material.validate().map_err(|problem| SceneError::Invalid {
                 scene: self.name.clone(),
                 what: format!("material '{}'", material.name),
-                problem,
+                problem: problem.to_string(),
             })?;
         }
         for light in &self.lights {

@@ -561,7 +561,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         if let Some(integrator) = &doc.integrator {
             match integrator.get_ref().parse::<IntegratorKind>() {
                 Ok(kind) => settings.integrator = Some(kind),
-                Err(message) => return self.error(integrator.span(), message),
+                Err(error) => return self.error(integrator.span(), error.to_string()),
             }
         }
         if let Some(sampler) = &doc.sampler {
@@ -569,13 +569,13 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                 sampler
                     .get_ref()
                     .parse::<SamplerKind>()
-                    .map_err(|e| (self.at)(Some(sampler.span()), e))?,
+                    .map_err(|e| (self.at)(Some(sampler.span()), e.to_string()))?,
             );
         }
         if let Some(filter) = &doc.filter {
             match filter.get_ref().parse::<Filter>() {
                 Ok(parsed) => settings.filter = Some(parsed),
-                Err(message) => return self.error(filter.span(), message),
+                Err(error) => return self.error(filter.span(), error.to_string()),
             }
         }
         Ok(settings)
