@@ -7,25 +7,26 @@
 use std::collections::VecDeque;
 use std::num::NonZeroU32;
 use std::rc::Rc;
-use std::sync::{Condvar, Mutex, MutexGuard};
+use std::sync::{Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::{Result, anyhow, bail};
 use raylab::Stage;
 use raylab::interactive::ViewMode;
-use raylab::interactive::{Controller, FrameInfo, FrameRenderer, Motion, View};
+use raylab::interactive::{Controller, Motion, View};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
+mod render_thread;
+
+use render_thread::{Frame, FrameReady, QuitOnDrop, Shared, State, render_thread};
+
 use crate::screenshot::{next_screenshot_path, save_screenshot};
 use crate::view_cmd::{KEYS_HELP, Session};
-
-/// A moving frame should take at most this long: 30 frames per second with room to spare.
-const MOVING_BUDGET: Duration = Duration::from_millis(25);
 
 /// Touchpad scrolling changes the speed by a step per this many pixels.
 const WHEEL_STEP_PIXELS: f64 = 60.0;
@@ -44,52 +45,6 @@ pub fn check_display() -> Result<()> {
     }
     Ok(())
 }
-
-/// A finished frame, in window words `0x00RRGGBB`.
-struct Frame {
-    words: Vec<u32>,
-    width: u32,
-    height: u32,
-    info: FrameInfo,
-}
-
-/// What the two threads share.
-struct Shared {
-    state: Mutex<State>,
-    /// Wakes the render thread: a new view, a free frame slot, or quitting.
-    changed: Condvar,
-}
-
-struct State {
-    view: View,
-    /// The finished frame the event loop has not taken yet.
-    ready: Option<Frame>,
-    /// A buffer to reuse for the next frame.
-    spare: Vec<u32>,
-    quit: bool,
-    error: Option<String>,
-}
-
-impl Shared {
-    fn lock(&self) -> MutexGuard<'_, State> {
-        // A panic on the other thread must not turn into a second one here.
-        self.state.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    fn wait<'a>(&self, guard: MutexGuard<'a, State>) -> MutexGuard<'a, State> {
-        self.changed.wait(guard).unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    /// Tells the render thread to stop.
-    fn quit(&self) {
-        self.lock().quit = true;
-        self.changed.notify_all();
-    }
-}
-
-/// The event the render thread sends: a frame is ready (or the renderer failed).
-#[derive(Debug)]
-struct FrameReady;
 
 /// Opens the window and runs until it is closed.
 pub fn run(session: Session) -> Result<()> {
@@ -149,76 +104,6 @@ pub fn run(session: Session) -> Result<()> {
         app.screenshot_to(path)?;
     }
     Ok(())
-}
-
-/// Tells the render thread to stop when dropped.
-struct QuitOnDrop<'a>(&'a Shared);
-
-impl Drop for QuitOnDrop<'_> {
-    fn drop(&mut self) {
-        self.0.quit();
-    }
-}
-
-/// The render thread: [`render_loop`], with a panic reported to the window as an error rather
-/// than leaving it waiting for frames.
-fn render_thread(session: &Session, shared: &Shared, proxy: EventLoopProxy<FrameReady>) {
-    let rendered = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        render_loop(session, shared, &proxy)
-    }));
-    if let Err(panic) = rendered {
-        let message = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_default();
-        shared.lock().error = Some(format!("the render thread failed: {message}"));
-        let _ = proxy.send_event(FrameReady);
-    }
-}
-
-/// Renders the latest view whenever it is not done, and hands over frames one at a time.
-fn render_loop(session: &Session, shared: &Shared, proxy: &EventLoopProxy<FrameReady>) {
-    let mut renderer = FrameRenderer::new(Some(MOVING_BUDGET), session.max_spp);
-    renderer.path_settings = session.path_settings;
-    renderer.sample_settings = session.sample_settings;
-    loop {
-        let (view, mut words) = {
-            let mut state = shared.lock();
-            while !state.quit && renderer.is_done(&state.view) {
-                state = shared.wait(state);
-            }
-            if state.quit {
-                return;
-            }
-            (state.view, std::mem::take(&mut state.spare))
-        };
-        let rendered = session
-            .pool
-            .install(|| renderer.frame(session.scene, session.accel, &view, &mut words));
-        let info = match rendered {
-            Ok(info) => info,
-            Err(error) => {
-                shared.lock().error = Some(format!("cannot render a frame: {error}"));
-                let _ = proxy.send_event(FrameReady);
-                return;
-            }
-        };
-        let frame = Frame { words, width: view.width, height: view.height, info };
-        {
-            let mut state = shared.lock();
-            while !state.quit && state.ready.is_some() {
-                state = shared.wait(state);
-            }
-            if state.quit {
-                return;
-            }
-            state.ready = Some(frame);
-        }
-        if proxy.send_event(FrameReady).is_err() {
-            return; // The event loop is gone.
-        }
-    }
 }
 
 /// The window and what is shown in it.

@@ -172,7 +172,7 @@ const TILE: usize = 64;
 
 /// [`Lab::shade`] for a tile's hits, lane by lane in arrays: the triangles' data gathered
 /// first, then every lane computed by the same operations as `shade` (and
-/// [`SurfacePoint::spawn_ray_to`]), in the same order and without branches, which the compiler
+/// [`SurfacePoint::spawn_ray_to`](crate::ray::SurfacePoint::spawn_ray_to)), in the same order and without branches, which the compiler
 /// vectorizes. The values are `shade`'s bit for bit (the test below compares them).
 struct TileShading {
     albedo: [[f32; TILE]; 3],

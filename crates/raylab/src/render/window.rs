@@ -13,7 +13,7 @@ const ROWS_PER_TASK: usize = 16;
 impl Accumulator {
     /// Writes the mean into a `width×height` window buffer of `0x00RRGGBB` words, scaled to fill
     /// it by nearest neighbour (a picture rendered at a fraction of the window's resolution fills
-    /// the window). Channels as in [`Film::to_rgb8_clamped`]. Runs on the current rayon pool.
+    /// the window). Channels as in [`Film::to_rgb8_clamped`](crate::film::Film::to_rgb8_clamped). Runs on the current rayon pool.
     ///
     /// # Panics
     /// If `out` does not hold `width×height` words.

@@ -30,6 +30,7 @@
 //! count, the tiling, the region a part covers, or how often the render stopped and resumed.
 
 mod camera_options;
+mod checkpoint;
 mod identity;
 mod job;
 mod merge;
@@ -38,10 +39,9 @@ mod summary;
 use std::time::Duration;
 
 pub use camera_options::CameraOptions;
+pub use checkpoint::{Checkpoints, checkpoint_path};
 pub use identity::{CameraIdentity, IdentityError, RenderIdentity};
-pub use job::{
-    Checkpoints, Event, FrameOutcome, RenderJob, check_memory, checkpoint_path, frame_path,
-};
+pub use job::{Event, FrameOutcome, RenderJob, check_memory, frame_path};
 pub use merge::{MergeReport, merge_parts};
 pub use summary::FrameSummary;
 

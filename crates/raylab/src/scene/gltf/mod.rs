@@ -6,7 +6,7 @@
 //! the file's order (nodes depth first, then primitives), positions and normals are
 //! transformed (normals by the inverse transpose), and a transform that mirrors reverses the
 //! winding, so that front faces stay front faces. Each primitive's material gives a
-//! [`MeshMaterial`]: the metallic-roughness material's base colour factor as the diffuse
+//! [`MeshMaterial`](crate::mesh::MeshMaterial): the metallic-roughness material's base colour factor as the diffuse
 //! colour, the emissive factor (times `KHR_materials_emissive_strength`) as emission, and
 //! their textures (base colour, metallic-roughness, normal, emissive). The first perspective
 //! camera, in node order, becomes the scene's camera.

@@ -2,6 +2,7 @@
 use std::collections::HashMap;
 
 use proptest::prelude::*;
+use std::io;
 
 use super::*;
 
