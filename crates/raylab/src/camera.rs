@@ -60,7 +60,7 @@ impl Camera {
     }
 
     /// The angle one pixel at the centre of the image subtends, in radians: a camera ray's
-    /// cone spreads by it (texture filtering, [`crate::texture`]).
+    /// cone spreads by it (texture filtering, in the `texture` module).
     #[inline]
     pub fn pixel_spread(&self) -> f32 {
         (1.0 / self.focal_length_px).atan()

@@ -1,6 +1,6 @@
 //! Lights that are not surfaces: the lab's point light and a constant environment.
 //!
-//! Area lights are triangles whose material emits (see [`crate::material::Material::emission`]);
+//! Area lights are triangles whose material emits (see `Material::emission`);
 //! the path integrator gathers every light, these and the area lights, into one set that it
 //! samples by power (`integrator::LightSet`).
 

@@ -16,9 +16,7 @@ pub struct BruteForce {
 }
 
 impl BruteForce {
-    /// Keeps a compact copy of the triangles' vertices (for a scene, [`Scene::vertices`]).
-    ///
-    /// [`Scene::vertices`]: crate::Scene::vertices
+    /// Keeps a compact copy of the triangles' vertices (for a scene, `Scene::vertices`).
     pub fn new(triangles: &[[Vec3; 3]]) -> Self {
         BruteForce { blocks: TriangleBlock::pack(triangles.iter().copied()) }
     }

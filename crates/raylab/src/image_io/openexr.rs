@@ -5,7 +5,7 @@
 //! (the layer convention of Nuke and Blender), or `NAME.Z` alone for a layer named `depth`. A
 //! file may hold one region of a larger image: its data window is the region, its display
 //! window the whole image (the OpenEXR way of saying where a crop belongs). The render-farm
-//! parts (`crate::parts`) are such files with attributes of their own in the header.
+//! parts (the `parts` module) are such files with attributes of their own in the header.
 
 use std::path::Path;
 

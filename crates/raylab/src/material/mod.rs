@@ -71,7 +71,7 @@ pub struct MaterialTextures {
     /// cutoff, the surface is not there and rays pass through.
     pub alpha_mask: Option<AlphaMask>,
     /// Multiplies the emitted radiance (glTF's `emissiveTexture`): an emitter that shines in a
-    /// pattern. Light sampling reads it at the sampled point (see [`crate::light`]).
+    /// pattern. Light sampling reads it at the sampled point (the `light` module).
     pub emission: Option<Texture>,
 }
 

@@ -7,7 +7,7 @@
 //! | attribute | type | meaning |
 //! |---|---|---|
 //! | `raylab.kind` | text | `image` (a part or a whole picture) or `checkpoint` |
-//! | `raylab.sceneHash` | text | [`Scene::content_hash`](crate::scene::Scene::content_hash), 16 hex digits |
+//! | `raylab.sceneHash` | text | `Scene::content_hash`, 16 hex digits |
 //! | `raylab.settings` | text | everything else that decides the pixels: `key=value` entries (size, camera, integrator, seed, sampler, filter, ...) separated by `; ` |
 //! | `raylab.samples` | int | samples per pixel reached |
 //! | `raylab.command` | bytes | checkpoints only: the command line to resume, as JSON |
@@ -68,7 +68,7 @@ pub struct PartHeader {
     pub region: Region,
     /// Samples per pixel reached.
     pub samples: u32,
-    /// The scene's [`content_hash`](crate::scene::Scene::content_hash) as 16 hex digits.
+    /// The scene's content hash (`Scene::content_hash`) as 16 hex digits.
     pub scene_hash: String,
     /// The render settings that decide the pixels, as text (ASCII).
     pub settings: String,
@@ -478,7 +478,7 @@ pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<Channel>), PartError> 
 }
 
 /// The entries of a part's settings as `key=value` texts, to name the ones that differ: the
-/// top-level fields of a JSON object (a render identity, see `crate::session`), or `key=value`
+/// top-level fields of a JSON object (a render identity, from the `session` module), or `key=value`
 /// entries separated by "; " in any other text.
 fn setting_entries(settings: &str) -> Vec<String> {
     match serde_json::from_str::<serde_json::Value>(settings) {

@@ -284,7 +284,7 @@ impl Scene {
     }
 
     /// Whether some material has cut-out holes (an alpha mask): rays must then be traced past
-    /// them ([`crate::integrator::closest_opaque_hit`]).
+    /// them (`integrator::closest_opaque_hit`).
     #[inline]
     pub fn has_cut_outs(&self) -> bool {
         self.materials.iter().any(|m| m.textures.alpha_mask.is_some())

@@ -14,7 +14,7 @@
 //! of Detail Strategies for Real-Time Ray Tracing"): a camera ray's pixel spreads by the angle
 //! one pixel subtends, so at distance `d` it is `d · angle` wide, `1/|cos θ|` longer on a slanted
 //! surface, and `sqrt(uv area / world area)` of the triangle turns that into texture units
-//! ([`crate::geometry::Geometry::uv_per_length`]). The path tracer averages many samples per
+//! (`Geometry::uv_per_length`). The path tracer averages many samples per
 //! pixel, which filters the texture by itself: it reads level 0 bilinearly (footprint 0), as
 //! Mitsuba 3 does, so that the two converge to the same image.
 
