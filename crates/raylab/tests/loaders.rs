@@ -533,7 +533,7 @@ fn file_level_errors_name_the_path() {
     let folder = tempfile::tempdir().unwrap();
     let missing = folder.path().join("missing.obj");
     let error = load_mesh(&missing).unwrap_err();
-    assert!(matches!(error, LoadError::Read { .. }));
+    assert!(matches!(error, LoadError::File(raylab::file_bytes::ReadError::Read { .. })));
     assert_eq!(
         error.to_string(),
         format!("{}: cannot read: No such file or directory (os error 2)", missing.display())

@@ -104,16 +104,7 @@ fn module_edges(files: &[(PathBuf, String)]) -> BTreeSet<Edge> {
         files.iter().filter_map(|(path, _)| module_path_of(path).first().cloned()).collect();
     let reexports = root_reexports(&tokens(&lib), &top_modules);
 
-    // Files declared by `#[cfg(test)] mod name;` are test code.
-    let mut test_files = BTreeSet::new();
-    for (path, text) in files {
-        let module = module_path_of(path);
-        for name in test_module_declarations(&tokens(&strip_comments_and_literals(text))) {
-            let mut child = module.clone();
-            child.push(name);
-            test_files.insert(child);
-        }
-    }
+    let test_files = test_files(files);
 
     let mut edges = BTreeSet::new();
     for (path, text) in files {
@@ -141,6 +132,20 @@ fn module_edges(files: &[(PathBuf, String)]) -> BTreeSet<Edge> {
         }
     }
     edges
+}
+
+/// The modules declared by `#[cfg(test)] mod name;`: test code in files of their own.
+fn test_files(files: &[(PathBuf, String)]) -> BTreeSet<Vec<String>> {
+    let mut test_files = BTreeSet::new();
+    for (path, text) in files {
+        let module = module_path_of(path);
+        for name in test_module_declarations(&tokens(&strip_comments_and_literals(text))) {
+            let mut child = module.clone();
+            child.push(name);
+            test_files.insert(child);
+        }
+    }
+    test_files
 }
 
 /// The source text with comments, string and character literals blanked out (newlines kept,
@@ -500,15 +505,7 @@ fn submodule_edges(files: &[(PathBuf, String)], parent: &[&str]) -> BTreeSet<Edg
         .map(|(_, text)| tokens(&strip_comments_and_literals(text)))
         .unwrap_or_default();
     let reexports = submodule_reexports(&parent_tokens, &children);
-    let mut test_files = BTreeSet::new();
-    for (path, text) in files {
-        let module = module_path_of(path);
-        for name in test_module_declarations(&tokens(&strip_comments_and_literals(text))) {
-            let mut child = module.clone();
-            child.push(name);
-            test_files.insert(child);
-        }
-    }
+    let test_files = test_files(files);
     let mut edges = BTreeSet::new();
     for (path, text) in files {
         let module = module_path_of(path);

@@ -24,7 +24,6 @@
 //! system does not say. Half, because the parsed mesh needs room too.
 
 use std::fmt;
-use std::io;
 use std::path::{Path, PathBuf};
 
 use super::{obj, ply};
@@ -115,19 +114,14 @@ impl fmt::Display for Location {
 
 /// Why a mesh file cannot be loaded. Every message is one line and starts with the file's path.
 ///
-/// Variants that wrap an [`io::Error`] include its text in their message and do not report it
+/// Variants that wrap an [`std::io::Error`] include its text in their message and do not report it
 /// again as [`std::error::Error::source`], so that printing the chain (`{:#}` with `anyhow`)
 /// says it once.
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
-    /// The file does not exist or cannot be read.
-    #[error("{}: cannot read: {error}", .path.display())]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// What the operating system said.
-        error: io::Error,
-    },
+    /// The file cannot be read, is not valid gzip, or is larger than [`read_limit_bytes`].
+    #[error(transparent)]
+    File(#[from] ReadError),
     /// The path names a folder.
     #[error("{}: is a folder, not a mesh file", .path.display())]
     Folder {
@@ -143,28 +137,6 @@ pub enum LoadError {
     UnsupportedExtension {
         /// The file.
         path: PathBuf,
-    },
-    /// The file is named `.gz` but is not a valid gzip stream (or it is cut short).
-    #[error("{}: not a valid gzip file: {error}", .path.display())]
-    Gzip {
-        /// The file.
-        path: PathBuf,
-        /// What the decompressor said.
-        error: io::Error,
-    },
-    /// The file, or its decompressed content, is larger than [`read_limit_bytes`].
-    #[error(
-        "{}: larger than {limit_bytes} bytes{}, more than this machine can load safely",
-        .path.display(),
-        if *.decompressed { " once decompressed" } else { "" }
-    )]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// The limit that was exceeded.
-        limit_bytes: u64,
-        /// Whether the limit was reached while decompressing.
-        decompressed: bool,
     },
     /// The content is malformed at a known place.
     #[error("{}: {location}: {message}", .path.display())]
@@ -223,8 +195,8 @@ fn format_of(path: &Path) -> Option<(Format, bool)> {
 ///
 /// A file that parses but has no triangles is an error ([`LoadError::NoTriangles`]).
 pub fn load_mesh(path: &Path) -> Result<LoadedMesh, LoadError> {
-    let metadata =
-        std::fs::metadata(path).map_err(|error| LoadError::Read { path: path.into(), error })?;
+    let metadata = std::fs::metadata(path)
+        .map_err(|error| LoadError::File(ReadError::Read { path: path.into(), error }))?;
     if metadata.is_dir() {
         return Err(LoadError::Folder { path: path.into() });
     }
@@ -252,18 +224,6 @@ pub(crate) fn read_file_bytes(path: &Path, gzip: bool) -> Result<Vec<u8>, LoadEr
 /// Reads the whole file, decompressing it if `gzip`, refusing more than `limit` bytes.
 pub(crate) fn read_bytes(path: &Path, gzip: bool, limit: u64) -> Result<Vec<u8>, LoadError> {
     Ok(crate::file_bytes::read_bytes(path, gzip, limit)?)
-}
-
-impl From<ReadError> for LoadError {
-    fn from(error: ReadError) -> LoadError {
-        match error {
-            ReadError::Read { path, error } => LoadError::Read { path, error },
-            ReadError::Gzip { path, error } => LoadError::Gzip { path, error },
-            ReadError::TooLarge { path, limit_bytes, decompressed } => {
-                LoadError::TooLarge { path, limit_bytes, decompressed }
-            }
-        }
-    }
 }
 
 /// `text` quoted for an error message: escaped so that it stays on one line, and cut after
@@ -330,13 +290,19 @@ mod tests {
         let path = folder.path().join("bomb.obj.gz");
         std::fs::write(&path, gzip(&vec![b'#'; 1 << 20])).unwrap();
         let error = read_bytes(&path, true, 1000).unwrap_err();
-        assert!(matches!(error, LoadError::TooLarge { limit_bytes: 1000, decompressed: true, .. }));
+        assert!(matches!(
+            error,
+            LoadError::File(ReadError::TooLarge { limit_bytes: 1000, decompressed: true, .. })
+        ));
         assert!(error.to_string().contains("larger than 1000 bytes once decompressed"), "{error}");
         assert_eq!(read_bytes(&path, true, 1 << 20).unwrap().len(), 1 << 20);
         let plain = folder.path().join("big.obj");
         std::fs::write(&plain, [b'#'; 1001]).unwrap();
         let error = read_bytes(&plain, false, 1000).unwrap_err();
-        assert!(matches!(error, LoadError::TooLarge { decompressed: false, .. }), "{error}");
+        assert!(
+            matches!(error, LoadError::File(ReadError::TooLarge { decompressed: false, .. })),
+            "{error}"
+        );
     }
 
     #[test]
@@ -359,7 +325,7 @@ mod tests {
             let path = folder.path().join(name);
             std::fs::write(&path, bytes).unwrap();
             let error = read_bytes(&path, true, 1 << 20).unwrap_err();
-            assert!(matches!(error, LoadError::Gzip { .. }), "{name}: {error}");
+            assert!(matches!(error, LoadError::File(ReadError::Gzip { .. })), "{name}: {error}");
             let message = error.to_string();
             assert!(message.contains(name) && !message.contains('\n'), "{message}");
         }

@@ -85,49 +85,32 @@ mod x86 {
     use crate::bvh::isa::{Avx2, Avx512, Sse};
     use crate::bvh::packet::lanes::packet_leaf_lanes;
 
-    impl PacketKernel for Sse {
-        #[inline(always)]
-        unsafe fn packet_leaf(
-            rays: &mut PacketRays,
-            open: &mut u64,
-            occlusion: bool,
-            bvh: &WideBvh,
-            bounds: &Bounds,
-            offset: u32,
-        ) {
-            // SAFETY: the caller's guarantee.
-            unsafe { packet_leaf_lanes::<__m128, 4>(rays, open, occlusion, bvh, bounds, offset) }
-        }
+    /// The packet leaf `$lanes` rays per register `$register`: SSE2's four, AVX2's eight and
+    /// AVX-512's sixteen.
+    macro_rules! packet_kernel {
+        ($isa:ty, $register:ty, $lanes:literal) => {
+            impl PacketKernel for $isa {
+                #[inline(always)]
+                unsafe fn packet_leaf(
+                    rays: &mut PacketRays,
+                    open: &mut u64,
+                    occlusion: bool,
+                    bvh: &WideBvh,
+                    bounds: &Bounds,
+                    offset: u32,
+                ) {
+                    // SAFETY: the caller's guarantee of the instruction set; the register
+                    // holds `$lanes` floats.
+                    unsafe {
+                        packet_leaf_lanes::<$register, $lanes>(
+                            rays, open, occlusion, bvh, bounds, offset,
+                        )
+                    }
+                }
+            }
+        };
     }
-
-    impl PacketKernel for Avx2 {
-        #[inline(always)]
-        unsafe fn packet_leaf(
-            rays: &mut PacketRays,
-            open: &mut u64,
-            occlusion: bool,
-            bvh: &WideBvh,
-            bounds: &Bounds,
-            offset: u32,
-        ) {
-            // SAFETY: the caller's guarantee.
-            unsafe { packet_leaf_lanes::<__m256, 8>(rays, open, occlusion, bvh, bounds, offset) }
-        }
-    }
-
-    /// 16 rays per instruction.
-    impl PacketKernel for Avx512 {
-        #[inline(always)]
-        unsafe fn packet_leaf(
-            rays: &mut PacketRays,
-            open: &mut u64,
-            occlusion: bool,
-            bvh: &WideBvh,
-            bounds: &Bounds,
-            offset: u32,
-        ) {
-            // SAFETY: the caller checked AVX-512 F support (this function's contract).
-            unsafe { packet_leaf_lanes::<__m512, 16>(rays, open, occlusion, bvh, bounds, offset) }
-        }
-    }
+    packet_kernel!(Sse, __m128, 4);
+    packet_kernel!(Avx2, __m256, 8);
+    packet_kernel!(Avx512, __m512, 16);
 }

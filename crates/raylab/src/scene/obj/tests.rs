@@ -11,10 +11,10 @@ fn parse_with(obj: &str, libraries: &[(&str, &str)]) -> Result<LoadedMesh, LoadE
     let libraries: HashMap<&str, &str> = libraries.iter().copied().collect();
     let read = |name: &str| match libraries.get(name) {
         Some(text) => Ok((PathBuf::from(name), text.as_bytes().to_vec())),
-        None => Err(LoadError::Read {
+        None => Err(LoadError::File(crate::file_bytes::ReadError::Read {
             path: name.into(),
             error: io::Error::new(io::ErrorKind::NotFound, "not found"),
-        }),
+        })),
     };
     parse_obj_with(Path::new("test.obj"), obj.as_bytes(), &read)
 }
