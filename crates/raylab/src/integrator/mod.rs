@@ -12,6 +12,7 @@ mod aov;
 mod lab;
 mod light_sampler;
 mod path;
+mod wavefront;
 
 use glam::Vec3;
 
@@ -19,6 +20,7 @@ pub use aov::{Aov, AovKind, WithAovs};
 pub use lab::{Lab, Stage};
 pub use light_sampler::{LightSample, LightSet, TriangleSampling};
 pub use path::{Path, PathSettings};
+pub use wavefront::{PathWavefront, StageTimes};
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;

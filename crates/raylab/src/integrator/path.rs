@@ -23,9 +23,10 @@ use glam::{Vec2, Vec3};
 
 use super::Integrator;
 use super::light_sampler::{LightSet, TriangleSampling};
-use crate::accel::Accelerator;
+use crate::accel::{Accelerator, Hit};
 use crate::interaction::SurfaceInteraction;
-use crate::ray::Ray;
+use crate::material::Bsdf;
+use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
 use crate::scene::Scene;
 
@@ -126,107 +127,148 @@ impl Frame {
     }
 }
 
+/// One path's state between its vertices.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PathState {
+    /// The ray to trace next.
+    pub ray: Ray,
+    /// The light gathered so far.
+    pub radiance: Vec3,
+    pub throughput: Vec3,
+    /// The product of the relative indices of refraction crossed (for the roulette).
+    pub eta: f32,
+    /// Segments traced so far.
+    pub depth: u32,
+    /// The previous vertex's BSDF sample: for the MIS weight of emitters found by it.
+    previous_pdf: f32,
+    previous_delta: bool,
+    /// The previous vertex: where light sampling would have sampled from.
+    previous_point: Vec3,
+}
+
+impl PathState {
+    /// A path starting with a camera ray.
+    pub fn new(camera_ray: &Ray) -> PathState {
+        PathState {
+            ray: *camera_ray,
+            radiance: Vec3::ZERO,
+            throughput: Vec3::ONE,
+            eta: 1.0,
+            depth: 0,
+            previous_pdf: 1.0,
+            previous_delta: true,
+            previous_point: camera_ray.origin,
+        }
+    }
+}
+
+/// A path's vertex, ready to scatter: its BSDF, in the shading frame.
+pub(super) struct Vertex<'s> {
+    point: SurfacePoint,
+    frame: Frame,
+    /// Whether the directions are mirrored into the front of a two-sided material.
+    flip: bool,
+    /// The direction toward the viewer, local.
+    wi: Vec3,
+    bsdf: Cow<'s, Bsdf>,
+}
+
+impl Vertex<'_> {
+    /// A world direction in the BSDF's local frame (mirrored for a two-sided back side).
+    #[inline]
+    fn to_local(&self, w: Vec3) -> Vec3 {
+        let mut local = self.frame.to_local(w);
+        if self.flip {
+            local.z = -local.z;
+        }
+        local
+    }
+}
+
 impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
     fn radiance(&self, camera_ray: &Ray, sampler: &mut Sampler) -> Vec3 {
         let max_depth = self.settings.max_depth.unwrap_or(u32::MAX);
         if max_depth == 0 {
             return Vec3::ZERO;
         }
-        let mut ray = *camera_ray;
-        let mut radiance = Vec3::ZERO;
-        let mut throughput = Vec3::ONE;
-        let mut eta = 1.0f32;
-        let mut depth = 0u32;
-        // The previous vertex's BSDF sample: for the MIS weight of emitters found by it.
-        let mut previous_pdf = 1.0f32;
-        let mut previous_delta = true;
-        // The previous vertex: where light sampling would have sampled from.
-        let mut previous_point = camera_ray.origin;
+        let mut state = PathState::new(camera_ray);
         loop {
-            // Light found by the camera or by BSDF sampling: weighted against light sampling,
-            // which could have found it too unless the camera or a delta lobe chose the ray.
-            let found = |depth: u32, previous_delta: bool, previous_pdf: f32, light_pdf: f32| {
-                if depth == 0 || previous_delta {
-                    1.0
-                } else {
-                    power_heuristic(previous_pdf, light_pdf)
-                }
-            };
-            let Some(hit) = super::closest_opaque_hit(self.scene, self.accel, &ray) else {
-                let (environment, light_pdf) = self.lights.environment(ray.direction.normalize());
-                if environment != Vec3::ZERO {
-                    let weight = found(depth, previous_delta, previous_pdf, light_pdf);
-                    radiance += throughput * environment * weight;
-                }
-                break;
-            };
-            let interaction = self.scene.interaction(&ray, &hit);
-            let (emitted, light_pdf) = self.lights.emitted(previous_point, &interaction);
-            if emitted != Vec3::ZERO {
-                let weight = found(depth, previous_delta, previous_pdf, light_pdf);
-                radiance += throughput * emitted * weight;
-            }
-            if depth + 1 >= max_depth {
+            let hit = super::closest_opaque_hit(self.scene, self.accel, &state.ray);
+            let Some(interaction) = self.arrive(&mut state, hit.as_ref()) else { break };
+            if state.depth + 1 >= max_depth {
                 break;
             }
-            let Some(scattered) =
-                self.scatter(&ray, &interaction, sampler, throughput, &mut radiance)
-            else {
-                break;
-            };
-            throughput *= scattered.weight;
-            eta *= scattered.eta;
-            previous_pdf = scattered.pdf;
-            previous_delta = scattered.delta;
-            previous_point = interaction.point.p;
-            ray = scattered.ray;
-            depth += 1;
-            // Russian roulette, as Mitsuba's: q = min(max(throughput)·η², 0.95).
-            let throughput_max = throughput.max_element();
-            if throughput_max <= 0.0 || !throughput_max.is_finite() {
-                break;
+            let vertex = self.vertex(&state.ray, &interaction);
+            if let Some((shadow_ray, contribution)) =
+                self.sample_light(&vertex, sampler, state.throughput)
+                && !super::occluded_opaque(self.scene, self.accel, &shadow_ray)
+            {
+                state.radiance += contribution;
             }
-            let u = sampler.next_1d();
-            if depth >= self.settings.rr_depth {
-                let q = (throughput_max * eta * eta).min(0.95);
-                if u >= q {
-                    break;
-                }
-                throughput /= q;
+            if !self.scatter(&mut state, &vertex, sampler) {
+                break;
             }
         }
-        // A sample that is not a finite, non-negative colour (a degenerate triangle's NaN, an
-        // overflow) would spoil its pixel for good: it counts as black instead, and is counted.
-        if radiance.is_finite() && radiance.min_element() >= 0.0 {
-            radiance
-        } else {
-            self.discarded.fetch_add(1, Ordering::Relaxed);
-            Vec3::ZERO
-        }
+        self.finish(state.radiance)
     }
 }
 
-/// Where a path goes after a vertex.
-struct Scattered {
-    ray: Ray,
-    weight: Vec3,
-    pdf: f32,
-    delta: bool,
-    eta: f32,
-}
+/// The steps of a path, shared by [`Path::radiance`] and the wavefront
+/// ([`PathWavefront`](super::PathWavefront)), which runs them stage by stage over many paths:
+/// the same code, so the same bits.
+impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
+    /// The scene.
+    pub(super) fn scene(&self) -> &'a Scene {
+        self.scene
+    }
 
-impl<A: Accelerator + ?Sized> Path<'_, A> {
-    /// At a vertex: adds the light sampled there (weighted by MIS) to `radiance`, then samples
-    /// the BSDF for the next segment.
+    /// The accelerator.
+    pub(super) fn accel(&self) -> &'a A {
+        self.accel
+    }
+
+    /// The settings.
+    pub(super) fn settings(&self) -> PathSettings {
+        self.settings
+    }
+
+    /// The path's ray has found `hit` (or nothing): adds the light it finds there, weighted
+    /// against light sampling (which could have found it too, unless the camera or a delta lobe
+    /// chose the ray), and returns the surface it reached, or `None` where it left the scene.
     #[inline]
-    fn scatter(
+    pub(super) fn arrive(
         &self,
-        ray: &Ray,
-        interaction: &SurfaceInteraction,
-        sampler: &mut Sampler,
-        throughput: Vec3,
-        radiance: &mut Vec3,
-    ) -> Option<Scattered> {
+        state: &mut PathState,
+        hit: Option<&Hit>,
+    ) -> Option<SurfaceInteraction> {
+        let found = |light_pdf: f32| {
+            if state.depth == 0 || state.previous_delta {
+                1.0
+            } else {
+                power_heuristic(state.previous_pdf, light_pdf)
+            }
+        };
+        let Some(hit) = hit else {
+            let (environment, light_pdf) = self.lights.environment(state.ray.direction.normalize());
+            if environment != Vec3::ZERO {
+                let weight = found(light_pdf);
+                state.radiance += state.throughput * environment * weight;
+            }
+            return None;
+        };
+        let interaction = self.scene.interaction(&state.ray, hit);
+        let (emitted, light_pdf) = self.lights.emitted(state.previous_point, &interaction);
+        if emitted != Vec3::ZERO {
+            let weight = found(light_pdf);
+            state.radiance += state.throughput * emitted * weight;
+        }
+        Some(interaction)
+    }
+
+    /// The vertex at `interaction`, reached along `ray`: its material's BSDF in its shading
+    /// frame.
+    #[inline]
+    pub(super) fn vertex(&self, ray: &Ray, interaction: &SurfaceInteraction) -> Vertex<'a> {
         let material = self.scene.material(interaction);
         // Only anisotropic BSDFs care which way the tangent points: they get Mitsuba's (dp/du);
         // the rest the cheaper basis of the normal alone (the same distribution of directions).
@@ -242,46 +284,90 @@ impl<A: Accelerator + ?Sized> Path<'_, A> {
         if flip {
             wi.z = -wi.z;
         }
-        let to_local = |w: Vec3| {
-            let mut local = frame.to_local(w);
-            if flip {
-                local.z = -local.z;
-            }
-            local
-        };
-        let bsdf = &*material.bsdf_at(&interaction.texture_query());
+        let bsdf = material.bsdf_at(&interaction.texture_query());
+        Vertex { point: interaction.point, frame, flip, wi, bsdf }
+    }
 
-        // Next-event estimation.
+    /// Next-event estimation at `vertex`: draws a light sample, and returns the shadow ray and
+    /// the light (weighted by MIS, times `throughput`) that arrives if nothing blocks the ray.
+    #[inline]
+    pub(super) fn sample_light(
+        &self,
+        vertex: &Vertex,
+        sampler: &mut Sampler,
+        throughput: Vec3,
+    ) -> Option<(Ray, Vec3)> {
         let u_light = sampler.next_1d();
         let u_point = sampler.next_2d();
-        if bsdf.is_smooth()
-            && let Some(light) = self.lights.sample(&interaction.point, u_light, u_point)
-        {
-            let wo = to_local(light.direction);
-            let f = bsdf.eval(wi, wo);
-            if f != Vec3::ZERO && !super::occluded_opaque(self.scene, self.accel, &light.shadow_ray)
-            {
-                let weight =
-                    if light.delta { 1.0 } else { power_heuristic(light.pdf, bsdf.pdf(wi, wo)) };
-                *radiance += throughput * f * light.radiance * (weight / light.pdf);
-            }
+        if !vertex.bsdf.is_smooth() {
+            return None;
         }
+        let light = self.lights.sample(&vertex.point, u_light, u_point)?;
+        let wo = vertex.to_local(light.direction);
+        let f = vertex.bsdf.eval(vertex.wi, wo);
+        if f == Vec3::ZERO {
+            return None;
+        }
+        let weight = if light.delta {
+            1.0
+        } else {
+            power_heuristic(light.pdf, vertex.bsdf.pdf(vertex.wi, wo))
+        };
+        Some((light.shadow_ray, throughput * f * light.radiance * (weight / light.pdf)))
+    }
 
-        // BSDF sampling.
+    /// Samples the BSDF at `vertex` for the path's next segment, then plays Russian roulette:
+    /// whether the path goes on.
+    #[inline]
+    pub(super) fn scatter(
+        &self,
+        state: &mut PathState,
+        vertex: &Vertex,
+        sampler: &mut Sampler,
+    ) -> bool {
         let u_lobe = sampler.next_1d();
         let u_direction: Vec2 = sampler.next_2d();
-        let sample = bsdf.sample(wi, u_lobe, u_direction)?;
+        let Some(sample) = vertex.bsdf.sample(vertex.wi, u_lobe, u_direction) else {
+            return false;
+        };
         let mut wo = sample.wo;
-        if flip {
+        if vertex.flip {
             wo.z = -wo.z;
         }
-        let direction = frame.to_world(wo);
-        Some(Scattered {
-            ray: interaction.point.spawn_ray(direction),
-            weight: sample.weight,
-            pdf: sample.pdf,
-            delta: sample.delta,
-            eta: sample.eta,
-        })
+        let direction = vertex.frame.to_world(wo);
+        state.throughput *= sample.weight;
+        state.eta *= sample.eta;
+        state.previous_pdf = sample.pdf;
+        state.previous_delta = sample.delta;
+        state.previous_point = vertex.point.p;
+        state.ray = vertex.point.spawn_ray(direction);
+        state.depth += 1;
+        // Russian roulette, as Mitsuba's: q = min(max(throughput)·η², 0.95).
+        let throughput_max = state.throughput.max_element();
+        if throughput_max <= 0.0 || !throughput_max.is_finite() {
+            return false;
+        }
+        let u = sampler.next_1d();
+        if state.depth >= self.settings.rr_depth {
+            let q = (throughput_max * state.eta * state.eta).min(0.95);
+            if u >= q {
+                return false;
+            }
+            state.throughput /= q;
+        }
+        true
+    }
+
+    /// A finished path's sample: a sample that is not a finite, non-negative colour (a
+    /// degenerate triangle's NaN, an overflow) would spoil its pixel for good, so it counts as
+    /// black instead, and is counted.
+    #[inline]
+    pub(super) fn finish(&self, radiance: Vec3) -> Vec3 {
+        if radiance.is_finite() && radiance.min_element() >= 0.0 {
+            radiance
+        } else {
+            self.discarded.fetch_add(1, Ordering::Relaxed);
+            Vec3::ZERO
+        }
     }
 }

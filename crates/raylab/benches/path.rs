@@ -1,0 +1,144 @@
+//! The path tracer, scalar (`Path`, one path at a time) against the wavefront
+//! (`PathWavefront`, a tile's paths stage by stage with batched queries): one pass of 128×96
+//! samples of the scene files' Mitsuba scenes, one thread, the scenes' own depth limits.
+//!
+//! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
+//! stage (`PathWavefront::with_stage_times`, 16 passes, one thread).
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use std::time::{Duration, Instant};
+
+use raylab::integrator::{Integrator, Path, PathWavefront};
+use raylab::sampling::Sampler;
+use raylab::scene::LoadOptions;
+use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
+use raylab::{Accumulator, Camera, SamplerKind, Scene, SceneBvh};
+
+/// A scene file of `scenes/` with its BVH, settings and a 128×96 camera.
+fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let file = root.join(format!("{name}.toml"));
+    let opened =
+        Scene::open(&file.display().to_string(), &LoadOptions::default()).expect("the scene file");
+    let scene = opened.scene;
+    let accel = SceneBvh::build(&scene.geometry).expect("a BVH");
+    let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
+    let cameras = CameraOptions { size: Some((128, 96)), ..CameraOptions::default() };
+    let camera = cameras.camera(scene.camera, &scene, false, &accel).expect("a camera");
+    (scene, accel, settings, camera)
+}
+
+/// One pass of `integrator` over the camera's pixels, on the current thread pool.
+fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrator) -> Accumulator {
+    let mut accumulator = Accumulator::new(camera.width, camera.height).expect("an accumulator");
+    accumulator.settings = settings.samples;
+    accumulator.add_sample(camera, integrator);
+    accumulator
+}
+
+/// Prints nanoseconds per sample by stage: the wavefront's stages as it measures them, the
+/// sampler's share estimated from the draws the path makes per vertex (3 one-dimensional and 2
+/// two-dimensional), and the rest of the pass (camera rays, filter, accumulation) as the pass's
+/// time less the integrator's.
+fn stage_table(_: &mut Criterion) {
+    const PASSES: u32 = 16;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
+    println!("ns per sample by stage, 128x96, {PASSES} passes, one thread");
+    println!(
+        "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "scene",
+        "scalar",
+        "wavefr.",
+        "camera+",
+        "hits",
+        "surface",
+        "lights",
+        "occl.",
+        "scatter",
+        "sampler*"
+    );
+    for name in ["cornell-mitsuba", "showcase"] {
+        let (scene, accel, settings, camera) = load(name);
+        let scalar = Path::new(&scene, &accel, settings.path_settings());
+        let wavefront =
+            PathWavefront::new(&scene, &accel, settings.path_settings()).with_stage_times();
+        let time = |integrator: &dyn Integrator| {
+            pool.install(|| {
+                let start = Instant::now();
+                for _ in 0..PASSES {
+                    pass(&camera, &settings, integrator);
+                }
+                start.elapsed()
+            })
+        };
+        pool.install(|| {
+            // Warm-ups.
+            pass(&camera, &settings, &scalar);
+            pass(&camera, &settings, &wavefront);
+        });
+        let scalar_time = time(&scalar);
+        let before = wavefront.stage_times().expect("measured");
+        let wavefront_time = time(&wavefront);
+        let after = wavefront.stage_times().expect("measured");
+        let samples = f64::from(PASSES) * f64::from(camera.width * camera.height);
+        let ns = |d: Duration| d.as_secs_f64() * 1e9 / samples;
+        let stages = [
+            after.closest_hits - before.closest_hits,
+            after.surfaces - before.surfaces,
+            after.light_sampling - before.light_sampling,
+            after.occlusion - before.occlusion,
+            after.scattering - before.scattering,
+        ];
+        let in_stages: Duration = stages.iter().sum();
+        // The sampler: the same draws as the path's vertices, timed alone.
+        let vertices = after.vertices - before.vertices;
+        let draws = Instant::now();
+        let mut sink = 0.0f32;
+        let mut sampler = Sampler::new(SamplerKind::Sobol, 0, (0, 0), 0);
+        for v in 0..vertices {
+            if v % 4 == 0 {
+                sampler = Sampler::new(SamplerKind::Sobol, 0, (v as u32 % 128, 0), v as u32);
+            }
+            sink += sampler.next_1d() + sampler.next_2d().x + sampler.next_1d();
+            sink += sampler.next_2d().y + sampler.next_1d();
+        }
+        let sampler_time = draws.elapsed();
+        std::hint::black_box(sink);
+        println!(
+            "{:16} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0}",
+            name,
+            ns(scalar_time),
+            ns(wavefront_time),
+            ns(wavefront_time.saturating_sub(in_stages)),
+            ns(stages[0]),
+            ns(stages[1]),
+            ns(stages[2]),
+            ns(stages[3]),
+            ns(stages[4]),
+            ns(sampler_time),
+        );
+    }
+    println!("* the sampler's draws are inside the light and scatter stages, timed here alone");
+}
+
+fn path(c: &mut Criterion) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
+    let mut group = c.benchmark_group("path_128x96_1spp_1_thread");
+    group.sample_size(20);
+    for name in ["cornell-mitsuba", "showcase"] {
+        let (scene, accel, settings, camera) = load(name);
+        let scalar = Path::new(&scene, &accel, settings.path_settings());
+        let wavefront = PathWavefront::new(&scene, &accel, settings.path_settings());
+        let integrators: [(&str, &dyn Integrator); 2] =
+            [("scalar", &scalar), ("wavefront", &wavefront)];
+        for (kind, integrator) in integrators {
+            group.bench_with_input(BenchmarkId::new(kind, name), &name, |b, _| {
+                b.iter(|| pool.install(|| pass(&camera, &settings, integrator)))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, stage_table, path);
+criterion_main!(benches);

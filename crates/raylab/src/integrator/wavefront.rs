@@ -1,0 +1,243 @@
+//! `path` as a wavefront: the paths of a tile advanced together, stage by stage, with their rays
+//! traced as batches.
+//!
+//! The estimator, the random numbers and the arithmetic are those of [`Path`]: each stage is
+//! the scalar path's own code ([`Path`]'s vertex, light-sampling and BSDF-sampling steps) run
+//! over the lanes that are still alive, and each lane draws from its own [`Sampler`] in the
+//! scalar order (light, then BSDF, then roulette), so every sample is the scalar path's to the
+//! bit (`tests/wavefront.rs`). What changes is the order of the work:
+//!
+//! 1. **closest hits** of every live path's ray, as one batch ([`Accelerator::closest_hits`]:
+//!    packets where the rays are coherent, camera rays above all);
+//! 2. **emission and misses**: light found by the camera or by BSDF sampling, weighted by MIS;
+//!    paths that leave the scene or reach `max_depth` end;
+//! 3. **light sampling** at every live vertex: a shadow ray and the contribution it carries;
+//! 4. **occlusion** of all the shadow rays, as one batch ([`Accelerator::occluded_each`]);
+//! 5. **BSDF sampling and Russian roulette**: the next ray, or the end of the path.
+//!
+//! Scenes with cut-out (alpha-masked) materials trace each ray through its holes one at a time,
+//! as the scalar path does.
+//!
+//! This is the structure that the SIMD stages (issue 27) fill in: a stage that runs over lanes
+//! can run sixteen of them per instruction. For now every stage is the scalar code, lane by
+//! lane; it is the twin the vector stages will be tested against.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+
+use super::Integrator;
+use super::path::{Path, PathSettings, PathState, Vertex};
+use crate::accel::{Accelerator, Hit};
+use crate::ray::Ray;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+/// [`Path`] run as a wavefront (see the module documentation): the same samples, the work
+/// ordered by stage.
+pub struct PathWavefront<'a, A: ?Sized> {
+    path: Path<'a, A>,
+    /// Time per stage, when measured ([`with_stage_times`](Self::with_stage_times)).
+    times: Option<StageClock>,
+}
+
+impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
+    /// A wavefront path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
+    pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
+        PathWavefront { path: Path::new(scene, accel, settings), times: None }
+    }
+
+    /// The same, measuring the time each stage takes (summed over threads): for the stage
+    /// table of the benchmarks. Costs a clock reading per stage and tile.
+    pub fn with_stage_times(mut self) -> Self {
+        self.times = Some(StageClock::default());
+        self
+    }
+
+    /// The time each stage took so far, if measured.
+    pub fn stage_times(&self) -> Option<StageTimes> {
+        self.times.as_ref().map(StageClock::read)
+    }
+
+    /// The scalar path tracer it runs the stages of.
+    pub fn path(&self) -> &Path<'a, A> {
+        &self.path
+    }
+}
+
+impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
+    fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
+        self.path.radiance(ray, sampler)
+    }
+
+    fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
+        assert_eq!(rays.len(), out.len(), "one colour per ray");
+        assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
+        let path = &self.path;
+        let max_depth = path.settings().max_depth.unwrap_or(u32::MAX);
+        if max_depth == 0 {
+            out.fill(Vec3::ZERO);
+            return;
+        }
+        let (scene, accel) = (path.scene(), path.accel());
+        let mut states: Vec<PathState> = rays.iter().map(PathState::new).collect();
+        // The paths still tracing, by index.
+        let mut alive: Vec<usize> = (0..rays.len()).collect();
+        let mut batch: Vec<Ray> = Vec::with_capacity(rays.len());
+        let mut hits: Vec<Option<Hit>> = Vec::with_capacity(rays.len());
+        let mut vertices: Vec<(usize, Vertex)> = Vec::with_capacity(rays.len());
+        let mut shadowed: Vec<(usize, Vec3)> = Vec::with_capacity(rays.len());
+        let mut occluded: Vec<bool> = Vec::with_capacity(rays.len());
+        let mut first = true;
+        let mut lap = Lap::start(self.times.as_ref());
+        while !alive.is_empty() {
+            // 1. Closest hits, as a batch.
+            batch.clear();
+            batch.extend(alive.iter().map(|&i| states[i].ray));
+            hits.clear();
+            hits.resize(batch.len(), None);
+            if scene.has_cut_outs() {
+                for (ray, hit) in batch.iter().zip(&mut hits) {
+                    *hit = super::closest_opaque_hit(scene, accel, ray);
+                }
+            } else if first {
+                // Camera rays are coherent: packets pay (see the module documentation).
+                accel.closest_hits(&batch, &mut hits);
+            } else {
+                for (ray, hit) in batch.iter().zip(&mut hits) {
+                    *hit = accel.closest_hit(ray);
+                }
+            }
+            first = false;
+            lap.end(|t| &t.closest_hits);
+
+            // 2. Light found; paths that leave the scene or reach the depth limit end.
+            vertices.clear();
+            for (&i, hit) in alive.iter().zip(&hits) {
+                let state = &mut states[i];
+                if let Some(interaction) = path.arrive(state, hit.as_ref())
+                    && state.depth + 1 < max_depth
+                {
+                    vertices.push((i, path.vertex(&state.ray, &interaction)));
+                }
+            }
+
+            lap.end(|t| &t.surfaces);
+
+            // 3. Light sampling at every vertex: the shadow rays.
+            batch.clear();
+            shadowed.clear();
+            for (i, vertex) in &vertices {
+                if let Some((shadow_ray, contribution)) =
+                    path.sample_light(vertex, &mut samplers[*i], states[*i].throughput)
+                {
+                    batch.push(shadow_ray);
+                    shadowed.push((*i, contribution));
+                }
+            }
+
+            lap.end(|t| &t.light_sampling);
+
+            // 4. Occlusion, as a batch.
+            occluded.clear();
+            occluded.resize(batch.len(), false);
+            for (ray, blocked) in batch.iter().zip(&mut occluded) {
+                *blocked = super::occluded_opaque(scene, accel, ray);
+            }
+            for (&(i, contribution), &blocked) in shadowed.iter().zip(&occluded) {
+                if !blocked {
+                    states[i].radiance += contribution;
+                }
+            }
+
+            lap.end(|t| &t.occlusion);
+
+            // 5. BSDF sampling and Russian roulette: the paths that go on.
+            alive.clear();
+            for (i, vertex) in &vertices {
+                if path.scatter(&mut states[*i], vertex, &mut samplers[*i]) {
+                    alive.push(*i);
+                }
+            }
+            if let Some(times) = &self.times {
+                times.vertices.fetch_add(vertices.len() as u64, Ordering::Relaxed);
+            }
+            lap.end(|t| &t.scattering);
+        }
+        for (state, colour) in states.iter().zip(out) {
+            *colour = path.finish(state.radiance);
+        }
+        if let Some(times) = &self.times {
+            times.paths.fetch_add(rays.len() as u64, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The time the wavefront's stages took, summed over threads, and how much work they did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StageTimes {
+    /// Closest hits (1).
+    pub closest_hits: Duration,
+    /// Surface interactions, emission found with its MIS weight, and the vertices' materials
+    /// and shading frames (2).
+    pub surfaces: Duration,
+    /// Light sampling: the light's choice, its point, the BSDF's value and MIS (3).
+    pub light_sampling: Duration,
+    /// Occlusion of the shadow rays (4).
+    pub occlusion: Duration,
+    /// BSDF sampling and Russian roulette (5).
+    pub scattering: Duration,
+    /// Paths traced (camera samples).
+    pub paths: u64,
+    /// Vertices scattered from.
+    pub vertices: u64,
+}
+
+/// [`StageTimes`] as the threads add to it: nanoseconds.
+#[derive(Debug, Default)]
+struct StageClock {
+    closest_hits: AtomicU64,
+    surfaces: AtomicU64,
+    light_sampling: AtomicU64,
+    occlusion: AtomicU64,
+    scattering: AtomicU64,
+    paths: AtomicU64,
+    vertices: AtomicU64,
+}
+
+impl StageClock {
+    fn read(&self) -> StageTimes {
+        let time = |t: &AtomicU64| Duration::from_nanos(t.load(Ordering::Relaxed));
+        StageTimes {
+            closest_hits: time(&self.closest_hits),
+            surfaces: time(&self.surfaces),
+            light_sampling: time(&self.light_sampling),
+            occlusion: time(&self.occlusion),
+            scattering: time(&self.scattering),
+            paths: self.paths.load(Ordering::Relaxed),
+            vertices: self.vertices.load(Ordering::Relaxed),
+        }
+    }
+}
+
+/// A stopwatch over the stages, reading the clock only when times are measured.
+struct Lap<'c> {
+    clock: Option<(&'c StageClock, Instant)>,
+}
+
+impl<'c> Lap<'c> {
+    fn start(clock: Option<&'c StageClock>) -> Lap<'c> {
+        Lap { clock: clock.map(|clock| (clock, Instant::now())) }
+    }
+
+    /// Adds the time since the last lap to the stage `slot` picks.
+    #[inline]
+    fn end(&mut self, slot: impl Fn(&StageClock) -> &AtomicU64) {
+        if let Some((clock, last)) = &mut self.clock {
+            let now = Instant::now();
+            slot(clock).fetch_add((now - *last).as_nanos() as u64, Ordering::Relaxed);
+            *last = now;
+        }
+    }
+}

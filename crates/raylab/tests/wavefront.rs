@@ -1,0 +1,127 @@
+//! The wavefront path tracer ([`PathWavefront`]) gives the scalar path tracer's samples, bit for
+//! bit: every scene in `scenes/`, the lab's box, models (OBJ with textures, glTF) and a scene
+//! with alpha-masked holes, at several depth limits. Accumulated sums are compared, so every
+//! pixel's every sample must agree; the wavefront traces tiles of 64 camera rays together
+//! (`radiance_each`), the scalar path one ray at a time.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+use raylab::integrator::{Integrator, Path as PathTracer, PathSettings, PathWavefront};
+use raylab::material::AlphaMask;
+use raylab::mesh::CornerAttribute;
+use raylab::scene::LoadOptions;
+use raylab::session::CameraOptions;
+use raylab::texture::{ImageTexture, Texture, TextureImage};
+use raylab::{Accumulator, Camera, Film, Material, Mesh, Scene, SceneBvh};
+
+const SIZE: (u32, u32) = (32, 24);
+
+fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The scenes: every `scenes/*.toml`, the built-in box, three model files.
+fn scene_names() -> Vec<String> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(repository().join("scenes"))
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 3, "the scenes folder: {files:?}");
+    let meshes = repository().join("crates/raylab/tests/data/meshes");
+    files.extend(
+        ["bunny_lowres.obj", "spider/spider.obj", "BoxTextured/BoxTextured.gltf"]
+            .map(|name| meshes.join(name)),
+    );
+    std::iter::once("cornell".to_string())
+        .chain(files.iter().map(|p| p.display().to_string()))
+        .collect()
+}
+
+/// A white quad cut out in a 2 × 2 checker by its texture's alpha, in front of a red wall, lit
+/// by a point light: rays and shadow rays pass through its holes.
+fn cut_out_scene() -> Scene {
+    let quad = |z: f32, half: f32| Mesh {
+        name: "quad".into(),
+        positions: [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)]
+            .iter()
+            .map(|&(x, y)| Vec3::new(x * half, y * half, z))
+            .collect(),
+        triangles: vec![[0, 1, 2], [2, 1, 3]],
+        uvs: Some(CornerAttribute {
+            values: vec![Vec2::ZERO, Vec2::Y, Vec2::X, Vec2::ONE],
+            triangles: vec![[0, 1, 2], [2, 1, 3]],
+        }),
+        ..Mesh::default()
+    };
+    let texels = vec![[255; 4], [255, 255, 255, 0], [255, 255, 255, 0], [255; 4]];
+    let image = Arc::new(TextureImage::from_rgba8("mask", 2, 2, texels, false));
+    let mut cut = Material::diffuse("cut", Vec3::ONE);
+    cut.textures.base_color = Some(Texture::Image(ImageTexture::new(image)));
+    cut.textures.alpha_mask = Some(AlphaMask { cutoff: 0.5, factor: 1.0 });
+    let wall = Material::diffuse("wall", Vec3::new(0.8, 0.2, 0.1));
+    let mut geometry = raylab::Geometry::new();
+    geometry.add_mesh(&quad(0.0, 1.0), &glam::Affine3A::IDENTITY, |_| 0);
+    geometry.add_mesh(&quad(1.0, 3.0), &glam::Affine3A::IDENTITY, |_| 1);
+    let light =
+        raylab::PointLight { position: Vec3::new(0.0, 0.0, -1.5), power: Vec3::splat(20.0) };
+    Scene::new("cut-out", geometry, vec![cut, wall], light)
+}
+
+fn bits(film: &Film) -> Vec<[u32; 3]> {
+    film.pixels().iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+}
+
+/// The sums of `passes` passes of `integrator`.
+fn sums(camera: &Camera, integrator: &dyn Integrator, passes: u32) -> Film {
+    let mut accumulator = Accumulator::new(camera.width, camera.height).unwrap();
+    for _ in 0..passes {
+        accumulator.add_sample(camera, integrator);
+    }
+    accumulator.sums().clone()
+}
+
+/// Checks the wavefront against the scalar path on `scene` seen by `camera`.
+fn check(name: &str, scene: &Scene, camera: &Camera) {
+    let accel = SceneBvh::build(&scene.geometry).unwrap();
+    for max_depth in [Some(1), Some(2), Some(4), None] {
+        let settings = PathSettings { max_depth, ..PathSettings::default() };
+        let scalar = PathTracer::new(scene, &accel, settings);
+        let wavefront = PathWavefront::new(scene, &accel, settings);
+        let (expected, got) = (sums(camera, &scalar, 2), sums(camera, &wavefront, 2));
+        assert!(
+            expected.pixels().iter().any(|p| p.max_element() > 0.0) || max_depth == Some(1),
+            "{name}: a black picture proves nothing"
+        );
+        let differing = bits(&expected).iter().zip(bits(&got)).filter(|(a, b)| *a != b).count();
+        assert_eq!(differing, 0, "{name}, max depth {max_depth:?}: pixels that differ");
+        assert_eq!(
+            scalar.discarded_samples(),
+            wavefront.path().discarded_samples(),
+            "{name}: discarded samples"
+        );
+    }
+}
+
+#[test]
+fn the_wavefront_gives_the_scalar_paths_samples_on_every_scene() {
+    for name in scene_names() {
+        let opened =
+            Scene::open(&name, &LoadOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let scene = opened.scene;
+        let accel = SceneBvh::build(&scene.geometry).unwrap();
+        let cameras = CameraOptions { size: Some(SIZE), ..CameraOptions::default() };
+        let camera = cameras.camera(scene.camera, &scene, opened.is_model, &accel).unwrap();
+        check(&name, &scene, &camera);
+    }
+}
+
+#[test]
+fn the_wavefront_passes_alpha_masked_holes_as_the_scalar_path_does() {
+    let scene = cut_out_scene();
+    assert!(scene.has_cut_outs());
+    check("cut-out", &scene, &Camera::lab(SIZE.0, SIZE.1));
+}
