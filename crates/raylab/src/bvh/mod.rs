@@ -12,7 +12,7 @@
 //! | `packet` | up to 64 coherent rays through the tree together: `rays` (their lanes), `setup`, `bundle` (a packet's bound in ray space), `leaf` and `lanes` (a leaf's triangles against several rays per instruction) |
 //! | `refit` | moving geometry keeps its tree: [`Bvh::refit`] takes new vertices and recomputes the boxes bottom-up |
 //! | `two_level` | [`TwoLevel`]: a tree over instances of bottom accelerators; `scene` ([`SceneBvh`]) picks one or two levels for a scene |
-//! | `isa`, `simd`, `queries` | the instruction sets, the vector lanes every kernel is written in (one trait over SSE, AVX and AVX-512 registers), and the table of query functions a BVH picks once |
+//! | `isa`, `simd`, `queries` | the instruction sets, the vector lanes most kernels are written in (one trait over SSE, AVX and AVX-512 registers), and the table of query functions a BVH picks once |
 //!
 //! The instruction set is picked once, when a BVH is built, from what the CPU supports: AVX-512
 //! or AVX2 where present, SSE2 on every other x86-64, portable scalar code elsewhere

@@ -15,6 +15,9 @@ use crate::accel::Hit;
 use crate::ray::Ray;
 
 /// A BVH's queries, compiled for one instruction set.
+///
+/// Calling a function of a table is sound only for a table that [`Queries::for_isa`] handed
+/// out (it checks the CPU): the module is private to `bvh`, and `Bvh` keeps its table private.
 #[derive(Clone, Copy)]
 pub(crate) struct Queries {
     /// The set the functions are compiled for.

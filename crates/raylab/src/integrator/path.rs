@@ -299,6 +299,19 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     ) -> Option<(Ray, Vec3)> {
         let u_light = sampler.next_1d();
         let u_point = sampler.next_2d();
+        self.sample_light_with(vertex, u_light, u_point, throughput)
+    }
+
+    /// [`sample_light`](Self::sample_light) with its numbers drawn: `u_light` picks the light,
+    /// `u_point` the point on it.
+    #[inline]
+    pub(super) fn sample_light_with(
+        &self,
+        vertex: &Vertex,
+        u_light: f32,
+        u_point: Vec2,
+        throughput: Vec3,
+    ) -> Option<(Ray, Vec3)> {
         if !vertex.bsdf.is_smooth() {
             return None;
         }
@@ -327,6 +340,24 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     ) -> bool {
         let u_lobe = sampler.next_1d();
         let u_direction: Vec2 = sampler.next_2d();
+        if !self.bounce(state, vertex, u_lobe, u_direction) {
+            return false;
+        }
+        let u = sampler.next_1d();
+        self.survives_roulette(state, u)
+    }
+
+    /// The BSDF sample of [`scatter`](Self::scatter) for `u_lobe` and `u_direction`: the next
+    /// segment, or `false` where the path ends (no sample, or a throughput that is zero or not
+    /// finite).
+    #[inline]
+    pub(super) fn bounce(
+        &self,
+        state: &mut PathState,
+        vertex: &Vertex,
+        u_lobe: f32,
+        u_direction: Vec2,
+    ) -> bool {
         let Some(sample) = vertex.bsdf.sample(vertex.wi, u_lobe, u_direction) else {
             return false;
         };
@@ -342,12 +373,16 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         state.previous_point = vertex.point.p;
         state.ray = vertex.point.spawn_ray(direction);
         state.depth += 1;
-        // Russian roulette, as Mitsuba's: q = min(max(throughput)·η², 0.95).
         let throughput_max = state.throughput.max_element();
-        if throughput_max <= 0.0 || !throughput_max.is_finite() {
-            return false;
-        }
-        let u = sampler.next_1d();
+        throughput_max > 0.0 && throughput_max.is_finite()
+    }
+
+    /// Russian roulette after a [`bounce`](Self::bounce), as Mitsuba's: from `rr_depth` on, the
+    /// path goes on with probability `q = min(max(throughput)·η², 0.95)` (`u` below it), its
+    /// throughput divided by `q`.
+    #[inline]
+    pub(super) fn survives_roulette(&self, state: &mut PathState, u: f32) -> bool {
+        let throughput_max = state.throughput.max_element();
         if state.depth >= self.settings.rr_depth {
             let q = (throughput_max * state.eta * state.eta).min(0.95);
             if u >= q {

@@ -26,8 +26,10 @@
 //! as the scalar path does.
 //!
 //! This is the structure that the SIMD stages (issue 27) fill in: a stage that runs over lanes
-//! can run sixteen of them per instruction. For now every stage is the scalar code, lane by
-//! lane; it is the twin the vector stages will be tested against.
+//! can run sixteen of them per instruction. The sampler's one-dimensional draws (the light's
+//! choice, the BSDF lobe, the roulette) already do: each is drawn for all of a stage's paths at
+//! once ([`Sampler::next_1d_each`], sixteen lanes per loop). The rest is the scalar code, lane
+//! by lane: the twin the vector stages will be tested against.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -96,6 +98,9 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut vertices: Vec<(usize, Vertex)> = Vec::with_capacity(rays.len());
         let mut shadowed: Vec<(usize, Vec3)> = Vec::with_capacity(rays.len());
         let mut occluded: Vec<bool> = Vec::with_capacity(rays.len());
+        // A stage's paths, and the numbers drawn for them a batch at a time.
+        let mut lanes: Vec<usize> = Vec::with_capacity(rays.len());
+        let mut numbers: Vec<f32> = Vec::with_capacity(rays.len());
         let mut first = true;
         let mut lap = Lap::start(self.times.as_ref());
         while !alive.is_empty() {
@@ -135,9 +140,14 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             // 3. Light sampling at every vertex: the shadow rays.
             batch.clear();
             shadowed.clear();
-            for (i, vertex) in &vertices {
+            lanes.clear();
+            lanes.extend(vertices.iter().map(|(i, _)| *i));
+            numbers.resize(lanes.len(), 0.0);
+            Sampler::next_1d_each(samplers, &lanes, &mut numbers);
+            for ((i, vertex), &u_light) in vertices.iter().zip(&numbers) {
+                let u_point = samplers[*i].next_2d();
                 if let Some((shadow_ray, contribution)) =
-                    path.sample_light(vertex, &mut samplers[*i], states[*i].throughput)
+                    path.sample_light_with(vertex, u_light, u_point, states[*i].throughput)
                 {
                     batch.push(shadow_ray);
                     shadowed.push((*i, contribution));
@@ -161,12 +171,29 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             lap.end(|t| &t.occlusion);
 
             // 5. BSDF sampling and Russian roulette: the paths that go on.
-            alive.clear();
-            for (i, vertex) in &vertices {
-                if path.scatter(&mut states[*i], vertex, &mut samplers[*i]) {
-                    alive.push(*i);
+            // The lobes' numbers for every vertex, then the roulette's for the paths that
+            // bounced, each drawn a batch at a time (`lanes` still holds the vertices' paths).
+            Sampler::next_1d_each(samplers, &lanes, &mut numbers);
+            let mut bounced = std::mem::take(&mut alive);
+            bounced.clear();
+            for ((i, vertex), &u_lobe) in vertices.iter().zip(&numbers) {
+                let u_direction = samplers[*i].next_2d();
+                if path.bounce(&mut states[*i], vertex, u_lobe, u_direction) {
+                    bounced.push(*i);
                 }
             }
+            numbers.resize(bounced.len(), 0.0);
+            Sampler::next_1d_each(samplers, &bounced, &mut numbers);
+            alive = bounced;
+            let mut kept = 0;
+            for k in 0..alive.len() {
+                let i = alive[k];
+                if path.survives_roulette(&mut states[i], numbers[k]) {
+                    alive[kept] = i;
+                    kept += 1;
+                }
+            }
+            alive.truncate(kept);
             if let Some(times) = &self.times {
                 times.vertices.fetch_add(vertices.len() as u64, Ordering::Relaxed);
             }

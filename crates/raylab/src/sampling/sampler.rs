@@ -116,7 +116,7 @@ impl Sampler {
     /// the two coordinates' scrambles).
     #[inline]
     fn dimension_seeds(&self, dimension: u32) -> [u32; 3] {
-        let base = (self.pixel_seed as u32) ^ (self.pixel_seed >> 32) as u32;
+        let base = self.seed_base();
         let d = dimension.wrapping_mul(0x9e37_79b9);
         [
             hash32(base ^ d),
@@ -125,18 +125,161 @@ impl Sampler {
         ]
     }
 
+    /// The pixel seed folded to 32 bits: the root of the dimensions' seeds.
+    #[inline]
+    fn seed_base(&self) -> u32 {
+        (self.pixel_seed as u32) ^ (self.pixel_seed >> 32) as u32
+    }
+
+    /// [`next_1d`](Self::next_1d) of the samplers `lanes` picks, into `out` (`out[k]` for
+    /// `samplers[lanes[k]]`): the same numbers, drawn sixteen at a time (`sobol` kind, where the
+    /// CPU has AVX-512 or AVX2: the same arithmetic in vector registers, so the same bits).
+    ///
+    /// # Panics
+    /// If `out` is shorter than `lanes`, or a lane is out of range.
+    pub fn next_1d_each(samplers: &mut [Sampler], lanes: &[usize], out: &mut [f32]) {
+        next_1d_each_with(samplers, lanes, out, LaneIsa::detect());
+    }
+}
+
+/// The instruction set of the lane loop of [`Sampler::next_1d_each`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LaneIsa {
+    Scalar,
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+impl LaneIsa {
+    fn detect() -> LaneIsa {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512bw")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+            {
+                return LaneIsa::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                return LaneIsa::Avx2;
+            }
+        }
+        LaneIsa::Scalar
+    }
+}
+
+/// Lanes per batch of [`Sampler::next_1d_each`].
+const LANES: usize = 16;
+
+fn next_1d_each_with(samplers: &mut [Sampler], lanes: &[usize], out: &mut [f32], isa: LaneIsa) {
+    let out = &mut out[..lanes.len()];
+    for (lanes, out) in lanes.chunks(LANES).zip(out.chunks_mut(LANES)) {
+        if lanes.iter().any(|&i| samplers[i].kind != SamplerKind::Sobol) {
+            for (&i, number) in lanes.iter().zip(out.iter_mut()) {
+                *number = samplers[i].next_1d();
+            }
+            continue;
+        }
+        let mut base = [0u32; LANES];
+        let mut reversed_index = [0u32; LANES];
+        let mut dimension = [0u32; LANES];
+        for (k, &i) in lanes.iter().enumerate() {
+            let sampler = &mut samplers[i];
+            (base[k], reversed_index[k], dimension[k]) =
+                (sampler.seed_base(), sampler.reversed_index, sampler.dimension);
+            sampler.dimension += 1;
+        }
+        let mut numbers = [0.0f32; LANES];
+        match isa {
+            // SAFETY: `detect` picked these only where the CPU has them (the tests pick them
+            // the same way).
+            #[cfg(target_arch = "x86_64")]
+            LaneIsa::Avx512 => unsafe {
+                sobol_1d_lanes_avx512(&base, &reversed_index, &dimension, &mut numbers)
+            },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            LaneIsa::Avx2 => unsafe {
+                sobol_1d_lanes_avx2(&base, &reversed_index, &dimension, &mut numbers)
+            },
+            LaneIsa::Scalar => sobol_1d_lanes(&base, &reversed_index, &dimension, &mut numbers),
+        }
+        out.copy_from_slice(&numbers[..out.len()]);
+    }
+}
+
+/// Sixteen [`sobol_1d`] at once: a plain loop that the compiler turns into vector code where
+/// it is compiled with vector instructions (the wrappers below); its scalar compilation is the
+/// twin.
+#[inline(always)]
+fn sobol_1d_lanes(
+    base: &[u32; LANES],
+    reversed_index: &[u32; LANES],
+    dimension: &[u32; LANES],
+    out: &mut [f32; LANES],
+) {
+    for k in 0..LANES {
+        out[k] = sobol_1d(base[k], reversed_index[k], dimension[k]);
+    }
+}
+
+/// [`sobol_1d_lanes`] compiled for AVX-512 (BW for the byte shuffles of the bit reversals).
+///
+/// # Safety
+/// The CPU must support AVX2 and AVX-512 F, BW and VL.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512bw,avx512vl")]
+unsafe fn sobol_1d_lanes_avx512(
+    base: &[u32; LANES],
+    reversed_index: &[u32; LANES],
+    dimension: &[u32; LANES],
+    out: &mut [f32; LANES],
+) {
+    sobol_1d_lanes(base, reversed_index, dimension, out)
+}
+
+/// [`sobol_1d_lanes`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn sobol_1d_lanes_avx2(
+    base: &[u32; LANES],
+    reversed_index: &[u32; LANES],
+    dimension: &[u32; LANES],
+    out: &mut [f32; LANES],
+) {
+    sobol_1d_lanes(base, reversed_index, dimension, out)
+}
+
+/// Dimension `dimension` of the Sobol' sample whose bit-reversed index is `reversed_index`, for
+/// the pixel whose folded seed is `base`: the first Sobol' dimension (the bit-reversed index),
+/// its points shuffled and Owen-scrambled by the dimension's seeds.
+#[inline(always)]
+fn sobol_1d(base: u32, reversed_index: u32, dimension: u32) -> f32 {
+    let d = dimension.wrapping_mul(0x9e37_79b9);
+    let shuffle = hash32(base ^ d);
+    let scramble = hash32(base.wrapping_add(d) ^ 0x5bd1_e995);
+    // nested_uniform_scramble(index, shuffle), its first reversal done in `Sampler::new`.
+    let index = laine_karras_permutation(reversed_index, shuffle).reverse_bits();
+    // The first Sobol' dimension is the bit-reversed index; Owen-scrambling it is
+    // reverse(LK(reverse(reverse(index)))) = reverse(LK(index)).
+    u32_to_unit(laine_karras_permutation(index, scramble).reverse_bits())
+}
+
+impl Sampler {
     /// The next number in `[0, 1)`.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         match self.kind {
             SamplerKind::Sobol => {
-                let [shuffle, scramble, _] = self.dimension_seeds(self.dimension);
+                let number = sobol_1d(self.seed_base(), self.reversed_index, self.dimension);
                 self.dimension += 1;
-                // nested_uniform_scramble(index, shuffle), its first reversal done in `new`.
-                let index = laine_karras_permutation(self.reversed_index, shuffle).reverse_bits();
-                // The first Sobol' dimension is the bit-reversed index; Owen-scrambling it is
-                // reverse(LK(reverse(reverse(index)))) = reverse(LK(index)).
-                u32_to_unit(laine_karras_permutation(index, scramble).reverse_bits())
+                number
             }
             _ => {
                 self.dimension += 1;
@@ -177,6 +320,58 @@ fn hash32(mut x: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn next_1d_each_draws_what_next_1d_draws_on_every_instruction_set() {
+        let mut isas = vec![LaneIsa::Scalar];
+        #[cfg(target_arch = "x86_64")]
+        {
+            // This machine's vector forms, picked as `detect` picks them.
+            if std::arch::is_x86_feature_detected!("avx2") {
+                isas.push(LaneIsa::Avx2);
+            }
+            if LaneIsa::detect() == LaneIsa::Avx512 {
+                isas.push(LaneIsa::Avx512);
+            }
+        }
+        for isa in isas {
+            for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+                // 37 samplers at different dimensions and indices, seeds up to u64::MAX; every
+                // other one drawn, in a shuffled order, three times.
+                let make = || -> Vec<Sampler> {
+                    (0..37u32)
+                        .map(|i| {
+                            let seed = u64::MAX - u64::from(i).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                            let mut s = Sampler::new(kind, seed, (i * 7, i * 3), i * 1_000_003);
+                            for _ in 0..i % 5 {
+                                s.next_1d();
+                            }
+                            s
+                        })
+                        .collect()
+                };
+                let (mut one_by_one, mut batched) = (make(), make());
+                let lanes: Vec<usize> =
+                    (0..37).rev().filter(|i| i % 2 == 0 || i % 3 == 0).collect();
+                for _ in 0..3 {
+                    let mut out = vec![f32::NAN; lanes.len()];
+                    next_1d_each_with(&mut batched, &lanes, &mut out, isa);
+                    for (k, &i) in lanes.iter().enumerate() {
+                        let expected = one_by_one[i].next_1d();
+                        assert_eq!(
+                            out[k].to_bits(),
+                            expected.to_bits(),
+                            "{isa:?} {kind:?} lane {i}"
+                        );
+                    }
+                }
+                // The samplers go on from where they are, as if drawn one by one.
+                for (a, b) in one_by_one.iter_mut().zip(&mut batched) {
+                    assert_eq!(a.next_2d(), b.next_2d());
+                }
+            }
+        }
+    }
 
     #[test]
     fn samplers_depend_on_seed_pixel_and_index_alone() {

@@ -116,7 +116,7 @@ mod x86 {
 
         #[inline(always)]
         unsafe fn prepare_record_ray(ray: &WatertightRay) -> RayBroadcast<__m256> {
-            // SAFETY: the caller checked AVX-512 F support (this function's contract).
+            // SAFETY: the caller checked AVX-512 F and VL support (this function's contract).
             unsafe { RayBroadcast::new(ray) }
         }
 
@@ -126,7 +126,7 @@ mod x86 {
             record: &Record,
             t_max: f32,
         ) -> RecordHits {
-            // SAFETY: the caller checked AVX-512 F support (this function's contract).
+            // SAFETY: the caller checked AVX-512 F and VL support (this function's contract).
             unsafe { record_hits_avx2::<true>(ray, record, t_max) }
         }
     }

@@ -16,7 +16,7 @@
 //!
 //! The scalar twin is [`record_hits_scalar`](super::record_hits_scalar): each value is
 //! computed by the same operations in the same order, so the kernels agree with it bit for bit
-//! (the tests in `bvh/tests.rs` check every kernel this machine supports).
+//! (the tests below check every kernel this machine supports).
 
 use std::arch::x86_64::*;
 

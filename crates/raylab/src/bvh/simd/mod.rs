@@ -89,7 +89,8 @@ macro_rules! intrinsics {
             #[inline(always)]
             unsafe fn $name($($args)*) $(-> $ret)? {
                 // SAFETY: the trait's contract: the caller guarantees the instruction set, and
-                // for `load`, `loadu` and `store` a pointer to a register's floats.
+                // for `load`, `loadu` and `store` a pointer to a register's floats (aligned to
+                // the register's size for `load`).
                 unsafe { $body }
             }
         )*

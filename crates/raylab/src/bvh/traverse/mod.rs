@@ -1,6 +1,7 @@
 //! Single-ray traversal of the wide BVH: closest hit (nearest child first) and any hit.
 //!
-//! Both are generic over the node kernel and `#[inline(always)]`, so each instruction set gets its
+//! Both are generic over the kernels ([`Kernel`]: the node test and the leaf records' test) and
+//! `#[inline(always)]`, so each instruction set gets its
 //! own copy compiled with that set enabled (the tables of `bvh/queries.rs`): the
 //! triangle pre-test is then vectorized for the same set too.
 
@@ -114,7 +115,7 @@ pub struct TraversalStats {
     /// Leaves entered.
     pub leaves: u64,
     /// Records in the leaves entered (occlusion may stop inside a leaf: then its remaining
-    /// records are counted without being tested). A record holds up to 16 triangles over up to
+    /// records are counted without being tested). A record holds up to 8 triangles over up to
     /// 16 vertices (`bvh/leaf`).
     pub records: u64,
 }
