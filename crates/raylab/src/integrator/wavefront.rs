@@ -26,15 +26,16 @@
 //! as the scalar path does.
 //!
 //! This is the structure that the SIMD stages (issue 27) fill in: a stage that runs over lanes
-//! can run sixteen of them per instruction. The sampler's one-dimensional draws (the light's
-//! choice, the BSDF lobe, the roulette) already do: each is drawn for all of a stage's paths at
-//! once ([`Sampler::next_1d_each`], sixteen lanes per loop). The rest is the scalar code, lane
+//! can run sixteen of them per instruction. The sampler's draws already do: the light's
+//! choice and point, the BSDF's lobe and direction, and the roulette's number are each drawn for
+//! all of a stage's paths at once ([`Sampler::next_1d_each`], [`Sampler::next_2d_each`],
+//! sixteen lanes per loop). The rest is the scalar code, lane
 //! by lane: the twin the vector stages will be tested against.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::Integrator;
 use super::path::{Path, PathSettings, PathState, Vertex};
@@ -101,6 +102,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         // A stage's paths, and the numbers drawn for them a batch at a time.
         let mut lanes: Vec<usize> = Vec::with_capacity(rays.len());
         let mut numbers: Vec<f32> = Vec::with_capacity(rays.len());
+        let mut points: Vec<Vec2> = Vec::with_capacity(rays.len());
         let mut first = true;
         let mut lap = Lap::start(self.times.as_ref());
         while !alive.is_empty() {
@@ -143,9 +145,10 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             lanes.clear();
             lanes.extend(vertices.iter().map(|(i, _)| *i));
             numbers.resize(lanes.len(), 0.0);
+            points.resize(lanes.len(), Vec2::ZERO);
             Sampler::next_1d_each(samplers, &lanes, &mut numbers);
-            for ((i, vertex), &u_light) in vertices.iter().zip(&numbers) {
-                let u_point = samplers[*i].next_2d();
+            Sampler::next_2d_each(samplers, &lanes, &mut points);
+            for (((i, vertex), &u_light), &u_point) in vertices.iter().zip(&numbers).zip(&points) {
                 if let Some((shadow_ray, contribution)) =
                     path.sample_light_with(vertex, u_light, u_point, states[*i].throughput)
                 {
@@ -174,10 +177,11 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             // The lobes' numbers for every vertex, then the roulette's for the paths that
             // bounced, each drawn a batch at a time (`lanes` still holds the vertices' paths).
             Sampler::next_1d_each(samplers, &lanes, &mut numbers);
+            Sampler::next_2d_each(samplers, &lanes, &mut points);
             let mut bounced = std::mem::take(&mut alive);
             bounced.clear();
-            for ((i, vertex), &u_lobe) in vertices.iter().zip(&numbers) {
-                let u_direction = samplers[*i].next_2d();
+            for (((i, vertex), &u_lobe), &u_direction) in vertices.iter().zip(&numbers).zip(&points)
+            {
                 if path.bounce(&mut states[*i], vertex, u_lobe, u_direction) {
                     bounced.push(*i);
                 }

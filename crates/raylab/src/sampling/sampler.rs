@@ -112,19 +112,6 @@ impl Sampler {
         }
     }
 
-    /// The scrambling seeds of a dimension: three well-mixed 32-bit words (the index shuffle and
-    /// the two coordinates' scrambles).
-    #[inline]
-    fn dimension_seeds(&self, dimension: u32) -> [u32; 3] {
-        let base = self.seed_base();
-        let d = dimension.wrapping_mul(0x9e37_79b9);
-        [
-            hash32(base ^ d),
-            hash32(base.wrapping_add(d) ^ 0x5bd1_e995),
-            hash32(base ^ d ^ 0x68e3_1da4),
-        ]
-    }
-
     /// The pixel seed folded to 32 bits: the root of the dimensions' seeds.
     #[inline]
     fn seed_base(&self) -> u32 {
@@ -138,11 +125,20 @@ impl Sampler {
     /// # Panics
     /// If `out` is shorter than `lanes`, or a lane is out of range.
     pub fn next_1d_each(samplers: &mut [Sampler], lanes: &[usize], out: &mut [f32]) {
-        next_1d_each_with(samplers, lanes, out, LaneIsa::detect());
+        each_with::<OneD>(samplers, lanes, out, LaneIsa::detect());
+    }
+
+    /// [`next_2d`](Self::next_2d) of the samplers `lanes` picks, into `out`, as
+    /// [`next_1d_each`](Self::next_1d_each) draws `next_1d`.
+    ///
+    /// # Panics
+    /// If `out` is shorter than `lanes`, or a lane is out of range.
+    pub fn next_2d_each(samplers: &mut [Sampler], lanes: &[usize], out: &mut [Vec2]) {
+        each_with::<TwoD>(samplers, lanes, out, LaneIsa::detect());
     }
 }
 
-/// The instruction set of the lane loop of [`Sampler::next_1d_each`].
+/// The instruction set of the lane loops of [`Sampler::next_1d_each`] and `next_2d_each`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum LaneIsa {
     Scalar,
@@ -171,15 +167,61 @@ impl LaneIsa {
     }
 }
 
-/// Lanes per batch of [`Sampler::next_1d_each`].
+/// Lanes per batch.
 const LANES: usize = 16;
 
-fn next_1d_each_with(samplers: &mut [Sampler], lanes: &[usize], out: &mut [f32], isa: LaneIsa) {
+/// A Sobol' draw of one or two dimensions, as a function of a sampler's state alone.
+trait SobolDraw {
+    type Number: Copy + Default;
+    /// The dimensions a draw takes.
+    const DIMENSIONS: u32;
+    /// The draw for a pixel's folded seed, a sample's bit-reversed index and a dimension.
+    fn draw(base: u32, reversed_index: u32, dimension: u32) -> Self::Number;
+    /// The same draw by a sampler of any kind, one at a time.
+    fn one_by_one(sampler: &mut Sampler) -> Self::Number;
+}
+
+/// [`Sampler::next_1d`].
+struct OneD;
+
+impl SobolDraw for OneD {
+    type Number = f32;
+    const DIMENSIONS: u32 = 1;
+    #[inline(always)]
+    fn draw(base: u32, reversed_index: u32, dimension: u32) -> f32 {
+        sobol_1d(base, reversed_index, dimension)
+    }
+    fn one_by_one(sampler: &mut Sampler) -> f32 {
+        sampler.next_1d()
+    }
+}
+
+/// [`Sampler::next_2d`].
+struct TwoD;
+
+impl SobolDraw for TwoD {
+    type Number = Vec2;
+    const DIMENSIONS: u32 = 2;
+    #[inline(always)]
+    fn draw(base: u32, reversed_index: u32, dimension: u32) -> Vec2 {
+        sobol_2d(base, reversed_index, dimension)
+    }
+    fn one_by_one(sampler: &mut Sampler) -> Vec2 {
+        sampler.next_2d()
+    }
+}
+
+fn each_with<D: SobolDraw>(
+    samplers: &mut [Sampler],
+    lanes: &[usize],
+    out: &mut [D::Number],
+    isa: LaneIsa,
+) {
     let out = &mut out[..lanes.len()];
     for (lanes, out) in lanes.chunks(LANES).zip(out.chunks_mut(LANES)) {
         if lanes.iter().any(|&i| samplers[i].kind != SamplerKind::Sobol) {
             for (&i, number) in lanes.iter().zip(out.iter_mut()) {
-                *number = samplers[i].next_1d();
+                *number = D::one_by_one(&mut samplers[i]);
             }
             continue;
         }
@@ -190,70 +232,77 @@ fn next_1d_each_with(samplers: &mut [Sampler], lanes: &[usize], out: &mut [f32],
             let sampler = &mut samplers[i];
             (base[k], reversed_index[k], dimension[k]) =
                 (sampler.seed_base(), sampler.reversed_index, sampler.dimension);
-            sampler.dimension += 1;
+            sampler.dimension += D::DIMENSIONS;
         }
-        let mut numbers = [0.0f32; LANES];
+        let mut numbers = [D::Number::default(); LANES];
         match isa {
             // SAFETY: `detect` picked these only where the CPU has them (the tests pick them
             // the same way).
             #[cfg(target_arch = "x86_64")]
             LaneIsa::Avx512 => unsafe {
-                sobol_1d_lanes_avx512(&base, &reversed_index, &dimension, &mut numbers)
+                lanes_avx512::<D>(&base, &reversed_index, &dimension, &mut numbers)
             },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
             LaneIsa::Avx2 => unsafe {
-                sobol_1d_lanes_avx2(&base, &reversed_index, &dimension, &mut numbers)
+                lanes_avx2::<D>(&base, &reversed_index, &dimension, &mut numbers)
             },
-            LaneIsa::Scalar => sobol_1d_lanes(&base, &reversed_index, &dimension, &mut numbers),
+            LaneIsa::Scalar => lanes_of::<D>(&base, &reversed_index, &dimension, &mut numbers),
         }
         out.copy_from_slice(&numbers[..out.len()]);
     }
 }
 
-/// Sixteen [`sobol_1d`] at once: a plain loop that the compiler turns into vector code where
-/// it is compiled with vector instructions (the wrappers below); its scalar compilation is the
-/// twin.
+/// Sixteen draws at once: a plain loop that the compiler turns into vector code where it is
+/// compiled with vector instructions (the wrappers below); its scalar compilation is the twin.
 #[inline(always)]
-fn sobol_1d_lanes(
+fn lanes_of<D: SobolDraw>(
     base: &[u32; LANES],
     reversed_index: &[u32; LANES],
     dimension: &[u32; LANES],
-    out: &mut [f32; LANES],
+    out: &mut [D::Number; LANES],
 ) {
     for k in 0..LANES {
-        out[k] = sobol_1d(base[k], reversed_index[k], dimension[k]);
+        out[k] = D::draw(base[k], reversed_index[k], dimension[k]);
     }
 }
 
-/// [`sobol_1d_lanes`] compiled for AVX-512 (BW for the byte shuffles of the bit reversals).
+/// [`lanes_of`] compiled for AVX-512 (BW for the byte shuffles of the bit reversals).
 ///
 /// # Safety
 /// The CPU must support AVX2 and AVX-512 F, BW and VL.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,avx512f,avx512bw,avx512vl")]
-unsafe fn sobol_1d_lanes_avx512(
+unsafe fn lanes_avx512<D: SobolDraw>(
     base: &[u32; LANES],
     reversed_index: &[u32; LANES],
     dimension: &[u32; LANES],
-    out: &mut [f32; LANES],
+    out: &mut [D::Number; LANES],
 ) {
-    sobol_1d_lanes(base, reversed_index, dimension, out)
+    lanes_of::<D>(base, reversed_index, dimension, out)
 }
 
-/// [`sobol_1d_lanes`] compiled for AVX2.
+/// [`lanes_of`] compiled for AVX2.
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn sobol_1d_lanes_avx2(
+unsafe fn lanes_avx2<D: SobolDraw>(
     base: &[u32; LANES],
     reversed_index: &[u32; LANES],
     dimension: &[u32; LANES],
-    out: &mut [f32; LANES],
+    out: &mut [D::Number; LANES],
 ) {
-    sobol_1d_lanes(base, reversed_index, dimension, out)
+    lanes_of::<D>(base, reversed_index, dimension, out)
+}
+
+/// The scrambling seeds of a dimension, for a pixel whose folded seed is `base`: three
+/// well-mixed 32-bit words (the index shuffle and the two coordinates' scrambles).
+#[inline(always)]
+fn dimension_seeds(base: u32, dimension: u32) -> [u32; 3] {
+    let d = dimension.wrapping_mul(0x9e37_79b9);
+    [hash32(base ^ d), hash32(base.wrapping_add(d) ^ 0x5bd1_e995), hash32(base ^ d ^ 0x68e3_1da4)]
 }
 
 /// Dimension `dimension` of the Sobol' sample whose bit-reversed index is `reversed_index`, for
@@ -261,14 +310,19 @@ unsafe fn sobol_1d_lanes_avx2(
 /// its points shuffled and Owen-scrambled by the dimension's seeds.
 #[inline(always)]
 fn sobol_1d(base: u32, reversed_index: u32, dimension: u32) -> f32 {
-    let d = dimension.wrapping_mul(0x9e37_79b9);
-    let shuffle = hash32(base ^ d);
-    let scramble = hash32(base.wrapping_add(d) ^ 0x5bd1_e995);
+    let [shuffle, scramble, _] = dimension_seeds(base, dimension);
     // nested_uniform_scramble(index, shuffle), its first reversal done in `Sampler::new`.
     let index = laine_karras_permutation(reversed_index, shuffle).reverse_bits();
     // The first Sobol' dimension is the bit-reversed index; Owen-scrambling it is
     // reverse(LK(reverse(reverse(index)))) = reverse(LK(index)).
     u32_to_unit(laine_karras_permutation(index, scramble).reverse_bits())
+}
+
+/// Dimensions `dimension` and `dimension + 1`: a 2D Sobol' point, shuffled and scrambled.
+#[inline(always)]
+fn sobol_2d(base: u32, reversed_index: u32, dimension: u32) -> Vec2 {
+    let p = shuffled_scrambled_sobol_2d(reversed_index, dimension_seeds(base, dimension));
+    Vec2::new(u32_to_unit(p[0]), u32_to_unit(p[1]))
 }
 
 impl Sampler {
@@ -293,10 +347,9 @@ impl Sampler {
     pub fn next_2d(&mut self) -> Vec2 {
         match self.kind {
             SamplerKind::Sobol => {
-                let seeds = self.dimension_seeds(self.dimension);
+                let point = sobol_2d(self.seed_base(), self.reversed_index, self.dimension);
                 self.dimension += 2;
-                let p = shuffled_scrambled_sobol_2d(self.reversed_index, seeds);
-                Vec2::new(u32_to_unit(p[0]), u32_to_unit(p[1]))
+                point
             }
             _ => {
                 self.dimension += 2;
@@ -321,8 +374,43 @@ fn hash32(mut x: u32) -> u32 {
 mod tests {
     use super::*;
 
+    /// Draws of `D` by `each_with` on `isa` against one by one, bit for bit: 37 samplers of
+    /// `kind` at different dimensions and indices, every other one drawn, in a shuffled order,
+    /// three times; then the samplers go on as if drawn one by one.
+    fn check_each<D: SobolDraw>(isa: LaneIsa, kind: SamplerKind)
+    where
+        D::Number: PartialEq + std::fmt::Debug,
+    {
+        let make = || -> Vec<Sampler> {
+            (0..37u32)
+                .map(|i| {
+                    let seed = u64::MAX - u64::from(i).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                    let mut s = Sampler::new(kind, seed, (i * 7, i * 3), i * 1_000_003);
+                    for _ in 0..i % 5 {
+                        s.next_1d();
+                    }
+                    s
+                })
+                .collect()
+        };
+        let (mut one_by_one, mut batched) = (make(), make());
+        let lanes: Vec<usize> = (0..37).rev().filter(|i| i % 2 == 0 || i % 3 == 0).collect();
+        for _ in 0..3 {
+            let mut out = vec![D::Number::default(); lanes.len()];
+            each_with::<D>(&mut batched, &lanes, &mut out, isa);
+            for (k, &i) in lanes.iter().enumerate() {
+                // Compared as values: every draw is a finite number in [0, 1), where equal
+                // values are equal bits.
+                assert_eq!(out[k], D::one_by_one(&mut one_by_one[i]), "{isa:?} {kind:?} lane {i}");
+            }
+        }
+        for (a, b) in one_by_one.iter_mut().zip(&mut batched) {
+            assert_eq!(a.next_2d(), b.next_2d());
+        }
+    }
+
     #[test]
-    fn next_1d_each_draws_what_next_1d_draws_on_every_instruction_set() {
+    fn batched_draws_are_the_draws_one_by_one_on_every_instruction_set() {
         let mut isas = vec![LaneIsa::Scalar];
         #[cfg(target_arch = "x86_64")]
         {
@@ -336,39 +424,8 @@ mod tests {
         }
         for isa in isas {
             for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
-                // 37 samplers at different dimensions and indices, seeds up to u64::MAX; every
-                // other one drawn, in a shuffled order, three times.
-                let make = || -> Vec<Sampler> {
-                    (0..37u32)
-                        .map(|i| {
-                            let seed = u64::MAX - u64::from(i).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-                            let mut s = Sampler::new(kind, seed, (i * 7, i * 3), i * 1_000_003);
-                            for _ in 0..i % 5 {
-                                s.next_1d();
-                            }
-                            s
-                        })
-                        .collect()
-                };
-                let (mut one_by_one, mut batched) = (make(), make());
-                let lanes: Vec<usize> =
-                    (0..37).rev().filter(|i| i % 2 == 0 || i % 3 == 0).collect();
-                for _ in 0..3 {
-                    let mut out = vec![f32::NAN; lanes.len()];
-                    next_1d_each_with(&mut batched, &lanes, &mut out, isa);
-                    for (k, &i) in lanes.iter().enumerate() {
-                        let expected = one_by_one[i].next_1d();
-                        assert_eq!(
-                            out[k].to_bits(),
-                            expected.to_bits(),
-                            "{isa:?} {kind:?} lane {i}"
-                        );
-                    }
-                }
-                // The samplers go on from where they are, as if drawn one by one.
-                for (a, b) in one_by_one.iter_mut().zip(&mut batched) {
-                    assert_eq!(a.next_2d(), b.next_2d());
-                }
+                check_each::<OneD>(isa, kind);
+                check_each::<TwoD>(isa, kind);
             }
         }
     }
