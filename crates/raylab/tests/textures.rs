@@ -1,6 +1,8 @@
 //! Textures in renders: one sample per pixel does not alias (the lab's integrator reads the
 //! mip-map level of each pixel's ray cone), measured against a supersampled reference.
 
+mod common;
+
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
@@ -227,34 +229,8 @@ fn a_normal_mapped_plane_shades_as_the_bumpy_geometry() {
 /// (glTF's `alphaMode: MASK`): camera rays and shadow rays pass the holes and stop at the rest.
 #[test]
 fn alpha_masked_holes_let_rays_through() {
-    use raylab::material::AlphaMask;
     use raylab::{Accelerator, Integrator};
-    let quad = |z: f32, half: f32| Mesh {
-        name: "quad".into(),
-        positions: [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)]
-            .iter()
-            .map(|&(x, y)| Vec3::new(x * half, y * half, z))
-            .collect(),
-        triangles: vec![[0, 1, 2], [2, 1, 3]],
-        uvs: Some(CornerAttribute {
-            values: vec![Vec2::new(0.0, 0.0), Vec2::new(0.0, 1.0), Vec2::new(1.0, 0.0), Vec2::ONE],
-            triangles: vec![[0, 1, 2], [2, 1, 3]],
-        }),
-        ..Mesh::default()
-    };
-    // Texel (0, 0) and (1, 1) opaque, the other two holes.
-    let texels = vec![[255; 4], [255, 255, 255, 0], [255, 255, 255, 0], [255; 4]];
-    let image = Arc::new(TextureImage::from_rgba8("mask", 2, 2, texels, false));
-    let mut cut = Material::diffuse("cut", Vec3::ONE);
-    cut.textures.base_color = Some(Texture::Image(ImageTexture::new(image)));
-    cut.textures.alpha_mask = Some(AlphaMask { cutoff: 0.5, factor: 1.0 });
-    let wall = Material::diffuse("wall", Vec3::new(0.8, 0.0, 0.0));
-    let mut geometry = raylab::Geometry::new();
-    geometry.add_mesh(&quad(0.0, 1.0), &glam::Affine3A::IDENTITY, |_| 0);
-    geometry.add_mesh(&quad(1.0, 3.0), &glam::Affine3A::IDENTITY, |_| 1);
-    let light =
-        raylab::PointLight { position: Vec3::new(0.0, 0.0, -1.5), power: Vec3::splat(20.0) };
-    let scene = Scene::new("cut-out", geometry, vec![cut, wall], light);
+    let scene = common::cut_out_scene();
     let accel = raylab::Bvh::new(&scene.vertices());
     let camera = Camera::lab(64, 64);
     let albedo = Aov::new(&scene, &accel, AovKind::Albedo);

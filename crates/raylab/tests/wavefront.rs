@@ -4,17 +4,14 @@
 //! pixel's every sample must agree; the wavefront traces tiles of 64 camera rays together
 //! (`radiance_each`), the scalar path one ray at a time.
 
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
+mod common;
 
-use glam::{Vec2, Vec3};
+use std::path::{Path, PathBuf};
+
 use raylab::integrator::{Integrator, Path as PathTracer, PathSettings, PathWavefront};
-use raylab::material::AlphaMask;
-use raylab::mesh::CornerAttribute;
 use raylab::scene::LoadOptions;
 use raylab::session::CameraOptions;
-use raylab::texture::{ImageTexture, Texture, TextureImage};
-use raylab::{Accumulator, Camera, Film, Material, Mesh, Scene, SceneBvh};
+use raylab::{Accumulator, Camera, Film, Scene, SceneBvh};
 
 const SIZE: (u32, u32) = (32, 24);
 
@@ -39,36 +36,6 @@ fn scene_names() -> Vec<String> {
     std::iter::once("cornell".to_string())
         .chain(files.iter().map(|p| p.display().to_string()))
         .collect()
-}
-
-/// A white quad cut out in a 2 × 2 checker by its texture's alpha, in front of a red wall, lit
-/// by a point light: rays and shadow rays pass through its holes.
-fn cut_out_scene() -> Scene {
-    let quad = |z: f32, half: f32| Mesh {
-        name: "quad".into(),
-        positions: [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)]
-            .iter()
-            .map(|&(x, y)| Vec3::new(x * half, y * half, z))
-            .collect(),
-        triangles: vec![[0, 1, 2], [2, 1, 3]],
-        uvs: Some(CornerAttribute {
-            values: vec![Vec2::ZERO, Vec2::Y, Vec2::X, Vec2::ONE],
-            triangles: vec![[0, 1, 2], [2, 1, 3]],
-        }),
-        ..Mesh::default()
-    };
-    let texels = vec![[255; 4], [255, 255, 255, 0], [255, 255, 255, 0], [255; 4]];
-    let image = Arc::new(TextureImage::from_rgba8("mask", 2, 2, texels, false));
-    let mut cut = Material::diffuse("cut", Vec3::ONE);
-    cut.textures.base_color = Some(Texture::Image(ImageTexture::new(image)));
-    cut.textures.alpha_mask = Some(AlphaMask { cutoff: 0.5, factor: 1.0 });
-    let wall = Material::diffuse("wall", Vec3::new(0.8, 0.2, 0.1));
-    let mut geometry = raylab::Geometry::new();
-    geometry.add_mesh(&quad(0.0, 1.0), &glam::Affine3A::IDENTITY, |_| 0);
-    geometry.add_mesh(&quad(1.0, 3.0), &glam::Affine3A::IDENTITY, |_| 1);
-    let light =
-        raylab::PointLight { position: Vec3::new(0.0, 0.0, -1.5), power: Vec3::splat(20.0) };
-    Scene::new("cut-out", geometry, vec![cut, wall], light)
 }
 
 fn bits(film: &Film) -> Vec<[u32; 3]> {
@@ -116,7 +83,7 @@ fn the_wavefront_gives_the_scalar_paths_samples_on_every_scene() {
 
 #[test]
 fn the_wavefront_passes_alpha_masked_holes_as_the_scalar_path_does() {
-    let scene = cut_out_scene();
+    let scene = common::cut_out_scene();
     assert!(scene.has_cut_outs());
     check("cut-out", &scene, &Camera::lab(SIZE.0, SIZE.1));
 }
