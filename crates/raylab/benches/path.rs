@@ -3,7 +3,8 @@
 //! samples of the scene files' Mitsuba scenes, one thread, the scenes' own depth limits.
 //!
 //! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
-//! stage (`PathWavefront::with_stage_times`, 16 passes, one thread).
+//! stage (`PathWavefront::with_stage_times`, 16 passes, one thread), then times the sampler's
+//! draws for a tile's paths one by one and in batches.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::time::{Duration, Instant};
@@ -121,6 +122,45 @@ fn stage_table(_: &mut Criterion) {
     println!("* the sampler's draws are inside the light and scatter stages, timed here alone");
 }
 
+/// The sampler's draws for 64 paths (a tile), one by one and a batch at a time
+/// (`Sampler::next_1d_each`, `next_2d_each`): a path vertex's three 1D and two 2D draws.
+fn draws(c: &mut Criterion) {
+    let samplers: Vec<Sampler> =
+        (0..64u32).map(|i| Sampler::new(SamplerKind::Sobol, 7, (i % 8, i / 8), i * 17)).collect();
+    let lanes: Vec<usize> = (0..64).collect();
+    let mut group = c.benchmark_group("sampler_draws_64_paths");
+    group.bench_function("one_by_one", |b| {
+        b.iter(|| {
+            let mut samplers = samplers.clone();
+            let mut sum = 0.0;
+            for sampler in &mut samplers {
+                sum += sampler.next_1d() + sampler.next_2d().x + sampler.next_1d();
+                sum += sampler.next_2d().y + sampler.next_1d();
+            }
+            sum
+        })
+    });
+    group.bench_function("batched", |b| {
+        let mut numbers = vec![0.0f32; 64];
+        let mut points = vec![glam::Vec2::ZERO; 64];
+        b.iter(|| {
+            let mut samplers = samplers.clone();
+            let mut sum = 0.0;
+            for round in 0..5 {
+                if round % 2 == 1 {
+                    Sampler::next_2d_each(&mut samplers, &lanes, &mut points);
+                    sum += points.iter().map(|p| p.x).sum::<f32>();
+                } else {
+                    Sampler::next_1d_each(&mut samplers, &lanes, &mut numbers);
+                    sum += numbers.iter().sum::<f32>();
+                }
+            }
+            sum
+        })
+    });
+    group.finish();
+}
+
 fn path(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     let mut group = c.benchmark_group("path_128x96_1spp_1_thread");
@@ -140,5 +180,5 @@ fn path(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, stage_table, path);
+criterion_group!(benches, stage_table, draws, path);
 criterion_main!(benches);

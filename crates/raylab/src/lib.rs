@@ -151,6 +151,7 @@ pub mod accel;
 pub mod bvh;
 pub mod camera;
 pub mod color;
+pub mod cpu;
 #[cfg(feature = "io")]
 pub mod file_bytes;
 pub mod film;

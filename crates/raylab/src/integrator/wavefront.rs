@@ -91,6 +91,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             return;
         }
         let (scene, accel) = (path.scene(), path.accel());
+        // The stages' buffers, made per tile: a thread-local set reused from tile to tile was
+        // measured slower (BENCHMARKS.md, "The wavefront").
         let mut states: Vec<PathState> = rays.iter().map(PathState::new).collect();
         // The paths still tracing, by index.
         let mut alive: Vec<usize> = (0..rays.len()).collect();

@@ -20,6 +20,7 @@ use glam::Vec2;
 use super::pcg::{Pcg32, mix64, u32_to_unit};
 use super::sobol::{laine_karras_permutation, shuffled_scrambled_sobol_2d};
 use super::{pixel_hash, sample_offset};
+use crate::cpu::Isa;
 use crate::unknown_name::UnknownName;
 
 /// Which numbers a [`Sampler`] hands out.
@@ -125,7 +126,7 @@ impl Sampler {
     /// # Panics
     /// If `out` is shorter than `lanes`, or a lane is out of range.
     pub fn next_1d_each(samplers: &mut [Sampler], lanes: &[usize], out: &mut [f32]) {
-        each_with::<OneD>(samplers, lanes, out, LaneIsa::detect());
+        each_with::<OneD>(samplers, lanes, out, Isa::detect());
     }
 
     /// [`next_2d`](Self::next_2d) of the samplers `lanes` picks, into `out`, as
@@ -134,36 +135,7 @@ impl Sampler {
     /// # Panics
     /// If `out` is shorter than `lanes`, or a lane is out of range.
     pub fn next_2d_each(samplers: &mut [Sampler], lanes: &[usize], out: &mut [Vec2]) {
-        each_with::<TwoD>(samplers, lanes, out, LaneIsa::detect());
-    }
-}
-
-/// The instruction set of the lane loops of [`Sampler::next_1d_each`] and `next_2d_each`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum LaneIsa {
-    Scalar,
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-    #[cfg(target_arch = "x86_64")]
-    Avx512,
-}
-
-impl LaneIsa {
-    fn detect() -> LaneIsa {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512bw")
-                && std::arch::is_x86_feature_detected!("avx512vl")
-            {
-                return LaneIsa::Avx512;
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                return LaneIsa::Avx2;
-            }
-        }
-        LaneIsa::Scalar
+        each_with::<TwoD>(samplers, lanes, out, Isa::detect());
     }
 }
 
@@ -215,7 +187,7 @@ fn each_with<D: SobolDraw>(
     samplers: &mut [Sampler],
     lanes: &[usize],
     out: &mut [D::Number],
-    isa: LaneIsa,
+    isa: Isa,
 ) {
     let out = &mut out[..lanes.len()];
     for (lanes, out) in lanes.chunks(LANES).zip(out.chunks_mut(LANES)) {
@@ -236,18 +208,18 @@ fn each_with<D: SobolDraw>(
         }
         let mut numbers = [D::Number::default(); LANES];
         match isa {
-            // SAFETY: `detect` picked these only where the CPU has them (the tests pick them
-            // the same way).
+            // SAFETY: `Isa::detect` picks a set only where the CPU has it (the tests pick the
+            // sets this CPU supports).
             #[cfg(target_arch = "x86_64")]
-            LaneIsa::Avx512 => unsafe {
+            Isa::Avx512 => unsafe {
                 lanes_avx512::<D>(&base, &reversed_index, &dimension, &mut numbers)
             },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            LaneIsa::Avx2 => unsafe {
+            Isa::Avx2 => unsafe {
                 lanes_avx2::<D>(&base, &reversed_index, &dimension, &mut numbers)
             },
-            LaneIsa::Scalar => lanes_of::<D>(&base, &reversed_index, &dimension, &mut numbers),
+            _ => lanes_of::<D>(&base, &reversed_index, &dimension, &mut numbers),
         }
         out.copy_from_slice(&numbers[..out.len()]);
     }
@@ -267,12 +239,12 @@ fn lanes_of<D: SobolDraw>(
     }
 }
 
-/// [`lanes_of`] compiled for AVX-512 (BW for the byte shuffles of the bit reversals).
+/// [`lanes_of`] compiled for AVX-512.
 ///
 /// # Safety
-/// The CPU must support AVX2 and AVX-512 F, BW and VL.
+/// The CPU must support AVX2 and AVX-512 F and VL ([`Isa::Avx512`]).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx512f,avx512bw,avx512vl")]
+#[target_feature(enable = "avx2,avx512f,avx512vl")]
 unsafe fn lanes_avx512<D: SobolDraw>(
     base: &[u32; LANES],
     reversed_index: &[u32; LANES],
@@ -377,7 +349,7 @@ mod tests {
     /// Draws of `D` by `each_with` on `isa` against one by one, bit for bit: 37 samplers of
     /// `kind` at different dimensions and indices, every other one drawn, in a shuffled order,
     /// three times; then the samplers go on as if drawn one by one.
-    fn check_each<D: SobolDraw>(isa: LaneIsa, kind: SamplerKind)
+    fn check_each<D: SobolDraw>(isa: Isa, kind: SamplerKind)
     where
         D::Number: PartialEq + std::fmt::Debug,
     {
@@ -411,18 +383,9 @@ mod tests {
 
     #[test]
     fn batched_draws_are_the_draws_one_by_one_on_every_instruction_set() {
-        let mut isas = vec![LaneIsa::Scalar];
-        #[cfg(target_arch = "x86_64")]
-        {
-            // This machine's vector forms, picked as `detect` picks them.
-            if std::arch::is_x86_feature_detected!("avx2") {
-                isas.push(LaneIsa::Avx2);
-            }
-            if LaneIsa::detect() == LaneIsa::Avx512 {
-                isas.push(LaneIsa::Avx512);
-            }
-        }
-        for isa in isas {
+        // Every set this CPU supports (on this machine: AVX-512, AVX2, SSE2 and scalar; SSE2
+        // runs the scalar loop).
+        for isa in Isa::ALL.into_iter().filter(|isa| isa.is_supported()) {
             for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
                 check_each::<OneD>(isa, kind);
                 check_each::<TwoD>(isa, kind);
