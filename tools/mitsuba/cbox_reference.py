@@ -7,7 +7,9 @@ compared against it.
 
 Scene: mi.cornell_box() unchanged except for
   * film:       hdrfilm, rfilter box, SIZE x SIZE, pixel_format rgb, float32
-  * sampler:    independent, sample_count SPP (seed passed to mi.render)
+  * sampler:    --sampler (independent, Mitsuba's default; multijitter, its best
+                on this scene; orthogonal, stratified), sample_count SPP (seed
+                passed to mi.render)
   * integrator: path, max_depth 8, rr_depth 5 (Mitsuba's default, made explicit)
 
 Output: linear float32 RGB, no tonemapping, row 0 = top of the image.
@@ -51,7 +53,7 @@ from mitsuba_run import Render, load_mitsuba  # noqa: E402
 from pfm import write_pfm  # noqa: E402
 
 
-def build_scene_dict(mi, size, spp, max_depth, rr_depth):
+def build_scene_dict(mi, size, spp, max_depth, rr_depth, sampler="independent"):
     d = mi.cornell_box()
     d["sensor"]["film"] = {
         "type": "hdrfilm",
@@ -61,7 +63,7 @@ def build_scene_dict(mi, size, spp, max_depth, rr_depth):
         "pixel_format": "rgb",
         "component_format": "float32",
     }
-    d["sensor"]["sampler"] = {"type": "independent", "sample_count": spp}
+    d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp}
     d["integrator"] = {"type": "path", "max_depth": max_depth, "rr_depth": rr_depth}
     return d
 
@@ -73,6 +75,10 @@ def main():
     ap.add_argument("--size", type=int, default=512, help="film width = height")
     ap.add_argument("--spp", type=int, default=64, help="samples per pixel per pass")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--sampler", default="independent",
+                    choices=["independent", "multijitter", "orthogonal", "stratified", "ldsampler"])
+    ap.add_argument("--warmup", action="store_true",
+                    help="render once untimed first (Dr.Jit compiles its kernels then)")
     ap.add_argument("--passes", type=int, default=1,
                     help="independent passes (seeds seed..seed+passes-1), averaged")
     ap.add_argument("--max-depth", type=int, default=8)
@@ -88,9 +94,12 @@ def main():
 
     t0 = time.perf_counter()
     scene = mi.load_dict(build_scene_dict(mi, args.size, args.spp,
-                                          args.max_depth, args.rr_depth))
+                                          args.max_depth, args.rr_depth, args.sampler))
     t_load = time.perf_counter() - t0
 
+    if args.warmup:
+        dr.eval(mi.render(scene, spp=args.spp, seed=args.seed + 1000))
+        dr.sync_thread()
     render = Render(dr, mi, scene, args.spp, args.seed, args.passes)
     img = render.image
     assert img.shape == (args.size, args.size, 3), img.shape
@@ -104,7 +113,7 @@ def main():
         write_pfm(stem + ".pfm", img)
 
     total_spp = args.spp * args.passes
-    print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant}")
+    print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant} sampler {args.sampler}")
     print(f"size {args.size}x{args.size} spp {total_spp} ({args.passes} pass(es) x "
           f"{args.spp}) seed {args.seed} max_depth {args.max_depth} "
           f"rr_depth {args.rr_depth}")

@@ -37,26 +37,25 @@ fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrato
     accumulator
 }
 
-/// Prints nanoseconds per sample by stage: the wavefront's stages as it measures them, the
-/// sampler's share estimated from the draws the path makes per vertex (3 one-dimensional and 2
-/// two-dimensional), and the rest of the pass (camera rays, filter, accumulation) as the pass's
-/// time less the integrator's.
+/// Prints nanoseconds per sample by stage: the wavefront's stages as it measures them, and the
+/// rest of the pass (camera rays, filter, accumulation) as the pass's time less the
+/// integrator's; then the share of vertices shaded in lanes.
 fn stage_table(_: &mut Criterion) {
     const PASSES: u32 = 16;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     println!("ns per sample by stage, 128x96, {PASSES} passes, one thread");
     println!(
-        "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7}",
         "scene",
         "scalar",
         "wavefr.",
         "camera+",
         "hits",
         "surface",
-        "lights",
+        "draws",
+        "shading",
         "occl.",
-        "scatter",
-        "sampler*"
+        "lanes"
     );
     for name in ["cornell-mitsuba", "showcase"] {
         let (scene, accel, settings, camera) = load(name);
@@ -86,27 +85,14 @@ fn stage_table(_: &mut Criterion) {
         let stages = [
             after.closest_hits - before.closest_hits,
             after.surfaces - before.surfaces,
-            after.light_sampling - before.light_sampling,
+            after.draws - before.draws,
+            after.shading - before.shading,
             after.occlusion - before.occlusion,
-            after.scattering - before.scattering,
         ];
         let in_stages: Duration = stages.iter().sum();
-        // The sampler: the same draws as the path's vertices, timed alone.
-        let vertices = after.vertices - before.vertices;
-        let draws = Instant::now();
-        let mut sink = 0.0f32;
-        let mut sampler = Sampler::new(SamplerKind::Sobol, 0, (0, 0), 0);
-        for v in 0..vertices {
-            if v % 4 == 0 {
-                sampler = Sampler::new(SamplerKind::Sobol, 0, (v as u32 % 128, 0), v as u32);
-            }
-            sink += sampler.next_1d() + sampler.next_2d().x + sampler.next_1d();
-            sink += sampler.next_2d().y + sampler.next_1d();
-        }
-        let sampler_time = draws.elapsed();
-        std::hint::black_box(sink);
+        let lanes = (after.lanes - before.lanes) as f64 / (after.vertices - before.vertices) as f64;
         println!(
-            "{:16} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0}",
+            "{:16} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:6.0}%",
             name,
             ns(scalar_time),
             ns(wavefront_time),
@@ -116,10 +102,9 @@ fn stage_table(_: &mut Criterion) {
             ns(stages[2]),
             ns(stages[3]),
             ns(stages[4]),
-            ns(sampler_time),
+            100.0 * lanes,
         );
     }
-    println!("* the sampler's draws are inside the light and scatter stages, timed here alone");
 }
 
 /// The sampler's draws for 64 paths (a tile), one by one and a batch at a time

@@ -83,17 +83,35 @@ impl SurfacePoint {
 /// surface, so the origin is guaranteed to be on the correct side whatever the scene's scale.
 #[inline(always)]
 pub fn offset_ray_origin(point: &SurfacePoint, w: Vec3) -> Vec3 {
+    match offset_ray_origin_finite(point, w) {
+        (origin, true) => origin,
+        (_, false) => {
+            let (po, offset) = offset_point(point, w);
+            offset_ray_origin_scalar(po, offset)
+        }
+    }
+}
+
+/// [`offset_ray_origin`] without a branch, for lanes: the origin, and whether the moved point
+/// was finite (where it was not, the origin is wrong and `offset_ray_origin` must be called).
+#[inline(always)]
+pub(crate) fn offset_ray_origin_finite(point: &SurfacePoint, w: Vec3) -> (Vec3, bool) {
+    let (po, offset) = offset_point(point, w);
+    let origin =
+        Vec3::new(step_away(po.x, offset.x), step_away(po.y, offset.y), step_away(po.z, offset.z));
+    (origin, po.is_finite())
+}
+
+/// The point moved by `(|n|·error)·n` to the side `w` points to, and the move.
+#[inline(always)]
+fn offset_point(point: &SurfacePoint, w: Vec3) -> (Vec3, Vec3) {
     let n = point.normal;
     let d = n.abs().dot(point.error);
     let mut offset = d * n;
     if w.dot(n) < 0.0 {
         offset = -offset;
     }
-    let po = point.p + offset;
-    if !po.is_finite() {
-        return offset_ray_origin_scalar(po, offset);
-    }
-    Vec3::new(step_away(po.x, offset.x), step_away(po.y, offset.y), step_away(po.z, offset.z))
+    (point.p + offset, offset)
 }
 
 /// [`offset_ray_origin`]'s last step on one axis: `value` (finite) moved one float further in the

@@ -114,7 +114,30 @@ pub struct LightSample {
 /// The fraction of a shadow ray toward a point on a surface light that is tested: the rest
 /// (a relative 10⁻⁴) keeps the light's own triangle out of the test (PBR 4th ed.'s
 /// `ShadowEpsilon`).
-const SHADOW_RAY_LENGTH: f32 = 1.0 - 1e-4;
+/// What [`LightSet::pick_for_lanes`] picked.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum LanePick {
+    /// No light: nothing to sample.
+    Nothing,
+    /// A triangle the lanes sample.
+    Triangle(LaneTriangle),
+    /// A light the lanes leave to [`LightSet::sample`].
+    Other,
+}
+
+/// A triangle light sampled uniformly by area, with a constant radiance, and the probability
+/// of having picked it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LaneTriangle {
+    pub corners: [Vec3; 3],
+    pub normal: Vec3,
+    pub error: Vec3,
+    pub area: f32,
+    pub radiance: Vec3,
+    pub selection: f32,
+}
+
+pub(super) const SHADOW_RAY_LENGTH: f32 = 1.0 - 1e-4;
 
 impl LightSet {
     /// The lights of `scene`.
@@ -303,6 +326,32 @@ impl LightSet {
                     shadow_ray: point.spawn_ray(direction),
                 })
             }
+        }
+    }
+
+    /// The light that `u_light` picks, as the wavefront's lanes take it: a triangle sampled
+    /// uniformly by area with a constant radiance, which the lanes sample as
+    /// [`sample`](Self::sample) does; any other light, which a lane leaves to `sample`; or
+    /// nothing, without lights.
+    #[inline]
+    pub(super) fn pick_for_lanes(&self, u_light: f32) -> LanePick {
+        let Some(distribution) = &self.distribution else { return LanePick::Nothing };
+        let (index, selection, _) = distribution.sample(u_light);
+        match self.lights[index] {
+            SampledLight::Triangle { corners, normal, error, area, radiance, texture }
+                if self.triangle_sampling == TriangleSampling::Area
+                    && self.textures.get(texture as usize).is_none() =>
+            {
+                LanePick::Triangle(LaneTriangle {
+                    corners,
+                    normal,
+                    error,
+                    area,
+                    radiance,
+                    selection,
+                })
+            }
+            _ => LanePick::Other,
         }
     }
 

@@ -90,9 +90,9 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
 /// A shading frame: the shading normal and two tangents.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Frame {
-    tangent: Vec3,
-    bitangent: Vec3,
-    normal: Vec3,
+    pub(crate) tangent: Vec3,
+    pub(crate) bitangent: Vec3,
+    pub(crate) normal: Vec3,
 }
 
 impl Frame {
@@ -140,10 +140,10 @@ pub(super) struct PathState {
     /// Segments traced so far.
     pub depth: u32,
     /// The previous vertex's BSDF sample: for the MIS weight of emitters found by it.
-    previous_pdf: f32,
-    previous_delta: bool,
+    pub previous_pdf: f32,
+    pub previous_delta: bool,
     /// The previous vertex: where light sampling would have sampled from.
-    previous_point: Vec3,
+    pub previous_point: Vec3,
 }
 
 impl PathState {
@@ -164,13 +164,13 @@ impl PathState {
 
 /// A path's vertex, ready to scatter: its BSDF, in the shading frame.
 pub(super) struct Vertex<'s> {
-    point: SurfacePoint,
-    frame: Frame,
+    pub point: SurfacePoint,
+    pub frame: Frame,
     /// Whether the directions are mirrored into the front of a two-sided material.
-    flip: bool,
+    pub flip: bool,
     /// The direction toward the viewer, local.
-    wi: Vec3,
-    bsdf: Cow<'s, Bsdf>,
+    pub wi: Vec3,
+    pub bsdf: Cow<'s, Bsdf>,
 }
 
 impl Vertex<'_> {

@@ -266,3 +266,31 @@ fn spherical_triangles_are_sampled_uniformly_in_solid_angle() {
     let flat = [Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)];
     assert!(sample_spherical_triangle(flat, Vec3::ZERO, Vec2::splat(0.5)).is_none());
 }
+
+/// The polynomial sine and cosine are within 2·10⁻⁷ of double precision's over ±π/4 (every
+/// 1,009th float of the range, both signs, and the ends), and odd and even as they should be.
+#[test]
+fn sin_cos_within_quarter_pi_is_accurate() {
+    let end = std::f32::consts::FRAC_PI_4;
+    let mut worst: (f64, f32) = (0.0, 0.0);
+    let mut bits = 0u32;
+    while f32::from_bits(bits) <= end {
+        for a in [f32::from_bits(bits), -f32::from_bits(bits)] {
+            let (sin, cos) = sin_cos_within_quarter_pi(a);
+            let (sin_exact, cos_exact) = (a as f64).sin_cos();
+            let error = (sin as f64 - sin_exact).abs().max((cos as f64 - cos_exact).abs());
+            if error > worst.0 {
+                worst = (error, a);
+            }
+            assert_eq!(sin_cos_within_quarter_pi(-a), (-sin, cos), "odd sine, even cosine at {a}");
+        }
+        bits += 1009;
+    }
+    for a in [0.0, end, -end] {
+        let (sin, cos) = sin_cos_within_quarter_pi(a);
+        let (sin_exact, cos_exact) = (a as f64).sin_cos();
+        worst.0 = worst.0.max((sin as f64 - sin_exact).abs()).max((cos as f64 - cos_exact).abs());
+    }
+    assert!(worst.0 <= 2e-7, "worst error {:e} at {}", worst.0, worst.1);
+    assert_eq!(sin_cos_within_quarter_pi(0.0), (0.0, 1.0));
+}

@@ -1,0 +1,418 @@
+//! `path` as a wavefront: the paths of a tile advanced together, stage by stage, with their rays
+//! traced as batches and their diffuse vertices shaded sixteen lanes per instruction.
+//!
+//! The estimator, the random numbers and the arithmetic are those of [`Path`]: every sample is
+//! the scalar path's to the bit (`tests/wavefront.rs` compares whole renders of every scene).
+//! Each lane draws from its own [`Sampler`] in the scalar order; what changes is the order of
+//! the work:
+//!
+//! 1. **closest hits** of every live path's ray: the camera rays as packets
+//!    ([`Accelerator::closest_hits`]), the later rays one by one;
+//! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
+//!    `max_depth` end; each vertex's material and shading frame;
+//! 3. **draws**: every vertex's numbers (the light's choice and point, the BSDF's lobe and
+//!    direction, the roulette's), each a batch over the vertices ([`Sampler::next_1d_each`],
+//!    [`Sampler::next_2d_each`], sixteen lanes per loop);
+//! 4. **shading**: light sampling, BSDF sampling and Russian roulette. Diffuse vertices go to
+//!    lanes (`diffuse.rs`: gathered sixteen to a chunk in structure-of-arrays form and shaded
+//!    by one loop the compiler vectorizes, sixteen lanes per AVX-512 instruction); the other
+//!    materials, lights other than area-sampled triangles, and the rare lane whose offset
+//!    point overflows run the scalar path's steps ([`Path::sample_light_with`], `bounce`,
+//!    `survives_roulette`) one by one;
+//! 5. **occlusion** of the shadow rays, one by one, and the light they bring.
+//!
+//! Grouping by material is what keeps the lanes full: a chunk holds only diffuse vertices,
+//! whichever paths they belong to.
+//!
+//! Packets pay only where rays are coherent. Measured (`cargo bench -p raylab --bench path`, one
+//! thread, 128×96): packets for every bounce made `showcase.toml` 16 times slower (216 ms a
+//! pass against 13.5), packets for the shadow rays 3.8 times (51.7 ms; occlusion 3,100 ns a
+//! sample against 121), and even on the Cornell box shadow packets doubled the occlusion time;
+//! packets for the camera rays alone gain a few per cent there (10.6 and 10.0 ms against 10.9 and
+//! 10.6 without).
+//!
+//! Scenes with cut-out (alpha-masked) materials trace each ray through its holes one at a time,
+//! as the scalar path does.
+
+mod diffuse;
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use glam::{Vec2, Vec3};
+
+use diffuse::{DiffuseLanes, LaneVertex};
+
+use super::Integrator;
+use super::light_sampler::LanePick;
+use super::path::{Path, PathSettings, PathState, Vertex};
+use crate::accel::{Accelerator, Hit};
+use crate::cpu::Isa;
+use crate::material::{Bsdf, Diffuse};
+use crate::ray::Ray;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+/// [`Path`] run as a wavefront (see the module documentation): the same samples, the work
+/// ordered by stage.
+pub struct PathWavefront<'a, A: ?Sized> {
+    path: Path<'a, A>,
+    /// The instruction set the lanes run on.
+    isa: Isa,
+    /// Time per stage, when measured ([`with_stage_times`](Self::with_stage_times)).
+    times: Option<StageClock>,
+}
+
+impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
+    /// A wavefront path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
+    pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
+        PathWavefront { path: Path::new(scene, accel, settings), isa: Isa::detect(), times: None }
+    }
+
+    /// The same, with its lanes run on the instruction set `isa` rather than the best this CPU
+    /// has (the same samples, to the bit): for tests and benchmarks.
+    ///
+    /// # Panics
+    /// If this CPU does not support `isa`.
+    pub fn with_isa(mut self, isa: Isa) -> Self {
+        assert!(isa.is_supported(), "{} is not supported by this CPU", isa.name());
+        self.isa = isa;
+        self
+    }
+
+    /// The same, measuring the time each stage takes (summed over threads): for the stage
+    /// table of the benchmarks. Costs a clock reading per stage and tile.
+    pub fn with_stage_times(mut self) -> Self {
+        self.times = Some(StageClock::default());
+        self
+    }
+
+    /// The time each stage took so far, if measured.
+    pub fn stage_times(&self) -> Option<StageTimes> {
+        self.times.as_ref().map(StageClock::read)
+    }
+
+    /// The scalar path tracer it runs the stages of.
+    pub fn path(&self) -> &Path<'a, A> {
+        &self.path
+    }
+}
+
+impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
+    fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
+        self.path.radiance(ray, sampler)
+    }
+
+    fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
+        assert_eq!(rays.len(), out.len(), "one colour per ray");
+        assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
+        let path = &self.path;
+        let max_depth = path.settings().max_depth.unwrap_or(u32::MAX);
+        if max_depth == 0 {
+            out.fill(Vec3::ZERO);
+            return;
+        }
+        let (scene, accel) = (path.scene(), path.accel());
+        let rr_depth = path.settings().rr_depth;
+        // The stages' buffers, made per tile: a thread-local set reused from tile to tile was
+        // measured slower (BENCHMARKS.md, "The wavefront").
+        let mut states: Vec<PathState> = rays.iter().map(PathState::new).collect();
+        // The paths still tracing, by index.
+        let mut alive: Vec<usize> = (0..rays.len()).collect();
+        let mut batch: Vec<Ray> = Vec::with_capacity(rays.len());
+        let mut hits: Vec<Option<Hit>> = Vec::with_capacity(rays.len());
+        let mut vertices: Vec<(usize, Vertex)> = Vec::with_capacity(rays.len());
+        let mut shadowed: Vec<(usize, Vec3)> = Vec::with_capacity(rays.len());
+        let mut occluded: Vec<bool> = Vec::with_capacity(rays.len());
+        // The vertices' paths, and the numbers drawn for them a batch at a time.
+        let mut lanes: Vec<usize> = Vec::with_capacity(rays.len());
+        let mut numbers = Numbers::with_capacity(rays.len());
+        // The diffuse vertices in lanes, and which vertex each lane is.
+        let mut diffuse = DiffuseLanes::default();
+        let mut diffuse_vertices: Vec<usize> = Vec::with_capacity(rays.len());
+        let mut first = true;
+        let mut lap = Lap::start(self.times.as_ref());
+        while !alive.is_empty() {
+            // 1. Closest hits, as a batch.
+            batch.clear();
+            batch.extend(alive.iter().map(|&i| states[i].ray));
+            hits.clear();
+            hits.resize(batch.len(), None);
+            if scene.has_cut_outs() {
+                for (ray, hit) in batch.iter().zip(&mut hits) {
+                    *hit = super::closest_opaque_hit(scene, accel, ray);
+                }
+            } else if first {
+                // Camera rays are coherent: packets pay (see the module documentation).
+                accel.closest_hits(&batch, &mut hits);
+            } else {
+                for (ray, hit) in batch.iter().zip(&mut hits) {
+                    *hit = accel.closest_hit(ray);
+                }
+            }
+            first = false;
+            lap.end(|t| &t.closest_hits);
+
+            // 2. Light found; paths that leave the scene or reach the depth limit end.
+            vertices.clear();
+            for (&i, hit) in alive.iter().zip(&hits) {
+                let state = &mut states[i];
+                if let Some(interaction) = path.arrive(state, hit.as_ref())
+                    && state.depth + 1 < max_depth
+                {
+                    vertices.push((i, path.vertex(&state.ray, &interaction)));
+                }
+            }
+            lap.end(|t| &t.surfaces);
+
+            // 3. Every vertex's numbers, in the scalar path's order, a batch at a time. The
+            // roulette's are drawn for every vertex, where the scalar path draws them only
+            // for the paths that bounced: a path that did not has ended and draws no more.
+            lanes.clear();
+            lanes.extend(vertices.iter().map(|(i, _)| *i));
+            numbers.draw(samplers, &lanes);
+            lap.end(|t| &t.draws);
+
+            // 4. Light sampling, BSDF sampling and roulette: diffuse vertices in lanes, the
+            // rest one by one.
+            batch.clear();
+            shadowed.clear();
+            diffuse.clear();
+            diffuse_vertices.clear();
+            let mut bounced = std::mem::take(&mut alive);
+            bounced.clear();
+            for (v, (i, vertex)) in vertices.iter().enumerate() {
+                let state = &mut states[*i];
+                let Bsdf::Diffuse(Diffuse { reflectance }) = *vertex.bsdf else {
+                    let shadow = path.sample_light_with(
+                        vertex,
+                        numbers.light[v],
+                        numbers.point[v],
+                        state.throughput,
+                    );
+                    if let Some((ray, contribution)) = shadow {
+                        batch.push(ray);
+                        shadowed.push((*i, contribution));
+                    }
+                    if numbers.bounce(path, state, vertex, v) {
+                        bounced.push(*i);
+                    }
+                    continue;
+                };
+                let light = path.lights().pick_for_lanes(numbers.light[v]);
+                if let LanePick::Other = light
+                    && let Some((ray, contribution)) = path.sample_light_with(
+                        vertex,
+                        numbers.light[v],
+                        numbers.point[v],
+                        state.throughput,
+                    )
+                {
+                    batch.push(ray);
+                    shadowed.push((*i, contribution));
+                }
+                diffuse.push(&LaneVertex {
+                    point: vertex.point,
+                    frame: [vertex.frame.tangent, vertex.frame.bitangent, vertex.frame.normal],
+                    flip: vertex.flip,
+                    wi: vertex.wi,
+                    reflectance,
+                    throughput: state.throughput,
+                    eta: state.eta,
+                    roulette: state.depth + 1 >= rr_depth,
+                    light,
+                    u_point: numbers.point[v],
+                    u_direction: numbers.direction[v],
+                    u_roulette: numbers.roulette[v],
+                });
+                diffuse_vertices.push(v);
+            }
+            diffuse.shade(self.isa);
+            for (lane, &v) in diffuse_vertices.iter().enumerate() {
+                let (i, vertex) = &vertices[v];
+                let state = &mut states[*i];
+                let result = diffuse.result(lane);
+                if !result.exact {
+                    // An offset point was not finite: the scalar code decides the lane.
+                    if result.light_in_lanes
+                        && let Some((ray, contribution)) = path.sample_light_with(
+                            vertex,
+                            numbers.light[v],
+                            numbers.point[v],
+                            state.throughput,
+                        )
+                    {
+                        batch.push(ray);
+                        shadowed.push((*i, contribution));
+                    }
+                    if numbers.bounce(path, state, vertex, v) {
+                        bounced.push(*i);
+                    }
+                    continue;
+                }
+                if let Some((ray, contribution)) = result.shadow {
+                    batch.push(ray);
+                    shadowed.push((*i, contribution));
+                }
+                if let Some((ray, throughput, pdf)) = result.next {
+                    state.ray = ray;
+                    state.throughput = throughput;
+                    state.previous_pdf = pdf;
+                    state.previous_delta = false;
+                    state.previous_point = vertex.point.p;
+                    state.depth += 1;
+                    bounced.push(*i);
+                }
+            }
+            alive = bounced;
+            if let Some(times) = &self.times {
+                times.vertices.fetch_add(vertices.len() as u64, Ordering::Relaxed);
+                times.lanes.fetch_add(diffuse.len() as u64, Ordering::Relaxed);
+            }
+            lap.end(|t| &t.shading);
+
+            // 5. Occlusion of the shadow rays, as a batch.
+            occluded.clear();
+            occluded.resize(batch.len(), false);
+            for (ray, blocked) in batch.iter().zip(&mut occluded) {
+                *blocked = super::occluded_opaque(scene, accel, ray);
+            }
+            for (&(i, contribution), &blocked) in shadowed.iter().zip(&occluded) {
+                if !blocked {
+                    states[i].radiance += contribution;
+                }
+            }
+            lap.end(|t| &t.occlusion);
+        }
+        for (state, colour) in states.iter().zip(out) {
+            *colour = path.finish(state.radiance);
+        }
+        if let Some(times) = &self.times {
+            times.paths.fetch_add(rays.len() as u64, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The numbers a stage's vertices draw, in the scalar path's order: the light's choice and
+/// point, the BSDF's lobe and direction, the roulette's number.
+struct Numbers {
+    light: Vec<f32>,
+    point: Vec<Vec2>,
+    lobe: Vec<f32>,
+    direction: Vec<Vec2>,
+    roulette: Vec<f32>,
+}
+
+impl Numbers {
+    fn with_capacity(n: usize) -> Numbers {
+        Numbers {
+            light: Vec::with_capacity(n),
+            point: Vec::with_capacity(n),
+            lobe: Vec::with_capacity(n),
+            direction: Vec::with_capacity(n),
+            roulette: Vec::with_capacity(n),
+        }
+    }
+
+    /// Draws each of `lanes`' numbers, a batch at a time.
+    fn draw(&mut self, samplers: &mut [Sampler], lanes: &[usize]) {
+        let n = lanes.len();
+        self.light.resize(n, 0.0);
+        self.point.resize(n, Vec2::ZERO);
+        self.lobe.resize(n, 0.0);
+        self.direction.resize(n, Vec2::ZERO);
+        self.roulette.resize(n, 0.0);
+        Sampler::next_1d_each(samplers, lanes, &mut self.light);
+        Sampler::next_2d_each(samplers, lanes, &mut self.point);
+        Sampler::next_1d_each(samplers, lanes, &mut self.lobe);
+        Sampler::next_2d_each(samplers, lanes, &mut self.direction);
+        Sampler::next_1d_each(samplers, lanes, &mut self.roulette);
+    }
+
+    /// The scalar path's BSDF sample and roulette at vertex `v` (its numbers): whether the path
+    /// goes on.
+    #[inline]
+    fn bounce<A: Accelerator + ?Sized>(
+        &self,
+        path: &Path<'_, A>,
+        state: &mut PathState,
+        vertex: &Vertex,
+        v: usize,
+    ) -> bool {
+        path.bounce(state, vertex, self.lobe[v], self.direction[v])
+            && path.survives_roulette(state, self.roulette[v])
+    }
+}
+
+/// The time the wavefront's stages took, summed over threads, and how much work they did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StageTimes {
+    /// Closest hits (1).
+    pub closest_hits: Duration,
+    /// Surface interactions, emission found with its MIS weight, and the vertices' materials
+    /// and shading frames (2).
+    pub surfaces: Duration,
+    /// The sampler's numbers for every vertex (3).
+    pub draws: Duration,
+    /// Light sampling (the light's choice, its point, the BSDF's value and MIS), BSDF
+    /// sampling and Russian roulette (4).
+    pub shading: Duration,
+    /// Occlusion of the shadow rays (5).
+    pub occlusion: Duration,
+    /// Paths traced (camera samples).
+    pub paths: u64,
+    /// Vertices scattered from.
+    pub vertices: u64,
+    /// Of those, the diffuse vertices shaded in lanes.
+    pub lanes: u64,
+}
+
+/// [`StageTimes`] as the threads add to it: nanoseconds.
+#[derive(Debug, Default)]
+struct StageClock {
+    closest_hits: AtomicU64,
+    surfaces: AtomicU64,
+    draws: AtomicU64,
+    shading: AtomicU64,
+    occlusion: AtomicU64,
+    paths: AtomicU64,
+    vertices: AtomicU64,
+    lanes: AtomicU64,
+}
+
+impl StageClock {
+    fn read(&self) -> StageTimes {
+        let time = |t: &AtomicU64| Duration::from_nanos(t.load(Ordering::Relaxed));
+        StageTimes {
+            closest_hits: time(&self.closest_hits),
+            surfaces: time(&self.surfaces),
+            draws: time(&self.draws),
+            shading: time(&self.shading),
+            occlusion: time(&self.occlusion),
+            paths: self.paths.load(Ordering::Relaxed),
+            vertices: self.vertices.load(Ordering::Relaxed),
+            lanes: self.lanes.load(Ordering::Relaxed),
+        }
+    }
+}
+
+/// A stopwatch over the stages, reading the clock only when times are measured.
+struct Lap<'c> {
+    clock: Option<(&'c StageClock, Instant)>,
+}
+
+impl<'c> Lap<'c> {
+    fn start(clock: Option<&'c StageClock>) -> Lap<'c> {
+        Lap { clock: clock.map(|clock| (clock, Instant::now())) }
+    }
+
+    /// Adds the time since the last lap to the stage `slot` picks.
+    #[inline]
+    fn end(&mut self, slot: impl Fn(&StageClock) -> &AtomicU64) {
+        if let Some((clock, last)) = &mut self.clock {
+            let now = Instant::now();
+            slot(clock).fetch_add((now - *last).as_nanos() as u64, Ordering::Relaxed);
+            *last = now;
+        }
+    }
+}
