@@ -32,9 +32,9 @@ pub struct RenderArgs {
     #[arg(short, long, value_name = "FILE", default_value = "render.png")]
     output: PathBuf,
 
-    /// What to compute: lab (the lab's light model), path (path tracing), or the first hit's
-    /// albedo, normals or depth [default: the scene file's; path for scenes with area lights,
-    /// else lab].
+    /// What to compute: lab (the lab's light model), path (path tracing), path-scalar (the
+    /// same pixels, one path at a time), or the first hit's albedo, normals or depth [default:
+    /// the scene file's; path for scenes with area lights, else lab].
     #[arg(long, value_name = "NAME")]
     integrator: Option<IntegratorKind>,
 

@@ -42,7 +42,9 @@ fn open(name: &str) -> OpenedScene {
     Scene::open(name, &LoadOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
-/// The picture made by hand: an accumulator adding `spp` passes of the scene's integrator.
+/// The picture made by hand: an accumulator adding `spp` passes of the scene's integrator
+/// (`path` and `path-scalar` both by the scalar path tracer: the session's `path` is the
+/// wavefront, which must give the same bits).
 fn by_hand(scene: &Scene, settings: &ResolvedSettings, camera: &Camera, region: Region) -> Film {
     let accel = SceneBvh::build(&scene.geometry).unwrap();
     let lab = Lab::new(scene, &accel, settings.stage).for_camera(camera);
@@ -50,7 +52,7 @@ fn by_hand(scene: &Scene, settings: &ResolvedSettings, camera: &Camera, region: 
     let aov;
     let integrator: &dyn Integrator = match settings.integrator {
         IntegratorKind::Lab => &lab,
-        IntegratorKind::Path => &path,
+        IntegratorKind::Path | IntegratorKind::PathScalar => &path,
         IntegratorKind::Aov(kind) => {
             aov = Aov::new(scene, &accel, kind);
             &aov

@@ -95,6 +95,10 @@ impl<A: Accelerator + Sync + ?Sized> Integrator for WithAovs<'_, A> {
         self.aovs.len()
     }
 
+    fn discarded_samples(&self) -> u64 {
+        self.inner.discarded_samples()
+    }
+
     fn radiance_and_layers_each(
         &self,
         rays: &[Ray],

@@ -84,6 +84,13 @@ pub trait Integrator: Sync {
         SamplerKind::Sobol
     }
 
+    /// How many samples so far it counted as black for not being a finite, non-negative colour
+    /// (the path tracers: a NaN from a degenerate triangle, an overflow); `raylab render`
+    /// warns when there are any.
+    fn discarded_samples(&self) -> u64 {
+        0
+    }
+
     /// How many extra layers (AOVs) it computes beside the colour: none, unless it wraps
     /// another integrator to add them ([`WithAovs`]).
     fn layer_count(&self) -> usize {

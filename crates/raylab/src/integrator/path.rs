@@ -186,6 +186,10 @@ impl Vertex<'_> {
 }
 
 impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
+    fn discarded_samples(&self) -> u64 {
+        Path::discarded_samples(self)
+    }
+
     fn radiance(&self, camera_ray: &Ray, sampler: &mut Sampler) -> Vec3 {
         let max_depth = self.settings.max_depth.unwrap_or(u32::MAX);
         if max_depth == 0 {

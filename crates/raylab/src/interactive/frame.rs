@@ -17,7 +17,7 @@ use crate::accel::Accelerator;
 use crate::camera::Camera;
 use crate::film::{Display, FilmError};
 use crate::integrator::LightSet;
-use crate::integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
+use crate::integrator::{Aov, AovKind, Integrator, Lab, PathSettings, PathWavefront, Stage};
 use crate::ray::Ray;
 use crate::render::{Accumulator, SampleSettings};
 use crate::sampling::{Sampler, SamplerKind};
@@ -45,7 +45,7 @@ impl ViewMode {
     pub fn of(integrator: IntegratorKind, stage: Stage) -> ViewMode {
         match integrator {
             IntegratorKind::Lab => ViewMode::Lab(stage),
-            IntegratorKind::Path => ViewMode::Path,
+            IntegratorKind::Path | IntegratorKind::PathScalar => ViewMode::Path,
             IntegratorKind::Aov(AovKind::Albedo) => ViewMode::Albedo,
             IntegratorKind::Aov(AovKind::Normals) => ViewMode::Normals,
             IntegratorKind::Aov(AovKind::Depth) => ViewMode::Depth,
@@ -248,7 +248,7 @@ impl FrameRenderer {
                 let lights = &self.lights.as_ref().expect("made above").1;
                 picture.add_sample(
                     &camera,
-                    &Path::with_lights(scene, accel, lights, self.path_settings),
+                    &PathWavefront::with_lights(scene, accel, lights, self.path_settings),
                 );
             }
             ViewMode::Albedo => {
@@ -342,6 +342,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+    use crate::integrator::Path;
     use crate::{BruteForce, render_samples};
 
     fn lab_view(width: u32, height: u32) -> View {

@@ -121,7 +121,7 @@ impl RenderIdentity {
             version: VERSION,
             size: (camera.width, camera.height),
             camera: camera.into(),
-            integrator,
+            integrator: integrator.estimator(),
             stage,
             spp,
             seed,

@@ -12,7 +12,7 @@ use crate::bvh::{Bvh, SceneBvh};
 use crate::camera::Camera;
 use crate::film::{Display, Film, ToneMap, format_bytes};
 use crate::image_io::{self, ImageFormat, ImageIoError};
-use crate::integrator::{Aov, Integrator, Lab, Path as PathTracer, WithAovs};
+use crate::integrator::{Aov, Integrator, Lab, Path as PathTracer, PathWavefront, WithAovs};
 use crate::parts::{self, Part, PartHeader, PartKind};
 use crate::region::Region;
 use crate::render::Accumulator;
@@ -304,11 +304,17 @@ impl<'s> RenderJob<'s> {
 
         // The integrator, with its layers.
         let lab = Lab::new(scene, accel, settings.stage).for_camera(camera);
-        let path = PathTracer::new(scene, accel, settings.path_settings());
-        let aov;
+        let (wavefront, scalar, aov);
         let base: &dyn Integrator = match settings.integrator {
             IntegratorKind::Lab => &lab,
-            IntegratorKind::Path => &path,
+            IntegratorKind::Path => {
+                wavefront = PathWavefront::new(scene, accel, settings.path_settings());
+                &wavefront
+            }
+            IntegratorKind::PathScalar => {
+                scalar = PathTracer::new(scene, accel, settings.path_settings());
+                &scalar
+            }
             IntegratorKind::Aov(kind) => {
                 aov = Aov::new(scene, accel, kind);
                 &aov
@@ -414,7 +420,7 @@ impl<'s> RenderJob<'s> {
             film: Some(film),
             samples,
             first_sample,
-            discarded: path.discarded_samples() + accumulator.discarded_samples(),
+            discarded: base.discarded_samples() + accumulator.discarded_samples(),
             elapsed,
             checkpoint_time,
             interrupted,

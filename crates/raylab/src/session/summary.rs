@@ -30,8 +30,9 @@ impl fmt::Display for FrameSummary<'_> {
         let spp = outcome.samples;
         let what = match settings.integrator {
             IntegratorKind::Lab => format!("stage {}", settings.stage),
-            IntegratorKind::Path => format!(
-                "path tracing, max depth {}",
+            IntegratorKind::Path | IntegratorKind::PathScalar => format!(
+                "path tracing{}, max depth {}",
+                if settings.integrator == IntegratorKind::PathScalar { " (scalar)" } else { "" },
                 settings.max_depth.map_or("unlimited".to_string(), |d| d.to_string())
             ),
             other => other.to_string(),

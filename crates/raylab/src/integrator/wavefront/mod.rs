@@ -69,6 +69,18 @@ impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
         PathWavefront { path: Path::new(scene, accel, settings), isa: Isa::detect(), times: None }
     }
 
+    /// A wavefront path tracer with lights made before (`raylab view` keeps them from frame
+    /// to frame).
+    pub fn with_lights(
+        scene: &'a Scene,
+        accel: &'a A,
+        lights: &'a super::LightSet,
+        settings: PathSettings,
+    ) -> Self {
+        let path = Path::with_lights(scene, accel, lights, settings);
+        PathWavefront { path, isa: Isa::detect(), times: None }
+    }
+
     /// The same, with its lanes run on the instruction set `isa` rather than the best this CPU
     /// has (the same samples, to the bit): for tests and benchmarks.
     ///
@@ -101,6 +113,10 @@ impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
 impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
     fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
         self.path.radiance(ray, sampler)
+    }
+
+    fn discarded_samples(&self) -> u64 {
+        self.path.discarded_samples()
     }
 
     fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
