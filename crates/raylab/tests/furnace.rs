@@ -1,8 +1,12 @@
 //! Known answers of the path tracer (furnace tests): inside a closed surface of uniform diffuse
 //! albedo `a` that emits `Le` everywhere, the radiance is `Le/(1 − a)` in every direction, and
 //! a path of at most `d` segments sees `Le·(1 − aᵈ)/(1 − a)`.
+//!
+//! Each picture is made by both path tracers, the wavefront (`path`) and the scalar twin
+//! (`path-scalar`), which must agree to the bit; the known answers are then checked once.
 
 use glam::Vec3;
+use raylab::integrator::{Integrator, PathWavefront};
 use raylab::{
     Accumulator, BruteForce, Camera, Geometry, Material, Path, PathSettings, SampleSettings,
     SamplerKind, Scene, TriangleSampling,
@@ -51,6 +55,33 @@ fn furnace(albedo: f32, emission: f32) -> Scene {
     }
 }
 
+/// `spp` passes of `scene` by the scalar path tracer and by the wavefront, which must give the
+/// same bits: the film.
+fn render_both<A: raylab::Accelerator>(
+    scene: &Scene,
+    accel: &A,
+    settings: PathSettings,
+    camera: &Camera,
+    samples: SampleSettings,
+    spp: u32,
+) -> raylab::Film {
+    let scalar = Path::new(scene, accel, settings);
+    let wavefront = PathWavefront::new(scene, accel, settings);
+    let [by_path, by_wavefront] = [&scalar as &dyn Integrator, &wavefront].map(|integrator| {
+        let mut accumulator = Accumulator::new(camera.width, camera.height).unwrap();
+        accumulator.settings = samples;
+        for _ in 0..spp {
+            accumulator.add_sample(camera, integrator);
+        }
+        accumulator.mean().unwrap()
+    });
+    let bits = |film: &raylab::Film| -> Vec<[u32; 3]> {
+        film.pixels().iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+    };
+    assert!(bits(&by_path) == bits(&by_wavefront), "the wavefront's pixels are the scalar path's");
+    by_path
+}
+
 /// The mean radiance over a small image from the centre, and its standard error (from the
 /// spread of the pixels).
 fn mean_radiance(
@@ -60,15 +91,9 @@ fn mean_radiance(
     kind: SamplerKind,
 ) -> (Vec3, f32) {
     let accel = BruteForce::new(&scene.vertices());
-    let path = Path::new(scene, &accel, settings);
     let camera = Camera { position: Vec3::new(0.1, -0.2, 0.05), yaw: 0.7, ..Camera::lab(24, 24) };
-    let mut accumulator = Accumulator::new(24, 24).unwrap();
-    accumulator.settings =
-        SampleSettings { seed: 5, sampler: Some(kind), ..SampleSettings::default() };
-    for _ in 0..spp {
-        accumulator.add_sample(&camera, &path);
-    }
-    let film = accumulator.mean().unwrap();
+    let samples = SampleSettings { seed: 5, sampler: Some(kind), ..SampleSettings::default() };
+    let film = render_both(scene, &accel, settings, &camera, samples, spp);
     let n = film.pixels().len() as f32;
     let mean = film.pixels().iter().sum::<Vec3>() / n;
     let variance = film.pixels().iter().map(|p| (p.x - mean.x).powi(2)).sum::<f32>() / (n - 1.0);
@@ -139,15 +164,10 @@ fn sphere_in_white_furnace(material: &str) -> (f32, f32) {
     );
     let scene = raylab::scene::parse_scene(&text, std::path::Path::new("furnace.toml")).unwrap();
     let accel = raylab::Bvh::new(&scene.vertices());
-    let path = Path::new(&scene, &accel, PathSettings::default());
     // Close enough that the sphere fills the middle of the picture.
     let camera = Camera { position: Vec3::new(0.0, 0.0, -2.5), ..Camera::lab(24, 24) };
-    let mut accumulator = Accumulator::new(24, 24).unwrap();
-    accumulator.settings = SampleSettings { seed: 2, ..SampleSettings::default() };
-    for _ in 0..64 {
-        accumulator.add_sample(&camera, &path);
-    }
-    let film = accumulator.mean().unwrap();
+    let samples = SampleSettings { seed: 2, ..SampleSettings::default() };
+    let film = render_both(&scene, &accel, PathSettings::default(), &camera, samples, 64);
     // The central 8×8 pixels all see the sphere.
     let values: Vec<f32> = (8..16)
         .flat_map(|y| (8..16).map(move |x| (x, y)))
@@ -193,11 +213,16 @@ fn samples_that_overflow_are_counted_as_discarded() {
         let scene = furnace(0.5, emission);
         let accel = BruteForce::new(&scene.vertices());
         let path = Path::new(&scene, &accel, PathSettings::default());
+        let wavefront = PathWavefront::new(&scene, &accel, PathSettings::default());
         let camera = Camera { position: Vec3::new(0.1, -0.2, 0.05), ..Camera::lab(8, 8) };
-        let mut accumulator = Accumulator::new(8, 8).unwrap();
-        accumulator.add_sample(&camera, &path);
-        let film = accumulator.mean().unwrap();
-        (path.discarded_samples(), film.pixels().iter().all(|p| p.is_finite()))
+        let counts = [&path as &dyn Integrator, &wavefront].map(|integrator| {
+            let mut accumulator = Accumulator::new(8, 8).unwrap();
+            accumulator.add_sample(&camera, integrator);
+            let film = accumulator.mean().unwrap();
+            (integrator.discarded_samples(), film.pixels().iter().all(|p| p.is_finite()))
+        });
+        assert_eq!(counts[0], counts[1], "the wavefront counts as the scalar path does");
+        counts[0]
     };
     // Le = f32::MAX seen directly, plus anything more, is infinite.
     assert_eq!(count(f32::MAX), (64, true));

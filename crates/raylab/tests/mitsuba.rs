@@ -4,15 +4,19 @@
 //! 8, box filter) at 64×64 with 65,536 samples per pixel, made by
 //! `tools/mitsuba/cbox_reference.py --variant llvm_ad_rgb --size 64 --spp 4096 --passes 16
 //! --seed 2000` (its own noise is about 0.0016 RMS). Mitsuba is not needed to run these tests.
+//!
+//! The renders are the default `path`, the wavefront ([`PathWavefront`]); its pixels are the
+//! scalar path's to the bit (`tests/wavefront.rs`, `tests/furnace.rs`).
 
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use raylab::film::Display;
 use raylab::image_compare::save_failure_images;
+use raylab::integrator::PathWavefront;
 use raylab::{
-    Accumulator, Bvh, Film, Path as PathTracer, PathSettings, SampleSettings, SamplerKind, Scene,
-    TriangleSampling, image_io,
+    Accumulator, Bvh, Film, PathSettings, SampleSettings, SamplerKind, Scene, TriangleSampling,
+    image_io,
 };
 
 fn repository() -> PathBuf {
@@ -45,7 +49,7 @@ fn render_with(
     let bvh = Bvh::new(&scene.vertices());
     let max_depth = scene.settings.max_depth.unwrap();
     let path_settings = PathSettings { max_depth, light_sampling, ..PathSettings::default() };
-    let path = PathTracer::new(scene, &bvh, path_settings);
+    let path = PathWavefront::new(scene, &bvh, path_settings);
     let mut accumulator = Accumulator::new(64, 64).unwrap();
     accumulator.settings = settings;
     for _ in 0..spp {
@@ -200,7 +204,8 @@ fn every_material_matches_mitsuba() {
     let camera = scene.camera.unwrap().camera(width, height);
     let bvh = Bvh::new(&scene.vertices());
     let max_depth = scene.settings.max_depth.unwrap();
-    let path = PathTracer::new(&scene, &bvh, PathSettings { max_depth, ..PathSettings::default() });
+    let path =
+        PathWavefront::new(&scene, &bvh, PathSettings { max_depth, ..PathSettings::default() });
     let mut accumulator = Accumulator::new(width, height).unwrap();
     accumulator.settings = SampleSettings { seed: 11, ..SampleSettings::default() };
     for _ in 0..128 {
