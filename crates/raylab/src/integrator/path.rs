@@ -25,7 +25,7 @@ use super::Integrator;
 use super::light_sampler::{LightSet, TriangleSampling};
 use crate::accel::{Accelerator, Hit};
 use crate::interaction::SurfaceInteraction;
-use crate::material::Bsdf;
+use crate::material::{Bsdf, Diffuse, Material};
 use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
 use crate::scene::Scene;
@@ -185,6 +185,31 @@ impl Vertex<'_> {
     }
 }
 
+/// A vertex's shading frame, whether its directions are mirrored into a two-sided material's
+/// front, and the direction toward the viewer in the frame (mirrored).
+#[inline(always)]
+fn shading_frame(
+    material: &Material,
+    ray: &Ray,
+    interaction: &SurfaceInteraction,
+) -> (Frame, bool, Vec3) {
+    // Only anisotropic BSDFs care which way the tangent points: they get Mitsuba's (dp/du);
+    // the rest the cheaper basis of the normal alone (the same distribution of directions).
+    let normal = material.shading_normal(interaction, -ray.direction);
+    let frame = if material.bsdf.is_anisotropic() {
+        Frame::new(normal, interaction.dp_du)
+    } else {
+        Frame::about(normal)
+    };
+    let mut wi = frame.to_local(-ray.direction.normalize());
+    // Two-sided materials scatter on both sides: mirror the directions into the front.
+    let flip = material.two_sided && wi.z < 0.0;
+    if flip {
+        wi.z = -wi.z;
+    }
+    (frame, flip, wi)
+}
+
 impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
     fn discarded_samples(&self) -> u64 {
         Path::discarded_samples(self)
@@ -274,22 +299,29 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     #[inline]
     pub(super) fn vertex(&self, ray: &Ray, interaction: &SurfaceInteraction) -> Vertex<'a> {
         let material = self.scene.material(interaction);
-        // Only anisotropic BSDFs care which way the tangent points: they get Mitsuba's (dp/du);
-        // the rest the cheaper basis of the normal alone (the same distribution of directions).
-        let normal = material.shading_normal(interaction, -ray.direction);
-        let frame = if material.bsdf.is_anisotropic() {
-            Frame::new(normal, interaction.dp_du)
-        } else {
-            Frame::about(normal)
-        };
-        let mut wi = frame.to_local(-ray.direction.normalize());
-        // Two-sided materials scatter on both sides: mirror the directions into the front.
-        let flip = material.two_sided && wi.z < 0.0;
-        if flip {
-            wi.z = -wi.z;
-        }
+        let (frame, flip, wi) = shading_frame(material, ray, interaction);
         let bsdf = material.bsdf_at(&interaction.texture_query());
         Vertex { point: interaction.point, frame, flip, wi, bsdf }
+    }
+
+    /// [`vertex`](Self::vertex) where the material is diffuse: the frame, the mirroring, the
+    /// direction toward the viewer and the (textured) reflectance, without a copy of the BSDF;
+    /// `None` for other materials.
+    #[inline]
+    pub(super) fn diffuse_vertex(
+        &self,
+        ray: &Ray,
+        interaction: &SurfaceInteraction,
+    ) -> Option<(Frame, bool, Vec3, Vec3)> {
+        let material = self.scene.material(interaction);
+        if !matches!(material.bsdf, Bsdf::Diffuse(_)) {
+            return None;
+        }
+        let (frame, flip, wi) = shading_frame(material, ray, interaction);
+        match *material.bsdf_at(&interaction.texture_query()) {
+            Bsdf::Diffuse(Diffuse { reflectance }) => Some((frame, flip, wi, reflectance)),
+            _ => None,
+        }
     }
 
     /// Next-event estimation at `vertex`: draws a light sample, and returns the shadow ray and

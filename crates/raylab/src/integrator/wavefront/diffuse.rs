@@ -30,9 +30,12 @@
 
 use glam::{Vec2, Vec3};
 
+use std::borrow::Cow;
+
 use super::super::light_sampler::{LanePick, LaneTriangle, SHADOW_RAY_LENGTH};
+use super::super::path::{Frame, Vertex};
 use crate::cpu::Isa;
-use crate::material::Diffuse;
+use crate::material::{Bsdf, Diffuse};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
 #[cfg(doc)]
 use crate::sampling::square_to_cosine_hemisphere;
@@ -250,16 +253,20 @@ pub(super) struct DiffuseLanes {
     len: usize,
 }
 
-/// A diffuse vertex, as [`DiffuseLanes::push`] takes it.
+/// A diffuse vertex, as [`DiffuseLanes::push`] takes it: the vertex and its path.
 pub(super) struct LaneVertex {
     pub point: SurfacePoint,
-    pub frame: [Vec3; 3],
+    pub frame: Frame,
     pub flip: bool,
     pub wi: Vec3,
     pub reflectance: Vec3,
     pub throughput: Vec3,
     pub eta: f32,
     pub roulette: bool,
+}
+
+/// A lane's light and numbers, as [`DiffuseLanes::set_draws`] takes them.
+pub(super) struct LaneDraws {
     pub light: LanePick,
     pub u_point: Vec2,
     pub u_direction: Vec2,
@@ -302,16 +309,23 @@ impl DiffuseLanes {
         input.p.set(k, v.point.p);
         input.error.set(k, v.point.error);
         input.normal.set(k, v.point.normal);
-        input.tangent.set(k, v.frame[0]);
-        input.bitangent.set(k, v.frame[1]);
-        input.shading_normal.set(k, v.frame[2]);
+        input.tangent.set(k, v.frame.tangent);
+        input.bitangent.set(k, v.frame.bitangent);
+        input.shading_normal.set(k, v.frame.normal);
         input.flip[k] = v.flip;
         input.wi.set(k, v.wi);
         input.reflectance.set(k, v.reflectance);
         input.throughput.set(k, v.throughput);
         input.eta[k] = v.eta;
         input.roulette[k] = v.roulette;
-        let light = match v.light {
+    }
+
+    /// Gives lane `i` its light and numbers.
+    #[inline]
+    pub(super) fn set_draws(&mut self, i: usize, draws: &LaneDraws) {
+        let input = &mut self.inputs[i / LANES];
+        let k = i % LANES;
+        let light = match draws.light {
             LanePick::Triangle(light) => Some(light),
             LanePick::Nothing | LanePick::Other => None,
         };
@@ -336,11 +350,39 @@ impl DiffuseLanes {
             input.radiance.set(k, radiance);
             input.selection[k] = selection;
         }
-        input.u_point[0][k] = v.u_point.x;
-        input.u_point[1][k] = v.u_point.y;
-        input.u_direction[0][k] = v.u_direction.x;
-        input.u_direction[1][k] = v.u_direction.y;
-        input.u_roulette[k] = v.u_roulette;
+        input.u_point[0][k] = draws.u_point.x;
+        input.u_point[1][k] = draws.u_point.y;
+        input.u_direction[0][k] = draws.u_direction.x;
+        input.u_direction[1][k] = draws.u_direction.y;
+        input.u_roulette[k] = draws.u_roulette;
+    }
+
+    /// Lane `i`'s vertex, for the scalar steps ([`LanePick::Other`] lights, lanes that are not
+    /// exact).
+    pub(super) fn vertex(&self, i: usize) -> Vertex<'static> {
+        let (input, k) = (&self.inputs[i / LANES], i % LANES);
+        let reflectance = input.reflectance.get(k);
+        Vertex {
+            point: SurfacePoint {
+                p: input.p.get(k),
+                error: input.error.get(k),
+                normal: input.normal.get(k),
+            },
+            frame: Frame {
+                tangent: input.tangent.get(k),
+                bitangent: input.bitangent.get(k),
+                normal: input.shading_normal.get(k),
+            },
+            flip: input.flip[k],
+            wi: input.wi.get(k),
+            bsdf: Cow::Owned(Bsdf::Diffuse(Diffuse { reflectance })),
+        }
+    }
+
+    /// Lane `i`'s point.
+    #[inline]
+    pub(super) fn point(&self, i: usize) -> Vec3 {
+        self.inputs[i / LANES].p.get(i % LANES)
     }
 
     /// Shades every lane with the instruction set `isa` (which the CPU must support).
@@ -388,11 +430,9 @@ impl DiffuseLanes {
 
 #[cfg(test)]
 mod tests {
-    use std::borrow::Cow;
-
     use glam::{Affine3A, Vec2, Vec3};
 
-    use super::super::super::path::{Frame, PathState, Vertex};
+    use super::super::super::path::PathState;
     use super::super::super::{Path, PathSettings};
     use super::*;
     use crate::bvh::Bvh;
@@ -498,9 +538,9 @@ mod tests {
             let u = [(); 7].map(|_| number(&mut rng));
             cases.push((vertex, state, u));
         }
-        let lane_vertex = |(vertex, state, u): &(Vertex, PathState, [f32; 7])| LaneVertex {
+        let lane_vertex = |(vertex, state, _): &(Vertex, PathState, [f32; 7])| LaneVertex {
             point: vertex.point,
-            frame: [vertex.frame.tangent, vertex.frame.bitangent, vertex.frame.normal],
+            frame: vertex.frame,
             flip: vertex.flip,
             wi: vertex.wi,
             reflectance: match &*vertex.bsdf {
@@ -510,6 +550,8 @@ mod tests {
             throughput: state.throughput,
             eta: state.eta,
             roulette: state.depth + 1 >= PathSettings::default().rr_depth,
+        };
+        let lane_draws = |u: &[f32; 7]| LaneDraws {
             light: path.lights().pick_for_lanes(u[0]),
             u_point: Vec2::new(u[1], u[2]),
             u_direction: Vec2::new(u[4], u[5]),
@@ -517,8 +559,9 @@ mod tests {
         };
         for isa in Isa::ALL.into_iter().filter(|isa| isa.is_supported()) {
             let mut lanes = DiffuseLanes::default();
-            for case in &cases {
+            for (i, case) in cases.iter().enumerate() {
                 lanes.push(&lane_vertex(case));
+                lanes.set_draws(i, &lane_draws(&case.2));
             }
             lanes.shade(isa);
             let (mut exact, mut shadows, mut bounces) = (0, 0, 0);

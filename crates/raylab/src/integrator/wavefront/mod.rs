@@ -41,14 +41,13 @@ use std::time::{Duration, Instant};
 
 use glam::{Vec2, Vec3};
 
-use diffuse::{DiffuseLanes, LaneVertex};
+use diffuse::{DiffuseLanes, LaneDraws, LaneVertex};
 
 use super::Integrator;
 use super::light_sampler::LanePick;
 use super::path::{Path, PathSettings, PathState, Vertex};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
-use crate::material::{Bsdf, Diffuse};
 use crate::ray::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -137,15 +136,16 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut alive: Vec<usize> = (0..rays.len()).collect();
         let mut batch: Vec<Ray> = Vec::with_capacity(rays.len());
         let mut hits: Vec<Option<Hit>> = Vec::with_capacity(rays.len());
+        // The vertices the scalar steps shade, with their paths.
         let mut vertices: Vec<(usize, Vertex)> = Vec::with_capacity(rays.len());
         let mut shadowed: Vec<(usize, Vec3)> = Vec::with_capacity(rays.len());
         let mut occluded: Vec<bool> = Vec::with_capacity(rays.len());
         // The vertices' paths, and the numbers drawn for them a batch at a time.
         let mut lanes: Vec<usize> = Vec::with_capacity(rays.len());
         let mut numbers = Numbers::with_capacity(rays.len());
-        // The diffuse vertices in lanes, and which vertex each lane is.
+        // The diffuse vertices in lanes, and their paths.
         let mut diffuse = DiffuseLanes::default();
-        let mut diffuse_vertices: Vec<usize> = Vec::with_capacity(rays.len());
+        let mut diffuse_paths: Vec<usize> = Vec::with_capacity(rays.len());
         let mut first = true;
         let mut lap = Lap::start(self.times.as_ref());
         while !alive.is_empty() {
@@ -169,121 +169,121 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             first = false;
             lap.end(|t| &t.closest_hits);
 
-            // 2. Light found; paths that leave the scene or reach the depth limit end.
+            // 2. Light found; paths that leave the scene or reach the depth limit end. Diffuse
+            // vertices go straight into lanes, the others become the scalar steps' vertices.
             vertices.clear();
+            diffuse.clear();
+            diffuse_paths.clear();
             for (&i, hit) in alive.iter().zip(&hits) {
                 let state = &mut states[i];
-                if let Some(interaction) = path.arrive(state, hit.as_ref())
-                    && state.depth + 1 < max_depth
-                {
-                    vertices.push((i, path.vertex(&state.ray, &interaction)));
+                let Some(interaction) = path.arrive(state, hit.as_ref()) else { continue };
+                if state.depth + 1 >= max_depth {
+                    continue;
+                }
+                match path.diffuse_vertex(&state.ray, &interaction) {
+                    Some((frame, flip, wi, reflectance)) => {
+                        diffuse.push(&LaneVertex {
+                            point: interaction.point,
+                            frame,
+                            flip,
+                            wi,
+                            reflectance,
+                            throughput: state.throughput,
+                            eta: state.eta,
+                            roulette: state.depth + 1 >= rr_depth,
+                        });
+                        diffuse_paths.push(i);
+                    }
+                    None => vertices.push((i, path.vertex(&state.ray, &interaction))),
                 }
             }
             lap.end(|t| &t.surfaces);
 
-            // 3. Every vertex's numbers, in the scalar path's order, a batch at a time. The
-            // roulette's are drawn for every vertex, where the scalar path draws them only
-            // for the paths that bounced: a path that did not has ended and draws no more.
+            // 3. Every vertex's numbers, in the scalar path's order, a batch at a time: the
+            // scalar steps' vertices first, then the lanes. The roulette's are drawn for every
+            // vertex, where the scalar path draws them only for the paths that bounced: a path
+            // that did not has ended and draws no more.
             lanes.clear();
             lanes.extend(vertices.iter().map(|(i, _)| *i));
+            lanes.extend(&diffuse_paths);
             numbers.draw(samplers, &lanes);
             lap.end(|t| &t.draws);
 
-            // 4. Light sampling, BSDF sampling and roulette: diffuse vertices in lanes, the
-            // rest one by one.
+            // 4. Light sampling, BSDF sampling and roulette: the scalar steps' vertices one by
+            // one, the diffuse vertices in lanes.
             batch.clear();
             shadowed.clear();
-            diffuse.clear();
-            diffuse_vertices.clear();
             let mut bounced = std::mem::take(&mut alive);
             bounced.clear();
             for (v, (i, vertex)) in vertices.iter().enumerate() {
                 let state = &mut states[*i];
-                let Bsdf::Diffuse(Diffuse { reflectance }) = *vertex.bsdf else {
-                    let shadow = path.sample_light_with(
-                        vertex,
-                        numbers.light[v],
-                        numbers.point[v],
-                        state.throughput,
-                    );
-                    if let Some((ray, contribution)) = shadow {
-                        batch.push(ray);
-                        shadowed.push((*i, contribution));
-                    }
-                    if numbers.bounce(path, state, vertex, v) {
-                        bounced.push(*i);
-                    }
-                    continue;
-                };
-                let light = path.lights().pick_for_lanes(numbers.light[v]);
-                if let LanePick::Other = light
-                    && let Some((ray, contribution)) = path.sample_light_with(
-                        vertex,
-                        numbers.light[v],
-                        numbers.point[v],
-                        state.throughput,
-                    )
-                {
+                if let Some((ray, contribution)) = numbers.sample_light(path, state, vertex, v) {
                     batch.push(ray);
                     shadowed.push((*i, contribution));
                 }
-                diffuse.push(&LaneVertex {
-                    point: vertex.point,
-                    frame: [vertex.frame.tangent, vertex.frame.bitangent, vertex.frame.normal],
-                    flip: vertex.flip,
-                    wi: vertex.wi,
-                    reflectance,
-                    throughput: state.throughput,
-                    eta: state.eta,
-                    roulette: state.depth + 1 >= rr_depth,
-                    light,
-                    u_point: numbers.point[v],
-                    u_direction: numbers.direction[v],
-                    u_roulette: numbers.roulette[v],
-                });
-                diffuse_vertices.push(v);
+                if numbers.bounce(path, state, vertex, v) {
+                    bounced.push(*i);
+                }
+            }
+            let first_lane = vertices.len();
+            for (lane, &i) in diffuse_paths.iter().enumerate() {
+                let v = first_lane + lane;
+                let light = path.lights().pick_for_lanes(numbers.light[v]);
+                if let LanePick::Other = light
+                    && let Some((ray, contribution)) =
+                        numbers.sample_light(path, &states[i], &diffuse.vertex(lane), v)
+                {
+                    batch.push(ray);
+                    shadowed.push((i, contribution));
+                }
+                diffuse.set_draws(
+                    lane,
+                    &LaneDraws {
+                        light,
+                        u_point: numbers.point[v],
+                        u_direction: numbers.direction[v],
+                        u_roulette: numbers.roulette[v],
+                    },
+                );
             }
             diffuse.shade(self.isa);
-            for (lane, &v) in diffuse_vertices.iter().enumerate() {
-                let (i, vertex) = &vertices[v];
-                let state = &mut states[*i];
+            for (lane, &i) in diffuse_paths.iter().enumerate() {
+                let state = &mut states[i];
                 let result = diffuse.result(lane);
                 if !result.exact {
-                    // An offset point was not finite: the scalar code decides the lane.
+                    // An offset point was not finite: the scalar steps decide the lane.
+                    let (vertex, v) = (diffuse.vertex(lane), first_lane + lane);
                     if result.light_in_lanes
-                        && let Some((ray, contribution)) = path.sample_light_with(
-                            vertex,
-                            numbers.light[v],
-                            numbers.point[v],
-                            state.throughput,
-                        )
+                        && let Some((ray, contribution)) =
+                            numbers.sample_light(path, state, &vertex, v)
                     {
                         batch.push(ray);
-                        shadowed.push((*i, contribution));
+                        shadowed.push((i, contribution));
                     }
-                    if numbers.bounce(path, state, vertex, v) {
-                        bounced.push(*i);
+                    if numbers.bounce(path, state, &vertex, v) {
+                        bounced.push(i);
                     }
                     continue;
                 }
                 if let Some((ray, contribution)) = result.shadow {
                     batch.push(ray);
-                    shadowed.push((*i, contribution));
+                    shadowed.push((i, contribution));
                 }
                 if let Some((ray, throughput, pdf)) = result.next {
                     state.ray = ray;
                     state.throughput = throughput;
                     state.previous_pdf = pdf;
                     state.previous_delta = false;
-                    state.previous_point = vertex.point.p;
+                    state.previous_point = diffuse.point(lane);
                     state.depth += 1;
-                    bounced.push(*i);
+                    bounced.push(i);
                 }
             }
             alive = bounced;
             if let Some(times) = &self.times {
-                times.vertices.fetch_add(vertices.len() as u64, Ordering::Relaxed);
-                times.lanes.fetch_add(diffuse.len() as u64, Ordering::Relaxed);
+                let lanes = diffuse.len() as u64;
+                times.vertices.fetch_add(vertices.len() as u64 + lanes, Ordering::Relaxed);
+                times.lanes.fetch_add(lanes, Ordering::Relaxed);
             }
             lap.end(|t| &t.shading);
 
@@ -343,6 +343,19 @@ impl Numbers {
         Sampler::next_1d_each(samplers, lanes, &mut self.lobe);
         Sampler::next_2d_each(samplers, lanes, &mut self.direction);
         Sampler::next_1d_each(samplers, lanes, &mut self.roulette);
+    }
+
+    /// The scalar path's light sample at vertex `v` (its numbers): the shadow ray and what it
+    /// brings.
+    #[inline]
+    fn sample_light<A: Accelerator + ?Sized>(
+        &self,
+        path: &Path<'_, A>,
+        state: &PathState,
+        vertex: &Vertex,
+        v: usize,
+    ) -> Option<(Ray, Vec3)> {
+        path.sample_light_with(vertex, self.light[v], self.point[v], state.throughput)
     }
 
     /// The scalar path's BSDF sample and roulette at vertex `v` (its numbers): whether the path
