@@ -1,5 +1,5 @@
 //! The path tracer, scalar (`Path`, one path at a time) against the wavefront
-//! (`PathWavefront`, a tile's paths stage by stage with batched queries): one pass of 128×96
+//! (`PathWavefront`, a tile's paths stage by stage with batched queries): one pass at a quarter of the scene's size
 //! samples of the scene files' Mitsuba scenes, one thread, the scenes' own depth limits.
 //!
 //! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
@@ -15,7 +15,8 @@ use raylab::scene::LoadOptions;
 use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
 use raylab::{Accumulator, Camera, SamplerKind, Scene, SceneBvh};
 
-/// A scene file of `scenes/` with its BVH, settings and a 128×96 camera.
+/// A scene file of `scenes/` with its BVH, settings and its camera at a quarter of its size
+/// (128×128 for the Cornell box, 160×120 for the showcase): the same view as a full render.
 fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
     let file = root.join(format!("{name}.toml"));
@@ -24,7 +25,8 @@ fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
     let scene = opened.scene;
     let accel = SceneBvh::build(&scene.geometry).expect("a BVH");
     let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
-    let cameras = CameraOptions { size: Some((128, 96)), ..CameraOptions::default() };
+    let (width, height) = scene.settings.size.expect("the scene file's size");
+    let cameras = CameraOptions { size: Some((width / 4, height / 4)), ..CameraOptions::default() };
     let camera = cameras.camera(scene.camera, &scene, false, &accel).expect("a camera");
     (scene, accel, settings, camera)
 }
@@ -43,7 +45,7 @@ fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrato
 fn stage_table(_: &mut Criterion) {
     const PASSES: u32 = 16;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
-    println!("ns per sample by stage, 128x96, {PASSES} passes, one thread");
+    println!("ns per sample by stage, a quarter of the scene's size, {PASSES} passes, one thread");
     println!(
         "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7}",
         "scene",
@@ -148,7 +150,7 @@ fn draws(c: &mut Criterion) {
 
 fn path(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
-    let mut group = c.benchmark_group("path_128x96_1spp_1_thread");
+    let mut group = c.benchmark_group("path_quarter_size_1spp_1_thread");
     group.sample_size(20);
     for name in ["cornell-mitsuba", "showcase"] {
         let (scene, accel, settings, camera) = load(name);
