@@ -9,16 +9,18 @@
 //! 1. **closest hits** of every live path's ray: the camera rays as packets
 //!    ([`Accelerator::closest_hits`]), the later rays one by one;
 //! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
-//!    `max_depth` end; each vertex's material and shading frame;
+//!    `max_depth` end; each vertex's material and shading frame. A diffuse vertex goes straight
+//!    into a lane (its point, frame and reflectance; no copy of its BSDF), any other becomes
+//!    the scalar path's vertex;
 //! 3. **draws**: every vertex's numbers (the light's choice and point, the BSDF's lobe and
 //!    direction, the roulette's), each a batch over the vertices ([`Sampler::next_1d_each`],
 //!    [`Sampler::next_2d_each`], sixteen lanes per loop);
-//! 4. **shading**: light sampling, BSDF sampling and Russian roulette. Diffuse vertices go to
-//!    lanes (`diffuse.rs`: gathered sixteen to a chunk in structure-of-arrays form and shaded
-//!    by one loop the compiler vectorizes, sixteen lanes per AVX-512 instruction); the other
-//!    materials, lights other than area-sampled triangles, and the rare lane whose offset
-//!    point overflows run the scalar path's steps ([`Path::sample_light_with`], `bounce`,
-//!    `survives_roulette`) one by one;
+//! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes
+//!    (`diffuse.rs`: sixteen to a chunk in structure-of-arrays form) get their lights and
+//!    numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per AVX-512
+//!    instruction; the other materials, lights other than area-sampled triangles, and the
+//!    rare lane whose offset point overflows run the scalar path's steps
+//!    ([`Path::sample_light_with`], `bounce`, `survives_roulette`) one by one;
 //! 5. **occlusion** of the shadow rays, one by one, and the light they bring.
 //!
 //! Grouping by material is what keeps the lanes full: a chunk holds only diffuse vertices,
@@ -143,7 +145,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         // The vertices' paths, and the numbers drawn for them a batch at a time.
         let mut lanes: Vec<usize> = Vec::with_capacity(rays.len());
         let mut numbers = Numbers::with_capacity(rays.len());
-        // The diffuse vertices in lanes, and their paths.
+        // The diffuse vertices in lanes, and their paths. Made per tile: one reused from tile
+        // to tile (thread-local) was measured slower (BENCHMARKS.md).
         let mut diffuse = DiffuseLanes::default();
         let mut diffuse_paths: Vec<usize> = Vec::with_capacity(rays.len());
         let mut first = true;
