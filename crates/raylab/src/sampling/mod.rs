@@ -22,7 +22,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 use glam::{DVec3, Vec2, Vec3};
 
 pub use pcg::{Pcg32, mix64};
-pub use sampler::{Sampler, SamplerKind};
+pub use sampler::{Sampler, SamplerKind, VertexNumbers};
 
 /// Where sample `index` of pixel `(x, y)` goes through the pixel, in `[0, 1)²` from its top-left
 /// corner: the lab's pixel sampling.

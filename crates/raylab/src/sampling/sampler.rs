@@ -137,6 +137,32 @@ impl Sampler {
     pub fn next_2d_each(samplers: &mut [Sampler], lanes: &[usize], out: &mut [Vec2]) {
         each_with::<TwoD>(samplers, lanes, out, Isa::detect());
     }
+
+    /// A path vertex's numbers ([`VertexNumbers`]: `next_1d`, `next_2d`, `next_1d`, `next_2d`,
+    /// `next_1d`, in that order) of the samplers `lanes` picks, into `out`: the five draws of
+    /// [`next_1d_each`](Self::next_1d_each) and [`next_2d_each`](Self::next_2d_each) in one
+    /// pass over the samplers, sixteen lanes at a time.
+    ///
+    /// # Panics
+    /// If `out` is shorter than `lanes`, or a lane is out of range.
+    pub fn next_vertex_each(samplers: &mut [Sampler], lanes: &[usize], out: &mut [VertexNumbers]) {
+        each_with::<VertexDraw>(samplers, lanes, out, Isa::detect());
+    }
+}
+
+/// The numbers a path tracer draws at a vertex, in the order it draws them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VertexNumbers {
+    /// Picks the light.
+    pub light: f32,
+    /// Picks the point on the light.
+    pub point: Vec2,
+    /// Picks the BSDF's lobe.
+    pub lobe: f32,
+    /// Picks the BSDF's direction.
+    pub direction: Vec2,
+    /// Plays Russian roulette.
+    pub roulette: f32,
 }
 
 /// Lanes per batch.
@@ -180,6 +206,33 @@ impl SobolDraw for TwoD {
     }
     fn one_by_one(sampler: &mut Sampler) -> Vec2 {
         sampler.next_2d()
+    }
+}
+
+/// [`Sampler::next_vertex_each`]: a 1D, a 2D, a 1D, a 2D and a 1D draw.
+struct VertexDraw;
+
+impl SobolDraw for VertexDraw {
+    type Number = VertexNumbers;
+    const DIMENSIONS: u32 = 7;
+    #[inline(always)]
+    fn draw(base: u32, reversed_index: u32, dimension: u32) -> VertexNumbers {
+        VertexNumbers {
+            light: OneD::draw(base, reversed_index, dimension),
+            point: TwoD::draw(base, reversed_index, dimension + 1),
+            lobe: OneD::draw(base, reversed_index, dimension + 3),
+            direction: TwoD::draw(base, reversed_index, dimension + 4),
+            roulette: OneD::draw(base, reversed_index, dimension + 6),
+        }
+    }
+    fn one_by_one(sampler: &mut Sampler) -> VertexNumbers {
+        VertexNumbers {
+            light: sampler.next_1d(),
+            point: sampler.next_2d(),
+            lobe: sampler.next_1d(),
+            direction: sampler.next_2d(),
+            roulette: sampler.next_1d(),
+        }
     }
 }
 
@@ -389,6 +442,7 @@ mod tests {
             for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
                 check_each::<OneD>(isa, kind);
                 check_each::<TwoD>(isa, kind);
+                check_each::<VertexDraw>(isa, kind);
             }
         }
     }

@@ -13,8 +13,8 @@
 //!    into a lane (its point, frame and reflectance; no copy of its BSDF), any other becomes
 //!    the scalar path's vertex;
 //! 3. **draws**: every vertex's numbers (the light's choice and point, the BSDF's lobe and
-//!    direction, the roulette's), each a batch over the vertices ([`Sampler::next_1d_each`],
-//!    [`Sampler::next_2d_each`], sixteen lanes per loop);
+//!    direction, the roulette's) in one pass over the vertices' samplers
+//!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
 //! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes
 //!    (`diffuse.rs`: sixteen to a chunk in structure-of-arrays form) get their lights and
 //!    numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per AVX-512
@@ -41,7 +41,7 @@ mod diffuse;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use diffuse::{DiffuseLanes, LaneDraws, LaneVertex};
 
@@ -51,7 +51,7 @@ use super::path::{Path, PathSettings, PathState, Vertex};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
 use crate::ray::Ray;
-use crate::sampling::Sampler;
+use crate::sampling::{Sampler, VertexNumbers};
 use crate::scene::Scene;
 
 /// [`Path`] run as a wavefront (see the module documentation): the same samples, the work
@@ -231,7 +231,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             let first_lane = vertices.len();
             for (lane, &i) in diffuse_paths.iter().enumerate() {
                 let v = first_lane + lane;
-                let light = path.lights().pick_for_lanes(numbers.light[v]);
+                let drawn = numbers.drawn[v];
+                let light = path.lights().pick_for_lanes(drawn.light);
                 if let LanePick::Other = light
                     && let Some((ray, contribution)) =
                         numbers.sample_light(path, &states[i], &diffuse.vertex(lane), v)
@@ -243,9 +244,9 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                     lane,
                     &LaneDraws {
                         light,
-                        u_point: numbers.point[v],
-                        u_direction: numbers.direction[v],
-                        u_roulette: numbers.roulette[v],
+                        u_point: drawn.point,
+                        u_direction: drawn.direction,
+                        u_roulette: drawn.roulette,
                     },
                 );
             }
@@ -313,39 +314,21 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
 }
 
 /// The numbers a stage's vertices draw, in the scalar path's order: the light's choice and
-/// point, the BSDF's lobe and direction, the roulette's number.
+/// point, the BSDF's lobe and direction, the roulette's number ([`VertexNumbers`]), vertex by
+/// vertex.
 struct Numbers {
-    light: Vec<f32>,
-    point: Vec<Vec2>,
-    lobe: Vec<f32>,
-    direction: Vec<Vec2>,
-    roulette: Vec<f32>,
+    drawn: Vec<VertexNumbers>,
 }
 
 impl Numbers {
     fn with_capacity(n: usize) -> Numbers {
-        Numbers {
-            light: Vec::with_capacity(n),
-            point: Vec::with_capacity(n),
-            lobe: Vec::with_capacity(n),
-            direction: Vec::with_capacity(n),
-            roulette: Vec::with_capacity(n),
-        }
+        Numbers { drawn: Vec::with_capacity(n) }
     }
 
-    /// Draws each of `lanes`' numbers, a batch at a time.
+    /// Draws each of `lanes`' numbers in one pass over their samplers.
     fn draw(&mut self, samplers: &mut [Sampler], lanes: &[usize]) {
-        let n = lanes.len();
-        self.light.resize(n, 0.0);
-        self.point.resize(n, Vec2::ZERO);
-        self.lobe.resize(n, 0.0);
-        self.direction.resize(n, Vec2::ZERO);
-        self.roulette.resize(n, 0.0);
-        Sampler::next_1d_each(samplers, lanes, &mut self.light);
-        Sampler::next_2d_each(samplers, lanes, &mut self.point);
-        Sampler::next_1d_each(samplers, lanes, &mut self.lobe);
-        Sampler::next_2d_each(samplers, lanes, &mut self.direction);
-        Sampler::next_1d_each(samplers, lanes, &mut self.roulette);
+        self.drawn.resize(lanes.len(), VertexNumbers::default());
+        Sampler::next_vertex_each(samplers, lanes, &mut self.drawn);
     }
 
     /// The scalar path's light sample at vertex `v` (its numbers): the shadow ray and what it
@@ -358,7 +341,8 @@ impl Numbers {
         vertex: &Vertex,
         v: usize,
     ) -> Option<(Ray, Vec3)> {
-        path.sample_light_with(vertex, self.light[v], self.point[v], state.throughput)
+        let drawn = &self.drawn[v];
+        path.sample_light_with(vertex, drawn.light, drawn.point, state.throughput)
     }
 
     /// The scalar path's BSDF sample and roulette at vertex `v` (its numbers): whether the path
@@ -371,8 +355,9 @@ impl Numbers {
         vertex: &Vertex,
         v: usize,
     ) -> bool {
-        path.bounce(state, vertex, self.lobe[v], self.direction[v])
-            && path.survives_roulette(state, self.roulette[v])
+        let drawn = &self.drawn[v];
+        path.bounce(state, vertex, drawn.lobe, drawn.direction)
+            && path.survives_roulette(state, drawn.roulette)
     }
 }
 
