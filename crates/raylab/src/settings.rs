@@ -67,10 +67,10 @@ pub enum IntegratorKind {
     /// The lab's light model, at the stage the render settings give.
     Lab,
     /// The path tracer: the wavefront, whose diffuse vertices run sixteen to an instruction
-    /// ([`PathWavefront`](crate::integrator::PathWavefront)).
+    /// (`PathWavefront`).
     Path,
-    /// The path tracer one path at a time ([`Path`](crate::integrator::Path)): the reference
-    /// twin of `path`, with the same samples to the bit.
+    /// The path tracer one path at a time (`Path`): the reference twin of `path`, with the
+    /// same samples to the bit.
     #[cfg_attr(feature = "io", serde(rename = "path-scalar"))]
     PathScalar,
     /// A first-hit image.
