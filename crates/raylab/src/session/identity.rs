@@ -190,6 +190,31 @@ mod tests {
         assert_eq!(RenderIdentity::from_text("b.exr", &lab.to_text()), Ok(lab));
     }
 
+    /// `path-scalar` gives `path`'s pixels to the bit, so a render by one is the same render
+    /// as by the other: parts of both merge, and either resumes the other's checkpoint.
+    #[test]
+    fn the_scalar_path_renders_under_the_paths_identity() {
+        let camera = Camera::lab(40, 27);
+        let with = |integrator| {
+            RenderIdentity::new(
+                &camera,
+                integrator,
+                Stage::Ambient,
+                16,
+                3,
+                SamplerKind::Sobol,
+                Filter::GAUSSIAN,
+                Some(8),
+                TriangleSampling::Area,
+                Vec::new(),
+            )
+        };
+        let scalar = with(IntegratorKind::PathScalar);
+        assert_eq!(scalar, with(IntegratorKind::Path));
+        assert_eq!(scalar.integrator, IntegratorKind::Path);
+        assert_ne!(scalar, with(IntegratorKind::Lab));
+    }
+
     #[test]
     fn earlier_and_malformed_identities_are_refused_by_name() {
         let old = "size=40x27; camera=Camera { .. }; integrator=lab; stage=ambient; spp=1";
