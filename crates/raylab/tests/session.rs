@@ -4,7 +4,9 @@
 //! first pass and resumed from its checkpoint ends with the uninterrupted render's pixels; AOV
 //! layers from the same pass are the layers a pass of their own gives.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use raylab::integrator::{Aov, Integrator, Lab, Path as PathTracer};
@@ -18,24 +20,9 @@ use raylab::{Accumulator, Camera, Film, Region, Scene, SceneBvh};
 
 const SIZE: (u32, u32) = (24, 16);
 
-fn repository() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
 /// The scenes of `scenes/`, the built-in lab box and a model file.
 fn scene_names() -> Vec<String> {
-    let mut names = vec!["cornell".to_string()];
-    let mut files: Vec<PathBuf> = std::fs::read_dir(repository().join("scenes"))
-        .unwrap()
-        .map(|entry| entry.unwrap().path())
-        .filter(|path| path.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 3, "the scenes folder: {files:?}");
-    names.extend(files.iter().map(|p| p.display().to_string()));
-    let model = repository().join("crates/raylab/tests/data/meshes/bunny_lowres.obj");
-    names.push(model.display().to_string());
-    names
+    common::scene_names(&["bunny_lowres.obj"])
 }
 
 fn open(name: &str) -> OpenedScene {
@@ -115,7 +102,7 @@ fn a_job_gives_the_pixels_of_its_parts_put_together_by_hand() {
 #[test]
 fn a_stopped_render_resumes_from_its_checkpoint_to_the_same_pixels() {
     let dir = tempfile::tempdir().unwrap();
-    let name = repository().join("scenes/cornell-mitsuba.toml").display().to_string();
+    let name = common::repository().join("scenes/cornell-mitsuba.toml").display().to_string();
     let OpenedScene { scene, is_model } = open(&name);
     let options = RenderOptions { spp: Some(3), ..RenderOptions::default() };
     let settings = ResolvedSettings::resolve(&scene, &options);
@@ -173,7 +160,7 @@ fn a_stopped_render_resumes_from_its_checkpoint_to_the_same_pixels() {
 #[test]
 fn layers_from_the_same_pass_are_those_of_a_pass_of_their_own() {
     let dir = tempfile::tempdir().unwrap();
-    let name = repository().join("scenes/showcase.toml").display().to_string();
+    let name = common::repository().join("scenes/showcase.toml").display().to_string();
     let OpenedScene { scene, is_model } = open(&name);
     let options = RenderOptions { spp: Some(2), ..RenderOptions::default() };
     let settings = ResolvedSettings::resolve(&scene, &options);

@@ -6,8 +6,6 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-
 use raylab::integrator::{Integrator, Path as PathTracer, PathSettings, PathWavefront};
 use raylab::scene::LoadOptions;
 use raylab::session::CameraOptions;
@@ -15,27 +13,9 @@ use raylab::{Accumulator, Camera, Film, Scene, SceneBvh};
 
 const SIZE: (u32, u32) = (32, 24);
 
-fn repository() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
 /// The scenes: every `scenes/*.toml`, the built-in box, three model files.
 fn scene_names() -> Vec<String> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(repository().join("scenes"))
-        .unwrap()
-        .map(|entry| entry.unwrap().path())
-        .filter(|path| path.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 3, "the scenes folder: {files:?}");
-    let meshes = repository().join("crates/raylab/tests/data/meshes");
-    files.extend(
-        ["bunny_lowres.obj", "spider/spider.obj", "BoxTextured/BoxTextured.gltf"]
-            .map(|name| meshes.join(name)),
-    );
-    std::iter::once("cornell".to_string())
-        .chain(files.iter().map(|p| p.display().to_string()))
-        .collect()
+    common::scene_names(&["bunny_lowres.obj", "spider/spider.obj", "BoxTextured/BoxTextured.gltf"])
 }
 
 fn bits(film: &Film) -> Vec<[u32; 3]> {

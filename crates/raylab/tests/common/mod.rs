@@ -1,5 +1,9 @@
 //! Scenes that more than one test file builds.
 
+// Each test file that includes this module uses only part of it.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
@@ -38,4 +42,26 @@ pub fn cut_out_scene() -> Scene {
     let light =
         raylab::PointLight { position: Vec3::new(0.0, 0.0, -1.5), power: Vec3::splat(20.0) };
     Scene::new("cut-out", geometry, vec![cut, wall], light)
+}
+
+/// The repository's root.
+pub fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The scenes to render in whole-pipeline tests: the built-in lab box, every `scenes/*.toml`
+/// (sorted), and `models`, paths under `crates/raylab/tests/data/meshes`.
+pub fn scene_names(models: &[&str]) -> Vec<String> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(repository().join("scenes"))
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 3, "the scenes folder: {files:?}");
+    let meshes = repository().join("crates/raylab/tests/data/meshes");
+    files.extend(models.iter().map(|name| meshes.join(name)));
+    std::iter::once("cornell".to_string())
+        .chain(files.iter().map(|p| p.display().to_string()))
+        .collect()
 }

@@ -140,8 +140,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut hits: Vec<Option<Hit>> = Vec::with_capacity(rays.len());
         // The vertices the scalar steps shade, with their paths.
         let mut vertices: Vec<(usize, Vertex)> = Vec::with_capacity(rays.len());
-        let mut shadowed: Vec<(usize, Vec3)> = Vec::with_capacity(rays.len());
-        let mut occluded: Vec<bool> = Vec::with_capacity(rays.len());
+        let mut shadows = ShadowRays::with_capacity(rays.len());
         // The vertices' paths, and the numbers drawn for them a batch at a time.
         let mut lanes: Vec<usize> = Vec::with_capacity(rays.len());
         let mut numbers = Numbers::with_capacity(rays.len());
@@ -214,16 +213,12 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
 
             // 4. Light sampling, BSDF sampling and roulette: the scalar steps' vertices one by
             // one, the diffuse vertices in lanes.
-            batch.clear();
-            shadowed.clear();
+            shadows.clear();
             let mut bounced = std::mem::take(&mut alive);
             bounced.clear();
             for (v, (i, vertex)) in vertices.iter().enumerate() {
                 let state = &mut states[*i];
-                if let Some((ray, contribution)) = numbers.sample_light(path, state, vertex, v) {
-                    batch.push(ray);
-                    shadowed.push((*i, contribution));
-                }
+                shadows.add(*i, numbers.sample_light(path, state, vertex, v));
                 if numbers.bounce(path, state, vertex, v) {
                     bounced.push(*i);
                 }
@@ -233,12 +228,9 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                 let v = first_lane + lane;
                 let drawn = numbers.drawn[v];
                 let light = path.lights().pick_for_lanes(drawn.light);
-                if let LanePick::Other = light
-                    && let Some((ray, contribution)) =
-                        numbers.sample_light(path, &states[i], &diffuse.vertex(lane), v)
-                {
-                    batch.push(ray);
-                    shadowed.push((i, contribution));
+                if let LanePick::Other = light {
+                    shadows
+                        .add(i, numbers.sample_light(path, &states[i], &diffuse.vertex(lane), v));
                 }
                 diffuse.set_draws(
                     lane,
@@ -257,22 +249,15 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                 if !result.exact {
                     // An offset point was not finite: the scalar steps decide the lane.
                     let (vertex, v) = (diffuse.vertex(lane), first_lane + lane);
-                    if result.light_in_lanes
-                        && let Some((ray, contribution)) =
-                            numbers.sample_light(path, state, &vertex, v)
-                    {
-                        batch.push(ray);
-                        shadowed.push((i, contribution));
+                    if result.light_in_lanes {
+                        shadows.add(i, numbers.sample_light(path, state, &vertex, v));
                     }
                     if numbers.bounce(path, state, &vertex, v) {
                         bounced.push(i);
                     }
                     continue;
                 }
-                if let Some((ray, contribution)) = result.shadow {
-                    batch.push(ray);
-                    shadowed.push((i, contribution));
-                }
+                shadows.add(i, result.shadow);
                 if let Some((ray, throughput, pdf)) = result.next {
                     state.ray = ray;
                     state.throughput = throughput;
@@ -291,14 +276,9 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             }
             lap.end(|t| &t.shading);
 
-            // 5. Occlusion of the shadow rays, as a batch.
-            occluded.clear();
-            occluded.resize(batch.len(), false);
-            for (ray, blocked) in batch.iter().zip(&mut occluded) {
-                *blocked = super::occluded_opaque(scene, accel, ray);
-            }
-            for (&(i, contribution), &blocked) in shadowed.iter().zip(&occluded) {
-                if !blocked {
+            // 5. Occlusion of the shadow rays, and the light they bring.
+            for (ray, &(i, contribution)) in shadows.rays.iter().zip(&shadows.light) {
+                if !super::occluded_opaque(scene, accel, ray) {
                     states[i].radiance += contribution;
                 }
             }
@@ -309,6 +289,33 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         }
         if let Some(times) = &self.times {
             times.paths.fetch_add(rays.len() as u64, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The shadow rays of a stage's vertices, and the light each brings to its path if nothing
+/// blocks it.
+struct ShadowRays {
+    rays: Vec<Ray>,
+    light: Vec<(usize, Vec3)>,
+}
+
+impl ShadowRays {
+    fn with_capacity(n: usize) -> ShadowRays {
+        ShadowRays { rays: Vec::with_capacity(n), light: Vec::with_capacity(n) }
+    }
+
+    fn clear(&mut self) {
+        self.rays.clear();
+        self.light.clear();
+    }
+
+    /// Path `i`'s light sample, if it made one.
+    #[inline]
+    fn add(&mut self, i: usize, sample: Option<(Ray, Vec3)>) {
+        if let Some((ray, contribution)) = sample {
+            self.rays.push(ray);
+            self.light.push((i, contribution));
         }
     }
 }
