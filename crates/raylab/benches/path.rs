@@ -47,7 +47,7 @@ fn stage_table(_: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     println!("ns per sample by stage, a quarter of the scene's size, {PASSES} passes, one thread");
     println!(
-        "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7}",
+        "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>9}",
         "scene",
         "scalar",
         "wavefr.",
@@ -57,7 +57,8 @@ fn stage_table(_: &mut Criterion) {
         "draws",
         "shading",
         "occl.",
-        "lanes"
+        "lanes",
+        "vertices"
     );
     for name in ["cornell-mitsuba", "showcase"] {
         let (scene, accel, settings, camera) = load(name);
@@ -94,7 +95,7 @@ fn stage_table(_: &mut Criterion) {
         let in_stages: Duration = stages.iter().sum();
         let lanes = (after.lanes - before.lanes) as f64 / (after.vertices - before.vertices) as f64;
         println!(
-            "{:16} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:6.0}%",
+            "{:16} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:6.0}% {:9.2}",
             name,
             ns(scalar_time),
             ns(wavefront_time),
@@ -105,6 +106,7 @@ fn stage_table(_: &mut Criterion) {
             ns(stages[3]),
             ns(stages[4]),
             100.0 * lanes,
+            (after.vertices - before.vertices) as f64 / samples,
         );
     }
 }

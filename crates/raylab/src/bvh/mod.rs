@@ -8,7 +8,7 @@
 //! | `build` | [`BuildSettings`]; the binned SAH build of a binary tree, in parallel on the current rayon pool (`build/sweep.rs`: the split sweep); its collapse into the 8-wide tree (`build/collapse.rs`) |
 //! | `node` | the wide node's layout (eight boxes plane by plane, eight child references, drawn in its doc); `node/kernel.rs`: one ray or a packet's bound against eight boxes |
 //! | `leaf` | leaf records of up to eight triangles over a table of the vertices they share; `leaf/kernel.rs` and `leaf/lanes.rs`: a ray against a record in one pass |
-//! | `traverse` | single rays: nearest child first for the closest hit, first hit for occlusion; `traverse/flat.rs`: scenes of a few dozen triangles (the Cornell boxes) answer single rays without the tree, every triangle tested sixteen per instruction (up to [`BuildSettings::flat_limit`] triangles) |
+//! | `traverse` | single rays: nearest child first for the closest hit, first hit for occlusion; `traverse/flat.rs`: scenes of a few dozen triangles (the Cornell boxes) answer single rays without the tree, every triangle tested sixteen per instruction (up to [`BuildSettings::flat_limit`] triangles); `traverse/flat_rays.rs`: many incoherent rays against that list, sixteen rays per instruction |
 //! | `packet` | up to 64 coherent rays through the tree together: `rays` (their lanes), `setup`, `bundle` (a packet's bound in ray space), `leaf` and `lanes` (a leaf's triangles against several rays per instruction) |
 //! | `refit` | moving geometry keeps its tree: [`Bvh::refit`] takes new vertices and recomputes the boxes bottom-up |
 //! | `two_level` | [`TwoLevel`]: a tree over instances of bottom accelerators; `scene` ([`SceneBvh`]) picks one or two levels for a scene |
@@ -271,6 +271,21 @@ impl Accelerator for Bvh {
     fn occluded_each(&self, rays: &[Ray], occluded: &mut [bool]) {
         // SAFETY: as above.
         unsafe { (self.queries.occluded_each)(&self.wide, rays, occluded) }
+    }
+
+    /// A small scene's flat list traces the rays in lanes, one triangle per step
+    /// (`traverse/flat_rays.rs`); the tree traces them one by one.
+    fn closest_hits_incoherent(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one answer per ray");
+        match &self.flat {
+            // SAFETY: as above.
+            Some(flat) => unsafe { (self.queries.flat_closest_hits)(flat, rays, hits) },
+            None => {
+                for (ray, hit) in rays.iter().zip(hits) {
+                    *hit = self.closest_hit(ray);
+                }
+            }
+        }
     }
 }
 

@@ -34,6 +34,8 @@ pub(crate) struct Queries {
     pub flat_closest_hit: unsafe fn(&Flat, &Ray) -> Option<Hit>,
     /// Whether one ray is occluded, in a small scene's flat list.
     pub flat_occluded: unsafe fn(&Flat, &Ray) -> bool,
+    /// Closest hits of incoherent rays, in lanes, in a small scene's flat list.
+    pub flat_closest_hits: unsafe fn(&Flat, &[Ray], &mut [Option<Hit>]),
 }
 
 impl std::fmt::Debug for Queries {
@@ -75,6 +77,11 @@ macro_rules! queries {
             // SAFETY: as above.
             unsafe { <$kernel as FlatKernel>::occluded(flat, ray) }
         }
+        $(#[target_feature(enable = $features)])?
+        unsafe fn flat_closest_hits(flat: &Flat, rays: &[Ray], out: &mut [Option<Hit>]) {
+            // SAFETY: as above.
+            unsafe { <$kernel as FlatKernel>::closest_hits(flat, rays, out) }
+        }
         Queries {
             isa: $isa,
             closest_hit,
@@ -83,6 +90,7 @@ macro_rules! queries {
             occluded_each,
             flat_closest_hit,
             flat_occluded,
+            flat_closest_hits,
         }
     }};
 }

@@ -88,4 +88,11 @@ impl Accelerator for SceneBvh {
             SceneBvh::Instanced(two) => two.occluded_each(rays, occluded),
         }
     }
+
+    fn closest_hits_incoherent(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        match self {
+            SceneBvh::Flat(bvh) => bvh.closest_hits_incoherent(rays, hits),
+            SceneBvh::Instanced(two) => two.closest_hits_incoherent(rays, hits),
+        }
+    }
 }

@@ -402,7 +402,10 @@ fn traversal_counts_are_the_nodes_leaves_and_records_visited() {
 /// answers, which are brute force's: scenes on a coarse grid (edge functions exactly zero, so
 /// the double-precision path decides), with duplicated triangles (ties at equal `t`, which go to
 /// the lower index), rays starting just off a surface (the self-intersection bound), explicit
-/// `t_min`, short segments, and 1 to 40 triangles (full, partial and several blocks).
+/// `t_min`, short segments, and 1 to 40 triangles (full, partial and several blocks). The
+/// rays of a case are also traced together, in lanes (`flat_rays.rs`), with rays that can hit
+/// nothing among them (NaN, zero or infinite parts, an empty range), in batches of every length
+/// up to 47, so that groups are full, partial, and padded.
 #[test]
 fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
     use crate::accel::BruteForce;
@@ -427,6 +430,7 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
         let bvh = Bvh::build(&triangles, &settings);
         let flat = bvh.flat.as_ref().expect("a flat list below the limit");
         let brute = BruteForce::new(&triangles);
+        let mut batch = Vec::new();
         for r in 0..40 {
             let [a, b, c] = triangles[(case + r) % triangles.len()];
             let target = match r % 3 {
@@ -444,6 +448,7 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
             let mut ray = Ray::new(origin, target - origin);
             ray.t_min = if r % 5 == 0 { 0.5 * rng.next() } else { 0.0 };
             ray.t_max = [f32::INFINITY, 1.0, 0.5 + rng.next()][r % 3];
+            batch.push(ray);
             let closest = traverse::flat::closest_hit_scalar(flat, &ray);
             let occluded = traverse::flat::occluded_scalar(flat, &ray);
             assert_eq!(closest, brute.closest_hit(&ray), "scalar twin, case {case}: {ray:?}");
@@ -461,6 +466,29 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
                 assert_eq!(simd.closest_hit(&ray), closest, "{}, case {case}: {ray:?}", isa.name());
                 assert_eq!(simd.occluded(&ray), occluded, "{}, case {case}: {ray:?}", isa.name());
             }
+        }
+        let origin = batch.first().map_or(Vec3::ZERO, |r| r.origin);
+        let hostile = [
+            Ray::new(origin, Vec3::new(f32::NAN, 1.0, 0.0)),
+            Ray::new(origin, Vec3::ZERO),
+            Ray::new(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X),
+            Ray { t_min: 2.0, t_max: 1.0, ..Ray::new(origin, Vec3::Y) },
+            Ray { t_max: f32::NAN, ..Ray::new(origin, -Vec3::Y) },
+            Ray { t_min: f32::NAN, ..Ray::new(origin, Vec3::Z) },
+        ];
+        let at = case % (batch.len() + 1);
+        batch.splice(at..at, hostile.into_iter().cycle().skip(case).take(1 + case % 7));
+        let batch = &batch[..=(case % batch.len())];
+        let expected: Vec<_> =
+            batch.iter().map(|r| traverse::flat::closest_hit_scalar(flat, r)).collect();
+        for (k, isa) in Isa::ALL.into_iter().enumerate() {
+            let Some(simd) = Bvh::build(&triangles, &settings).with_isa(isa) else {
+                continue;
+            };
+            tested[k] += 1;
+            let mut hits = vec![Some(Hit { t: -1.0, triangle: 7, b1: 0.0, b2: 0.0 }); batch.len()];
+            simd.closest_hits_incoherent(batch, &mut hits);
+            assert_eq!(hits, expected, "{} in lanes, case {case}: {batch:?}", isa.name());
         }
     }
     for (k, isa) in Isa::ALL.into_iter().enumerate() {

@@ -83,6 +83,12 @@ impl Flat {
         Flat { blocks }
     }
 
+    /// The triangles in index order, with their indices.
+    #[inline(always)]
+    pub(crate) fn triangles(&self) -> FlatTriangles<'_> {
+        FlatTriangles { blocks: self.blocks.iter(), block: None, lanes: 0 }
+    }
+
     /// Bytes of the blocks.
     pub(crate) fn bytes(&self) -> usize {
         self.blocks.len() * size_of::<FlatBlock>()
@@ -93,6 +99,34 @@ impl Flat {
         &mut self,
     ) -> impl Iterator<Item = (&mut TriangleBlock<FLAT_LANES>, &[u32; FLAT_LANES])> {
         self.blocks.iter_mut().map(|b| (&mut b.triangles, &b.ids))
+    }
+}
+
+/// [`Flat::triangles`]: the corners and index of each triangle, in index order.
+pub(crate) struct FlatTriangles<'a> {
+    blocks: std::slice::Iter<'a, FlatBlock>,
+    /// The block being read, and its lanes not yet read.
+    block: Option<&'a FlatBlock>,
+    lanes: u32,
+}
+
+impl Iterator for FlatTriangles<'_> {
+    type Item = ([Vec3; 3], u32);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<([Vec3; 3], u32)> {
+        loop {
+            if let Some(block) = self.block
+                && self.lanes != 0
+            {
+                let lane = self.lanes.trailing_zeros() as usize;
+                self.lanes &= self.lanes - 1;
+                return Some((block.triangles.triangle(lane), block.ids[lane]));
+            }
+            let block = self.blocks.next()?;
+            self.block = Some(block);
+            self.lanes = block.lanes;
+        }
     }
 }
 
@@ -155,6 +189,21 @@ pub(crate) trait FlatKernel {
     /// # Safety
     /// As for [`closest_hit`](Self::closest_hit).
     unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool;
+
+    /// The closest hit of each ray, `hits[i]` for `rays[i]`: exactly
+    /// [`closest_hit`](Self::closest_hit)'s answers, by default ray by ray (the scalar twin of
+    /// `flat_rays.rs`).
+    ///
+    /// # Safety
+    /// As for [`closest_hit`](Self::closest_hit).
+    #[inline(always)]
+    unsafe fn closest_hits(flat: &Flat, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one answer per ray");
+        for (ray, hit) in rays.iter().zip(hits) {
+            // SAFETY: the caller's guarantee.
+            *hit = unsafe { Self::closest_hit(flat, ray) };
+        }
+    }
 }
 
 impl FlatKernel for Scalar {
@@ -175,6 +224,7 @@ mod x86 {
     use super::*;
     use crate::bvh::isa::{Avx2, Avx512, Sse};
     use crate::bvh::simd::{LaneHits, LaneMask, Lanes, RayBroadcast, watertight_lanes_with};
+    use crate::bvh::traverse::flat_rays;
 
     /// The lane test of lanes `first..first + W` of `block` for hits below `t_max`.
     ///
@@ -330,6 +380,11 @@ mod x86 {
                 unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool {
                     // SAFETY: as above.
                     unsafe { occluded::<$register, $lanes>(flat, ray) }
+                }
+                #[inline(always)]
+                unsafe fn closest_hits(flat: &Flat, rays: &[Ray], hits: &mut [Option<Hit>]) {
+                    // SAFETY: as above.
+                    unsafe { flat_rays::closest_hits::<$register, $lanes>(flat, rays, hits) }
                 }
             }
         };

@@ -6,6 +6,7 @@
 //! triangle pre-test is then vectorized for the same set too.
 
 pub(crate) mod flat;
+pub(crate) mod flat_rays;
 
 use crate::accel::Hit;
 use crate::bvh::bounds::{FAR_SCALE, RayBoxTest};

@@ -7,7 +7,9 @@
 //! the work:
 //!
 //! 1. **closest hits** of every live path's ray: the camera rays as packets
-//!    ([`Accelerator::closest_hits`]), the later rays one by one;
+//!    ([`Accelerator::closest_hits`]), the later rays as one batch
+//!    ([`Accelerator::closest_hits_incoherent`]: in lanes against a small scene's flat list,
+//!    one by one through a tree);
 //! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
 //!    `max_depth` end; each vertex's material and shading frame. A diffuse vertex goes straight
 //!    into a lane (its point, frame and reflectance; no copy of its BSDF), any other becomes
@@ -164,9 +166,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                 // Camera rays are coherent: packets pay (see the module documentation).
                 accel.closest_hits(&batch, &mut hits);
             } else {
-                for (ray, hit) in batch.iter().zip(&mut hits) {
-                    *hit = accel.closest_hit(ray);
-                }
+                accel.closest_hits_incoherent(&batch, &mut hits);
             }
             first = false;
             lap.end(|t| &t.closest_hits);
