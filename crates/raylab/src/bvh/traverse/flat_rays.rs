@@ -23,7 +23,7 @@
 //! the other two ([`WatertightRay`]). Rays in lanes have different axes, so each lane picks its
 //! own coordinates of the broadcast corners: `kx = 0, 1, 2` selects `x`, `y` or `z` with two
 //! selects per coordinate, eighteen per triangle, masks made once per group of rays. Sorting the
-//! rays by axis instead would leave six part-filled groups in a wavefront of 64 paths.
+//! rays by axis instead would leave up to six part-filled groups in every batch.
 //!
 //! ## The answers are the single-ray query's
 //! Each lane runs [`watertight_sheared`], the same operations in the same order as
@@ -39,7 +39,7 @@ use glam::Vec3;
 use super::can_hit;
 use super::flat::Flat;
 use crate::accel::Hit;
-use crate::bvh::simd::{LaneMask, Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
+use crate::bvh::simd::{Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
 use crate::ray::Ray;
 use crate::triangle::WatertightRay;
 
@@ -218,25 +218,32 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
         // of 16.
         unsafe {
             let registers = RayRegisters::<V>::new(&rows);
-            let mut best_t = V::splat(f32::INFINITY);
+            // Each lane's nearest decided hit so far: its `t` is also the lane's limit, so
+            // that a triangle no nearer is rejected before the division.
+            let mut best_t = registers.ray.t_max;
             let mut best_b1 = V::splat(0.0);
             let mut best_b2 = V::splat(0.0);
             // Triangle indices ride along as float bits: only ever selected, never computed.
-            let mut best_id = V::splat(f32::from_bits(u32::MAX));
+            let mut best_id = V::splat(0.0);
+            // The lanes with a decided hit.
+            let mut found = 0;
             // Hits only the double-precision test could decide, per lane.
             let mut rare = [None; MAX_LANES];
             if rows.live != 0 {
                 for (triangle, id) in flat.triangles() {
                     let sheared = registers.sheared(triangle);
-                    let decided =
-                        watertight_sheared::<V, true>(&sheared, &registers.ray, rows.live);
+                    let ray = RayLanes { t_max: best_t, ..registers.ray };
+                    let decided = watertight_sheared::<V, true>(&sheared, &ray, rows.live);
                     if decided.hits != 0 {
-                        // Padding lanes are never hit (their `t_max` is NaN).
-                        let nearer = decided.hit_mask.and(decided.t.lt(best_t));
+                        // Hits are strictly nearer than the lane's best (`t < t_max`), so the
+                        // earlier triangle keeps a tie; padding lanes are never hit (their
+                        // `t_max` is NaN).
+                        let nearer = decided.hit_mask;
                         best_t = V::select(nearer, decided.t, best_t);
                         best_b1 = V::select(nearer, decided.b1, best_b1);
                         best_b2 = V::select(nearer, decided.b2, best_b2);
                         best_id = V::select(nearer, V::splat(f32::from_bits(id)), best_id);
+                        found |= decided.hits;
                     }
                     let mut undecided = decided.undecided;
                     while undecided != 0 {
@@ -254,7 +261,7 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
             best_b1.store(b1.as_mut_ptr());
             best_b2.store(b2.as_mut_ptr());
             for (lane, hit) in hits.iter_mut().enumerate() {
-                let mut best = (t[lane] < f32::INFINITY).then(|| Hit {
+                let mut best = (found & (1 << lane) != 0).then(|| Hit {
                     t: t[lane],
                     triangle: ids[lane].to_bits(),
                     b1: b1[lane],
