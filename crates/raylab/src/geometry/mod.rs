@@ -419,11 +419,7 @@ impl Geometry {
     pub fn surface_point(&self, hit: &Hit) -> SurfacePoint {
         let (s, placement) = self.locate(hit.triangle as usize);
         let corners = self.stored_triangle(s);
-        // PBR 4th ed. §6.8.5: interpolating the vertices errs by at most γ₇ Σ|bᵢ·pᵢ|.
-        let interpolate = |[v0, v1, v2]: [Vec3; 3]| {
-            let (a, b, c) = (hit.b0() * v0, hit.b1 * v1, hit.b2 * v2);
-            (a + b + c, gamma(7) * (a.abs() + b.abs() + c.abs()))
-        };
+        let interpolate = |corners| interpolate_point(corners, hit);
         match placement {
             None => {
                 let (p, error) = interpolate(corners);
@@ -437,6 +433,25 @@ impl Geometry {
                 SurfacePoint { p, error, normal: geometric_normal(placement.triangle(corners)) }
             }
         }
+    }
+
+    /// [`surface_point`](Self::surface_point) and the material of a hit on a plain triangle: one
+    /// that no instance places and that has no shading normals, so that its interaction's
+    /// shading normal is the geometric one. `None` for any other triangle. The path tracer's
+    /// shortcut for the commonest vertex, which needs neither texture coordinates nor tangents.
+    #[inline]
+    pub fn plain_surface_point(&self, hit: &Hit) -> Option<(SurfacePoint, u32)> {
+        if self.placed {
+            return None;
+        }
+        let s = hit.triangle as usize;
+        if let Some(normals) = self.shading_normals.get(s)
+            && normals[0] != Vec3::ZERO
+        {
+            return None;
+        }
+        let (p, error) = interpolate_point(self.stored_triangle(s), hit);
+        Some((SurfacePoint { p, error, normal: self.normals[s] }, self.material_ids[s]))
     }
 
     /// A per-axis bound on the rounding error of [`surface_point`](Self::surface_point) for any
@@ -494,6 +509,14 @@ impl Geometry {
             t: hit.t,
         }
     }
+}
+
+/// The point at `hit`'s barycentrics on a triangle's `corners`, and its rounding-error bound
+/// (PBR 4th ed. §6.8.5: interpolating the vertices errs by at most γ₇ Σ|bᵢ·pᵢ|).
+#[inline(always)]
+fn interpolate_point([v0, v1, v2]: [Vec3; 3], hit: &Hit) -> (Vec3, Vec3) {
+    let (a, b, c) = (hit.b0() * v0, hit.b1 * v1, hit.b2 * v2);
+    (a + b + c, gamma(7) * (a.abs() + b.abs() + c.abs()))
 }
 
 impl Geometry {

@@ -66,6 +66,32 @@ fn interactions_interpolate_normals_and_uvs() {
     assert!(si.point.error.max_element() < 1e-6);
 }
 
+/// The path tracer's shortcut gives the interaction's point and material exactly, for plain
+/// triangles only: not where the mesh has shading normals, nor through an instance.
+#[test]
+fn plain_surface_points_are_the_interactions_on_plain_triangles_only() {
+    let normals = CornerAttribute { values: vec![-Vec3::Z], triangles: vec![[0, 0, 0]; 2] };
+    let mut geometry = Geometry::new();
+    geometry.add_mesh(&quad("plain"), &Affine3A::from_rotation_x(0.3), |i| 4 + i as u32);
+    geometry.add_mesh(
+        &Mesh { normals: Some(normals), ..quad("smooth") },
+        &Affine3A::IDENTITY,
+        |_| 0,
+    );
+    let ray = Ray::new(Vec3::new(0.3, 0.2, 5.0), -Vec3::Z);
+    for (triangle, b1, b2) in [(0, 0.1f32, 0.7f32), (1, 1.0, 0.0), (1, 0.3, 0.3)] {
+        let hit = Hit { t: 4.9, triangle, b1, b2 };
+        let si = geometry.interaction(&ray, &hit);
+        assert_eq!(geometry.plain_surface_point(&hit), Some((si.point, si.material)));
+        assert_eq!(si.shading_normal, si.point.normal, "the shortcut's frame is the normal's");
+    }
+    // Shading normals (triangles 2 and 3), then an instance: no shortcut.
+    assert_eq!(geometry.plain_surface_point(&Hit { t: 1.0, triangle: 2, b1: 0.2, b2: 0.2 }), None);
+    let mut instanced = Geometry::new();
+    instanced.add_instanced_mesh(&quad("q"), &[Affine3A::IDENTITY], |_| 0);
+    assert_eq!(instanced.plain_surface_point(&Hit { t: 1.0, triangle: 0, b1: 0.2, b2: 0.2 }), None);
+}
+
 #[test]
 fn shading_normals_are_kept_as_the_mesh_gives_them() {
     let normals = CornerAttribute { values: vec![-Vec3::Z], triangles: vec![[0, 0, 0]; 2] };

@@ -361,6 +361,7 @@ impl LightSet {
     /// from behind.
     #[inline]
     pub fn emitted(&self, origin: Vec3, hit: &SurfaceInteraction) -> (Vec3, f32) {
+        // `plain_diffuse` in `path.rs` relies on this: only the triangles of lights emit.
         let light = self.triangle_light[hit.triangle as usize];
         if light == u32::MAX {
             return (Vec3::ZERO, 0.0);
@@ -386,6 +387,13 @@ impl LightSet {
             Some((pattern, _)) => radiance * pattern.rgb(&hit.texture_query()).max(Vec3::ZERO),
         };
         (radiance, selection * pdf)
+    }
+
+    /// Whether triangle `i` is (part of) a light: the only triangles [`emitted`](Self::emitted)
+    /// finds light on.
+    #[inline]
+    pub fn is_light_triangle(&self, i: u32) -> bool {
+        self.triangle_light[i as usize] != u32::MAX
     }
 
     /// The environment's radiance along a ray that leaves the scene, and the density with which

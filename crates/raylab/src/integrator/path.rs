@@ -201,6 +201,13 @@ fn shading_frame(
     } else {
         Frame::about(normal)
     };
+    facing(material, ray, frame)
+}
+
+/// [`shading_frame`]'s second half: the direction toward the viewer in `frame`, mirrored into
+/// the front for a two-sided material, and whether it was.
+#[inline(always)]
+fn facing(material: &Material, ray: &Ray, frame: Frame) -> (Frame, bool, Vec3) {
     let mut wi = frame.to_local(-ray.direction.normalize());
     // Two-sided materials scatter on both sides: mirror the directions into the front.
     let flip = material.two_sided && wi.z < 0.0;
@@ -322,6 +329,34 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
             Bsdf::Diffuse(Diffuse { reflectance }) => Some((frame, flip, wi, reflectance)),
             _ => None,
         }
+    }
+
+    /// The wavefront's shortcut for the commonest hit: a plain triangle
+    /// ([`Geometry::plain_surface_point`](crate::geometry::Geometry::plain_surface_point)) that
+    /// is no light's, of an untextured diffuse material. It gives exactly what
+    /// [`arrive`](Self::arrive) and [`diffuse_vertex`](Self::diffuse_vertex) give there: no
+    /// light found (only lights' triangles emit), and the same point, frame, mirroring,
+    /// direction toward the viewer and reflectance (the shading normal is the geometric one,
+    /// and the frame the normal's own, as for every isotropic BSDF). Without building the
+    /// interaction: no texture coordinates, tangents or second lookups. `None` for any other
+    /// hit, which takes the general steps.
+    #[inline]
+    pub(super) fn plain_diffuse(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+    ) -> Option<(SurfacePoint, Frame, bool, Vec3, Vec3)> {
+        let (point, material) = self.scene.geometry.plain_surface_point(hit)?;
+        if self.lights.is_light_triangle(hit.triangle) {
+            return None;
+        }
+        let material = &self.scene.materials[material as usize];
+        let Bsdf::Diffuse(Diffuse { reflectance }) = material.bsdf else { return None };
+        if !material.textures.is_empty() {
+            return None;
+        }
+        let (frame, flip, wi) = facing(material, ray, Frame::about(point.normal));
+        Some((point, frame, flip, wi, reflectance))
     }
 
     /// Next-event estimation at `vertex`: draws a light sample, and returns the shadow ray and

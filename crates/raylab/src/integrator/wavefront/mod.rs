@@ -178,26 +178,39 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             diffuse_paths.clear();
             for (&i, hit) in alive.iter().zip(&hits) {
                 let state = &mut states[i];
-                let Some(interaction) = path.arrive(state, hit.as_ref()) else { continue };
+                // The commonest hit, a plain triangle of a diffuse material, by the shortcut
+                // (nothing is emitted there); any other by the general steps.
+                let plain = hit.as_ref().and_then(|hit| path.plain_diffuse(&state.ray, hit));
+                let (point, frame, flip, wi, reflectance) = match plain {
+                    Some(plain) => plain,
+                    None => {
+                        let Some(interaction) = path.arrive(state, hit.as_ref()) else { continue };
+                        if state.depth + 1 >= max_depth {
+                            continue;
+                        }
+                        match path.diffuse_vertex(&state.ray, &interaction) {
+                            Some((frame, flip, wi, r)) => (interaction.point, frame, flip, wi, r),
+                            None => {
+                                vertices.push((i, path.vertex(&state.ray, &interaction)));
+                                continue;
+                            }
+                        }
+                    }
+                };
                 if state.depth + 1 >= max_depth {
                     continue;
                 }
-                match path.diffuse_vertex(&state.ray, &interaction) {
-                    Some((frame, flip, wi, reflectance)) => {
-                        diffuse.push(&LaneVertex {
-                            point: interaction.point,
-                            frame,
-                            flip,
-                            wi,
-                            reflectance,
-                            throughput: state.throughput,
-                            eta: state.eta,
-                            roulette: state.depth + 1 >= rr_depth,
-                        });
-                        diffuse_paths.push(i);
-                    }
-                    None => vertices.push((i, path.vertex(&state.ray, &interaction))),
-                }
+                diffuse.push(&LaneVertex {
+                    point,
+                    frame,
+                    flip,
+                    wi,
+                    reflectance,
+                    throughput: state.throughput,
+                    eta: state.eta,
+                    roulette: state.depth + 1 >= rr_depth,
+                });
+                diffuse_paths.push(i);
             }
             lap.end(|t| &t.surfaces);
 
