@@ -39,30 +39,22 @@ use glam::Vec3;
 use super::can_hit;
 use super::flat::Flat;
 use crate::accel::Hit;
-use crate::bvh::simd::{Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
+use crate::bvh::simd::{LaneMask, Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
 use crate::ray::Ray;
 use crate::triangle::WatertightRay;
 
 /// The most lanes a register holds (AVX-512's sixteen).
 const MAX_LANES: usize = 16;
 
-/// Up to [`MAX_LANES`] rays' watertight set-up, row by row (lane `k` of each row is ray `k`).
+/// Up to [`MAX_LANES`] rays, row by row (lane `k` of each row is ray `k`).
 ///
-/// Lanes without a ray, or whose ray can hit nothing ([`can_hit`]), keep the padding: a NaN
-/// `t_max`, which admits no hit, and no bit in `live`.
+/// Lanes without a ray, or whose ray can hit nothing ([`can_hit`]), hold a harmless ray along
+/// `+z` with a NaN `t_max`, which admits no hit, and have no bit in `live`.
 struct RayRows {
-    /// The origin's `kx`, `ky`, `kz` coordinates.
     origin: [[f32; MAX_LANES]; 3],
-    /// `shear_x`, `shear_y`, `shear_z`.
-    shear: [[f32; MAX_LANES]; 3],
-    /// `|shear_x|`, `|shear_y|`.
-    abs_shear: [[f32; MAX_LANES]; 2],
+    direction: [[f32; MAX_LANES]; 3],
     t_min: [f32; MAX_LANES],
     t_max: [f32; MAX_LANES],
-    /// `kx`, `ky`, `kz` as the floats 0, 1, 2 (compared once into select masks).
-    k: [[f32; MAX_LANES]; 3],
-    /// Each lane's ray, for the rare double-precision decisions.
-    rays: [Option<WatertightRay>; MAX_LANES],
     /// Bit `k` set where lane `k` has a ray that can hit.
     live: u32,
 }
@@ -74,47 +66,46 @@ impl RayRows {
         debug_assert!(rays.len() <= MAX_LANES);
         let mut rows = RayRows {
             origin: [[0.0; MAX_LANES]; 3],
-            shear: [[0.0; MAX_LANES]; 3],
-            abs_shear: [[0.0; MAX_LANES]; 2],
-            t_min: [f32::INFINITY; MAX_LANES],
+            direction: [[0.0; MAX_LANES], [0.0; MAX_LANES], [1.0; MAX_LANES]],
+            t_min: [0.0; MAX_LANES],
             t_max: [f32::NAN; MAX_LANES],
-            k: [[0.0; MAX_LANES], [1.0; MAX_LANES], [2.0; MAX_LANES]],
-            rays: [None; MAX_LANES],
             live: 0,
         };
         for (lane, ray) in rays.iter().enumerate() {
             if !can_hit(ray) {
                 continue;
             }
-            let w = WatertightRay::new(ray);
-            for (row, axis) in [w.kx, w.ky, w.kz].into_iter().enumerate() {
-                rows.origin[row][lane] = w.origin[axis];
-                rows.k[row][lane] = axis as f32;
+            for axis in 0..3 {
+                rows.origin[axis][lane] = ray.origin[axis];
+                rows.direction[axis][lane] = ray.direction[axis];
             }
-            rows.shear[0][lane] = w.shear_x;
-            rows.shear[1][lane] = w.shear_y;
-            rows.shear[2][lane] = w.shear_z;
-            rows.abs_shear[0][lane] = w.shear_x.abs();
-            rows.abs_shear[1][lane] = w.shear_y.abs();
-            rows.t_min[lane] = w.t_min;
+            rows.t_min[lane] = ray.t_min;
             rows.t_max[lane] = ray.t_max;
-            rows.rays[lane] = Some(w);
             rows.live |= 1 << lane;
         }
         rows
     }
 }
 
-/// The rows in registers of `V`, and the masks that pick each lane's permuted coordinates.
+/// The rays' watertight set-up in registers of `V` ([`WatertightRay`] lane by lane), and the
+/// masks that pick each lane's permuted coordinates.
 struct RayRegisters<V: Lanes> {
+    /// The origin's `kx`, `ky`, `kz` coordinates.
     origin: [V; 3],
+    /// `shear_x`, `shear_y`, `shear_z`.
     shear: [V; 3],
     ray: RayLanes<V>,
-    /// Per row of `k`: the lanes whose axis is 0, and those whose axis is 1.
+    /// Per axis `kx`, `ky`, `kz`: the lanes where it is `x`, and those where it is `y`.
     picks: [[V::Mask; 2]; 3],
 }
 
 impl<V: Lanes> RayRegisters<V> {
+    /// [`WatertightRay::new`] of every lane, by the same comparisons and operations: the
+    /// dominant axis `kz` (ties to the lower axis), `kx` and `ky` after it, swapped where the
+    /// ray points along `−kz`, `shear_z = 1/d[kz]`, `shear_x = d[kx]·shear_z`,
+    /// `shear_y = d[ky]·shear_z`, and a NaN `t_min` made infinite. Selects instead of the scalar
+    /// set-up's branches, which incoherent rays mispredict.
+    ///
     /// # Safety
     /// The CPU must support `V`'s instruction set, which holds at most [`MAX_LANES`] floats.
     #[inline(always)]
@@ -122,18 +113,37 @@ impl<V: Lanes> RayRegisters<V> {
         // No closures: they would not inherit the caller's target features.
         // SAFETY: the caller's guarantee; every row holds `MAX_LANES` floats.
         unsafe {
-            let load = load::<V>;
-            let pick = pick_masks::<V>;
+            let o = [load::<V>(&rows.origin[0]), load(&rows.origin[1]), load(&rows.origin[2])];
+            let d =
+                [load::<V>(&rows.direction[0]), load(&rows.direction[1]), load(&rows.direction[2])];
+            let [ax, ay, az] = [d[0].abs(), d[1].abs(), d[2].abs()];
+            // `>=` as "not less than": the same for the live lanes, whose directions have no
+            // NaN (`can_hit`).
+            let z_is_x = ax.nlt(ay).and(ax.nlt(az));
+            let z_is_y = ay.nlt(az).andnot_of(z_is_x);
+            let all = ax.eq(ax).or(ax.nlt(ax));
+            let z_is_z = all.andnot_of(z_is_x.or(z_is_y));
+            let d_z = pick([z_is_x, z_is_y], d);
+            let shear_z = V::splat(1.0).div(d_z);
+            // kz = x: (kx, ky) = (y, z), y: (z, x), z: (x, y); swapped along −kz.
+            let neg = d_z.lt(V::splat(0.0));
+            let x_picks = [either::<V>(neg, z_is_z, z_is_y), either::<V>(neg, z_is_x, z_is_z)];
+            let y_picks = [either::<V>(neg, z_is_y, z_is_z), either::<V>(neg, z_is_z, z_is_x)];
+            let z_picks = [z_is_x, z_is_y];
+            let shear_x = pick(x_picks, d).mul(shear_z);
+            let shear_y = pick(y_picks, d).mul(shear_z);
+            let t_min = load::<V>(&rows.t_min);
             RayRegisters {
-                origin: [load(&rows.origin[0]), load(&rows.origin[1]), load(&rows.origin[2])],
-                shear: [load(&rows.shear[0]), load(&rows.shear[1]), load(&rows.shear[2])],
+                origin: [pick(x_picks, o), pick(y_picks, o), pick(z_picks, o)],
+                shear: [shear_x, shear_y, shear_z],
                 ray: RayLanes {
-                    shear_z: load(&rows.shear[2]),
-                    abs_shear: [load(&rows.abs_shear[0]), load(&rows.abs_shear[1])],
-                    t_min: load(&rows.t_min),
+                    shear_z,
+                    abs_shear: [shear_x.abs(), shear_y.abs()],
+                    // A NaN range start admits no hit.
+                    t_min: V::select(t_min.eq(t_min), t_min, V::splat(f32::INFINITY)),
                     t_max: load(&rows.t_max),
                 },
-                picks: [pick(&rows.k[0]), pick(&rows.k[1]), pick(&rows.k[2])],
+                picks: [x_picks, y_picks, z_picks],
             }
         }
     }
@@ -176,20 +186,18 @@ unsafe fn load<V: Lanes>(row: &[f32; MAX_LANES]) -> V {
     unsafe { V::loadu(row.as_ptr()) }
 }
 
-/// The masks of the lanes whose axis in `row` is 0 (`x`), and of those whose axis is 1 (`y`).
+/// `swapped` in the lanes of `neg`, `plain` in the others.
 ///
 /// # Safety
-/// As for [`load`].
+/// The CPU must support `V`'s instruction set.
 #[inline(always)]
-unsafe fn pick_masks<V: Lanes>(row: &[f32; MAX_LANES]) -> [V::Mask; 2] {
+unsafe fn either<V: Lanes>(neg: V::Mask, plain: V::Mask, swapped: V::Mask) -> V::Mask {
     // SAFETY: the caller's guarantee.
-    unsafe {
-        let k = load::<V>(row);
-        [k.eq(V::splat(0.0)), k.eq(V::splat(1.0))]
-    }
+    unsafe { plain.andnot_of(neg).or(swapped.and(neg)) }
 }
 
-/// Each lane's coordinate of `[x, y, z]` along its axis (`masks` from [`pick_masks`]).
+/// Each lane's coordinate of `[x, y, z]` along its axis (`x` where `is_x`, else `y` where
+/// `is_y`, else `z`).
 ///
 /// # Safety
 /// The CPU must support `V`'s instruction set.
@@ -249,7 +257,7 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
                     while undecided != 0 {
                         let lane = undecided.trailing_zeros() as usize;
                         undecided &= undecided - 1;
-                        decide_rarely(&rows, lane, triangle, id, &mut rare[lane]);
+                        decide_rarely(rays, lane, triangle, id, &mut rare[lane]);
                     }
                 }
             }
@@ -281,14 +289,14 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
 #[cold]
 #[inline(never)]
 fn decide_rarely(
-    rows: &RayRows,
+    rays: &[Ray],
     lane: usize,
     [v0, v1, v2]: [Vec3; 3],
     id: u32,
     best: &mut Option<Hit>,
 ) {
-    let ray = rows.rays[lane].as_ref().expect("only live lanes are undecided");
-    if let Some(h) = ray.intersect(v0, v1, v2, rows.t_max[lane]) {
+    let ray = &rays[lane];
+    if let Some(h) = WatertightRay::new(ray).intersect(v0, v1, v2, ray.t_max) {
         Hit { t: h.t, triangle: id, b1: h.b1, b2: h.b2 }.keep_first(best);
     }
 }
