@@ -185,6 +185,18 @@ impl Vertex<'_> {
     }
 }
 
+/// A diffuse vertex as the wavefront's lanes take it: its point, its shading normal (its frame is
+/// the normal's own, [`Frame::about`]), whether its material is two-sided, and its (textured)
+/// reflectance. The lanes find the frame and the direction toward the viewer themselves, by
+/// [`facing`].
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DiffuseSurface {
+    pub point: SurfacePoint,
+    pub normal: Vec3,
+    pub two_sided: bool,
+    pub reflectance: Vec3,
+}
+
 /// A vertex's shading frame, whether its directions are mirrored into a two-sided material's
 /// front, and the direction toward the viewer in the frame (mirrored).
 #[inline(always)]
@@ -201,16 +213,17 @@ fn shading_frame(
     } else {
         Frame::about(normal)
     };
-    facing(material, ray, frame)
+    facing(material.two_sided, ray.direction, frame)
 }
 
-/// [`shading_frame`]'s second half: the direction toward the viewer in `frame`, mirrored into
-/// the front for a two-sided material, and whether it was.
+/// [`shading_frame`]'s second half: the direction toward the viewer of a ray along `direction`
+/// in `frame`, mirrored into the front for a `two_sided` material, and whether it was (the
+/// wavefront's diffuse lanes run it too).
 #[inline(always)]
-fn facing(material: &Material, ray: &Ray, frame: Frame) -> (Frame, bool, Vec3) {
-    let mut wi = frame.to_local(-ray.direction.normalize());
+pub(super) fn facing(two_sided: bool, direction: Vec3, frame: Frame) -> (Frame, bool, Vec3) {
+    let mut wi = frame.to_local(-direction.normalize());
     // Two-sided materials scatter on both sides: mirror the directions into the front.
-    let flip = material.two_sided && wi.z < 0.0;
+    let flip = two_sided && wi.z < 0.0;
     if flip {
         wi.z = -wi.z;
     }
@@ -311,22 +324,28 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         Vertex { point: interaction.point, frame, flip, wi, bsdf }
     }
 
-    /// [`vertex`](Self::vertex) where the material is diffuse: the frame, the mirroring, the
-    /// direction toward the viewer and the (textured) reflectance, without a copy of the BSDF;
-    /// `None` for other materials.
+    /// [`vertex`](Self::vertex) where the material is diffuse, as the lanes take it
+    /// ([`DiffuseSurface`]), without a copy of the BSDF; `None` for other materials.
     #[inline]
     pub(super) fn diffuse_vertex(
         &self,
         ray: &Ray,
         interaction: &SurfaceInteraction,
-    ) -> Option<(Frame, bool, Vec3, Vec3)> {
+    ) -> Option<DiffuseSurface> {
         let material = self.scene.material(interaction);
         if !matches!(material.bsdf, Bsdf::Diffuse(_)) {
             return None;
         }
-        let (frame, flip, wi) = shading_frame(material, ray, interaction);
+        // The frame `shading_frame` gives a diffuse (isotropic) BSDF: the normal's own.
+        debug_assert!(!material.bsdf.is_anisotropic());
+        let normal = material.shading_normal(interaction, -ray.direction);
         match *material.bsdf_at(&interaction.texture_query()) {
-            Bsdf::Diffuse(Diffuse { reflectance }) => Some((frame, flip, wi, reflectance)),
+            Bsdf::Diffuse(Diffuse { reflectance }) => Some(DiffuseSurface {
+                point: interaction.point,
+                normal,
+                two_sided: material.two_sided,
+                reflectance,
+            }),
             _ => None,
         }
     }
@@ -335,17 +354,12 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// ([`Geometry::plain_surface_point`](crate::geometry::Geometry::plain_surface_point)) that
     /// is no light's, of an untextured diffuse material. It gives exactly what
     /// [`arrive`](Self::arrive) and [`diffuse_vertex`](Self::diffuse_vertex) give there: no
-    /// light found (only lights' triangles emit), and the same point, frame, mirroring,
-    /// direction toward the viewer and reflectance (the shading normal is the geometric one,
-    /// and the frame the normal's own, as for every isotropic BSDF). Without building the
-    /// interaction: no texture coordinates, tangents or second lookups. `None` for any other
-    /// hit, which takes the general steps.
+    /// light found (only lights' triangles emit), and the same point, shading normal (the
+    /// geometric one), sidedness and reflectance. Without building the interaction: no texture
+    /// coordinates, tangents or second lookups. `None` for any other hit, which takes the
+    /// general steps.
     #[inline]
-    pub(super) fn plain_diffuse(
-        &self,
-        ray: &Ray,
-        hit: &Hit,
-    ) -> Option<(SurfacePoint, Frame, bool, Vec3, Vec3)> {
+    pub(super) fn plain_diffuse(&self, hit: &Hit) -> Option<DiffuseSurface> {
         let (point, material) = self.scene.geometry.plain_surface_point(hit)?;
         if self.lights.is_light_triangle(hit.triangle) {
             return None;
@@ -355,8 +369,8 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         if !material.textures.is_empty() {
             return None;
         }
-        let (frame, flip, wi) = facing(material, ray, Frame::about(point.normal));
-        Some((point, frame, flip, wi, reflectance))
+        let two_sided = material.two_sided;
+        Some(DiffuseSurface { point, normal: point.normal, two_sided, reflectance })
     }
 
     /// Next-event estimation at `vertex`: draws a light sample, and returns the shadow ray and

@@ -1,6 +1,7 @@
-//! The wavefront's diffuse vertices, sixteen lanes per instruction: light sampling (a triangle
-//! light's point, the shadow ray, the BSDF's value and the MIS weight), BSDF sampling (the
-//! cosine-weighted direction and the next ray) and Russian roulette.
+//! The wavefront's diffuse vertices, sixteen lanes per instruction: the shading frame and the
+//! direction toward the viewer (from the shading normal and the arriving ray), light sampling (a
+//! triangle light's point, the shadow ray, the BSDF's value and the MIS weight), BSDF sampling
+//! (the cosine-weighted direction and the next ray) and Russian roulette.
 //!
 //! ## Lanes
 //! The vertices are gathered sixteen to a [`Chunk`]: every quantity a row of sixteen floats
@@ -12,7 +13,7 @@
 //!
 //! ## The scalar path's bits
 //! `shade_lane` is the scalar path's arithmetic, operation for operation: it calls the same
-//! [`Diffuse`] BSDF, the same warps ([`square_to_uniform_triangle`],
+//! frame ([`Frame::about`], [`facing`]), the same [`Diffuse`] BSDF, the same warps ([`square_to_uniform_triangle`],
 //! [`square_to_cosine_hemisphere`] with its polynomial sine and cosine), the same
 //! [`power_heuristic`] and the same ray offset ([`offset_ray_origin_finite`]), and Rust neither
 //! fuses nor reorders floating-point operations, in vector code or not. So a lane's shadow ray,
@@ -33,7 +34,7 @@ use glam::{Vec2, Vec3};
 use std::borrow::Cow;
 
 use super::super::light_sampler::{LanePick, LaneTriangle, SHADOW_RAY_LENGTH};
-use super::super::path::{Frame, Vertex};
+use super::super::path::{DiffuseSurface, Frame, Vertex, facing};
 use crate::cpu::Isa;
 use crate::material::{Bsdf, Diffuse};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
@@ -77,14 +78,12 @@ struct Input {
     p: Rows3,
     error: Rows3,
     normal: Rows3,
-    /// The shading frame.
-    tangent: Rows3,
-    bitangent: Rows3,
+    /// The shading normal: the frame is its own ([`Frame::about`]).
     shading_normal: Rows3,
-    /// Whether directions are mirrored into a two-sided material's front.
-    flip: [bool; LANES],
-    /// The direction toward the viewer, local.
-    wi: Rows3,
+    /// Whether the material is two-sided (directions are mirrored into its front).
+    two_sided: [bool; LANES],
+    /// The direction of the ray that arrived (not normalized).
+    arrival: Rows3,
     reflectance: Rows3,
     throughput: Rows3,
     eta: Row,
@@ -133,10 +132,10 @@ struct Output {
 fn shade_lane(input: &Input, output: &mut Output, k: usize) {
     let point =
         SurfacePoint { p: input.p.get(k), error: input.error.get(k), normal: input.normal.get(k) };
-    let (tangent, bitangent, normal) =
-        (input.tangent.get(k), input.bitangent.get(k), input.shading_normal.get(k));
-    let flip = input.flip[k];
-    let wi = input.wi.get(k);
+    // Path::vertex's frame, mirroring and direction toward the viewer.
+    let (frame, flip, wi) =
+        facing(input.two_sided[k], input.arrival.get(k), Frame::about(input.shading_normal.get(k)));
+    let Frame { tangent, bitangent, normal } = frame;
     let bsdf = Diffuse { reflectance: input.reflectance.get(k) };
     let throughput = input.throughput.get(k);
 
@@ -255,11 +254,9 @@ pub(super) struct DiffuseLanes {
 
 /// A diffuse vertex, as [`DiffuseLanes::push`] takes it: the vertex and its path.
 pub(super) struct LaneVertex {
-    pub point: SurfacePoint,
-    pub frame: Frame,
-    pub flip: bool,
-    pub wi: Vec3,
-    pub reflectance: Vec3,
+    pub surface: DiffuseSurface,
+    /// The direction of the ray that arrived.
+    pub arrival: Vec3,
     pub throughput: Vec3,
     pub eta: f32,
     pub roulette: bool,
@@ -306,15 +303,14 @@ impl DiffuseLanes {
         }
         self.len += 1;
         let input = &mut self.inputs[c];
-        input.p.set(k, v.point.p);
-        input.error.set(k, v.point.error);
-        input.normal.set(k, v.point.normal);
-        input.tangent.set(k, v.frame.tangent);
-        input.bitangent.set(k, v.frame.bitangent);
-        input.shading_normal.set(k, v.frame.normal);
-        input.flip[k] = v.flip;
-        input.wi.set(k, v.wi);
-        input.reflectance.set(k, v.reflectance);
+        let surface = &v.surface;
+        input.p.set(k, surface.point.p);
+        input.error.set(k, surface.point.error);
+        input.normal.set(k, surface.point.normal);
+        input.shading_normal.set(k, surface.normal);
+        input.two_sided[k] = surface.two_sided;
+        input.arrival.set(k, v.arrival);
+        input.reflectance.set(k, surface.reflectance);
         input.throughput.set(k, v.throughput);
         input.eta[k] = v.eta;
         input.roulette[k] = v.roulette;
@@ -362,19 +358,20 @@ impl DiffuseLanes {
     pub(super) fn vertex(&self, i: usize) -> Vertex<'static> {
         let (input, k) = (&self.inputs[i / LANES], i % LANES);
         let reflectance = input.reflectance.get(k);
+        let (frame, flip, wi) = facing(
+            input.two_sided[k],
+            input.arrival.get(k),
+            Frame::about(input.shading_normal.get(k)),
+        );
         Vertex {
             point: SurfacePoint {
                 p: input.p.get(k),
                 error: input.error.get(k),
                 normal: input.normal.get(k),
             },
-            frame: Frame {
-                tangent: input.tangent.get(k),
-                bitangent: input.bitangent.get(k),
-                normal: input.shading_normal.get(k),
-            },
-            flip: input.flip[k],
-            wi: input.wi.get(k),
+            frame,
+            flip,
+            wi,
             bsdf: Cow::Owned(Bsdf::Diffuse(Diffuse { reflectance })),
         }
     }
@@ -518,16 +515,22 @@ mod tests {
             // Now and then an error bound so large that the offset point overflows.
             let error = Vec3::splat(if rng.next_u32().is_multiple_of(32) { 3e38 } else { 1e-6 });
             let point = crate::ray::SurfacePoint { p, error, normal };
-            let mut wi = unit(&mut rng);
+            let shading_normal = unit(&mut rng);
+            // Arrivals of any length, now and then along the surface (the horizon: `wi.z` 0).
+            let mut arrival = unit(&mut rng) * hostile(&mut rng, 4.0, 1e-3);
             if rng.next_u32().is_multiple_of(8) {
-                wi.z = 0.0;
+                arrival = shading_normal.any_orthonormal_vector() * 3.0;
             }
+            let two_sided = rng.next_u32().is_multiple_of(2);
             let reflectance =
                 Vec3::new(hostile(&mut rng, 1.0, 0.0), rng.next_f32(), hostile(&mut rng, 1.0, 0.0));
+            let surface = DiffuseSurface { point, normal: shading_normal, two_sided, reflectance };
+            // The scalar path's vertex there (`Path::vertex`'s frame for a diffuse BSDF).
+            let (frame, flip, wi) = facing(two_sided, arrival, Frame::about(shading_normal));
             let vertex = Vertex {
                 point,
-                frame: Frame::about(unit(&mut rng)),
-                flip: rng.next_u32().is_multiple_of(2),
+                frame,
+                flip,
                 wi,
                 bsdf: Cow::Owned(Bsdf::Diffuse(Diffuse { reflectance })),
             };
@@ -536,17 +539,12 @@ mod tests {
             state.eta = hostile(&mut rng, 0.0, 1.5);
             state.depth = rng.next_u32() % 8;
             let u = [(); 7].map(|_| number(&mut rng));
-            cases.push((vertex, state, u));
+            cases.push((vertex, state, u, (surface, arrival)));
         }
-        let lane_vertex = |(vertex, state, _): &(Vertex, PathState, [f32; 7])| LaneVertex {
-            point: vertex.point,
-            frame: vertex.frame,
-            flip: vertex.flip,
-            wi: vertex.wi,
-            reflectance: match &*vertex.bsdf {
-                Bsdf::Diffuse(d) => d.reflectance,
-                _ => unreachable!(),
-            },
+        type Case<'a> = (Vertex<'a>, PathState, [f32; 7], (DiffuseSurface, Vec3));
+        let lane_vertex = |(_, state, _, (surface, arrival)): &Case| LaneVertex {
+            surface: *surface,
+            arrival: *arrival,
             throughput: state.throughput,
             eta: state.eta,
             roulette: state.depth + 1 >= PathSettings::default().rr_depth,
@@ -565,7 +563,7 @@ mod tests {
             }
             lanes.shade(isa);
             let (mut exact, mut shadows, mut bounces) = (0, 0, 0);
-            for (lane, (vertex, state, u)) in cases.iter().enumerate() {
+            for (lane, (vertex, state, u, _)) in cases.iter().enumerate() {
                 let result = lanes.result(lane);
                 if !result.exact {
                     continue;

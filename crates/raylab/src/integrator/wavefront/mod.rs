@@ -180,8 +180,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                 let state = &mut states[i];
                 // The commonest hit, a plain triangle of a diffuse material, by the shortcut
                 // (nothing is emitted there); any other by the general steps.
-                let plain = hit.as_ref().and_then(|hit| path.plain_diffuse(&state.ray, hit));
-                let (point, frame, flip, wi, reflectance) = match plain {
+                let plain = hit.as_ref().and_then(|hit| path.plain_diffuse(hit));
+                let surface = match plain {
                     Some(plain) => plain,
                     None => {
                         let Some(interaction) = path.arrive(state, hit.as_ref()) else { continue };
@@ -189,7 +189,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                             continue;
                         }
                         match path.diffuse_vertex(&state.ray, &interaction) {
-                            Some((frame, flip, wi, r)) => (interaction.point, frame, flip, wi, r),
+                            Some(surface) => surface,
                             None => {
                                 vertices.push((i, path.vertex(&state.ray, &interaction)));
                                 continue;
@@ -201,11 +201,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                     continue;
                 }
                 diffuse.push(&LaneVertex {
-                    point,
-                    frame,
-                    flip,
-                    wi,
-                    reflectance,
+                    surface,
+                    arrival: state.ray.direction,
                     throughput: state.throughput,
                     eta: state.eta,
                     roulette: state.depth + 1 >= rr_depth,
