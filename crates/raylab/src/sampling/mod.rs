@@ -357,6 +357,9 @@ pub fn erf_inv(y: f32) -> f32 {
 // ---------------------------------------------------------------------------------------------
 // Discrete choices.
 
+/// The most CDF entries [`DiscreteDistribution`] counts rather than searches.
+const SMALL_DISTRIBUTION: usize = 16;
+
 /// A choice among `n` items with probabilities proportional to given weights, by a binary
 /// search of the cumulative distribution (Mitsuba's `DiscreteDistribution`).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -391,6 +394,18 @@ impl DiscreteDistribution {
         self.pmf.len()
     }
 
+    /// How many entries of the CDF are at most `u` (it ascends, so they lead): a binary search,
+    /// or for a few items (a scene's handful of light triangles) a count without branches,
+    /// which random numbers cannot mispredict. Both give the same number.
+    #[inline]
+    fn below_or_at(&self, u: f32) -> usize {
+        if self.cdf.len() <= SMALL_DISTRIBUTION {
+            self.cdf.iter().map(|&c| usize::from(c <= u)).sum()
+        } else {
+            self.cdf.partition_point(|&c| c <= u)
+        }
+    }
+
     /// Whether there are no items.
     pub fn is_empty(&self) -> bool {
         self.pmf.is_empty()
@@ -407,7 +422,7 @@ impl DiscreteDistribution {
     #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
         // The last i with cdf[i] <= u, skipping items of probability zero.
-        let i = (self.cdf.partition_point(|&c| c <= u).max(1) - 1).min(self.pmf.len() - 1);
+        let i = (self.below_or_at(u).max(1) - 1).min(self.pmf.len() - 1);
         let pmf = self.pmf[i];
         let reused =
             if pmf > 0.0 { ((u - self.cdf[i]) / pmf).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 };

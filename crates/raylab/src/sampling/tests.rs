@@ -221,6 +221,18 @@ fn discrete_distributions_pick_by_weight_and_skip_zeros() {
     }
     assert_eq!((counts[1], counts[3]), (0, 0));
     assert!((counts[2] as f64 / 100_000.0 - 0.75).abs() < 0.01, "{counts:?}");
+    // Small distributions count the CDF entries at most `u`, large ones search: the same item.
+    for n in [1, 2, 3, 7, 15, 16, 40] {
+        let weights: Vec<f32> =
+            (0..n).map(|i| if i % 3 == 1 { 0.0 } else { rng.next_f32() + 0.01 }).collect();
+        let d = DiscreteDistribution::new(&weights).unwrap();
+        let search = |u: f32| d.cdf.partition_point(|&c| c <= u);
+        let edges = d.cdf.iter().flat_map(|&c| [c, c.next_down(), c.next_up()]);
+        let numbers = (0..2000).map(|_| rng.next_f32()).chain(edges).chain([f32::NAN, -1.0, 2.0]);
+        for u in numbers {
+            assert_eq!(d.below_or_at(u), search(u), "{n} items, u = {u}");
+        }
+    }
     assert!(DiscreteDistribution::new(&[0.0, 0.0]).is_none());
     assert!(DiscreteDistribution::new(&[]).is_none());
     assert!(DiscreteDistribution::new(&[f32::INFINITY]).is_none());
