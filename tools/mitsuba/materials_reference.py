@@ -9,8 +9,10 @@ rectangular light, in a constant environment), but it translates the scene forma
   [render]   size -> hdrfilm width/height (pixel_format rgb, float32); filter box -> rfilter box,
              gaussian -> gaussian (stddev 0.5, Mitsuba's radius 4 stddev = 2 px); max_depth ->
              path max_depth (rr_depth 5, Mitsuba's and raylab's default); integrator must be
-             `path`; the sampler is always Mitsuba's `independent` (raylab's sobol/lab samplers
-             only change the noise, not the expectation). spp and seed come from the command line.
+             `path`; the sampler is --sampler (Mitsuba's default `independent`; `multijitter`,
+             its best for the Cornell box; raylab's sobol/lab samplers only change the noise, not
+             the expectation). spp and seed come from the command line; --warmup renders once
+             first, so that the timing is of compiled kernels.
   [camera]   position + target (up [0, 1, 0]), or position + yaw/pitch: perspective with
              to_world = look_at(position, target, up), fov, fov_axis; aperture_radius > 0 ->
              thinlens (aperture_radius, focus_distance).
@@ -374,7 +376,7 @@ def shape_dicts(mi, doc, folder, materials, sphere_dir, raylab_frames):
 # ---------------------------------------------------------------------------------------------
 # Camera, lights, the scene.
 
-def camera_dict(mi, cam, width, height, spp, filt):
+def camera_dict(mi, cam, width, height, spp, filt, sampler="independent"):
     pos = [float(x) for x in cam["position"]]
     up = [float(x) for x in cam.get("up", [0, 1, 0])]
     if np.linalg.norm(np.array(up) / np.linalg.norm(up) - [0, 1, 0]) > 1e-4:
@@ -396,7 +398,7 @@ def camera_dict(mi, cam, width, height, spp, filt):
         "fov_axis": cam.get("fov_axis", "x"),
         "film": {"type": "hdrfilm", "width": width, "height": height,
                  "rfilter": filt, "pixel_format": "rgb", "component_format": "float32"},
-        "sampler": {"type": "independent", "sample_count": spp},
+        "sampler": {"type": sampler, "sample_count": spp},
     }
     aperture = float(cam.get("aperture_radius", 0.0))
     if aperture > 0:
@@ -407,7 +409,7 @@ def camera_dict(mi, cam, width, height, spp, filt):
 
 
 def build_scene_dict(mi, doc, folder, width, height, spp, max_depth, rr_depth, sphere_dir,
-                     raylab_frames=True):
+                     raylab_frames=True, sampler="independent"):
     """The Mitsuba scene dict; built-in spheres are written as PLY files into sphere_dir."""
     render = doc.get("render", {})
     integrator = render.get("integrator", "path")
@@ -423,7 +425,7 @@ def build_scene_dict(mi, doc, folder, width, height, spp, max_depth, rr_depth, s
     scene = {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": int(max_depth), "rr_depth": int(rr_depth)},
-        "sensor": camera_dict(mi, doc["camera"], width, height, spp, filt),
+        "sensor": camera_dict(mi, doc["camera"], width, height, spp, filt, sampler),
     }
     scene.update(shape_dicts(mi, doc, folder, doc.get("materials", {}), sphere_dir,
                              raylab_frames))
@@ -458,6 +460,10 @@ def main():
                     help="independent passes (seeds seed..seed+passes-1), averaged")
     ap.add_argument("--max-depth", type=int, help="default: the file's max_depth (else -1)")
     ap.add_argument("--rr-depth", type=int, default=5)
+    ap.add_argument("--sampler", default="independent",
+                    choices=["independent", "multijitter", "orthogonal", "stratified", "ldsampler"])
+    ap.add_argument("--warmup", action="store_true",
+                    help="render once first (another seed), so the timing is of compiled kernels")
     ap.add_argument("--threads", type=int, default=0,
                     help="Dr.Jit worker threads (0 = Dr.Jit default = all cores)")
     ap.add_argument("--out", required=True, help="output: .pfm, .exr or .npy")
@@ -486,12 +492,15 @@ def main():
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="raylab_spheres_") as sphere_dir:
         scene_dict = build_scene_dict(mi, doc, folder, width, height, args.spp, max_depth,
-                                      args.rr_depth, sphere_dir, args.duff_frames)
+                                      args.rr_depth, sphere_dir, args.duff_frames, args.sampler)
         if args.print_scene:
             print(scene_dict)
         scene = mi.load_dict(scene_dict)
     t_load = time.perf_counter() - t0
 
+    if args.warmup:
+        dr.eval(mi.render(scene, spp=args.spp, seed=args.seed + 1000))
+        dr.sync_thread()
     render = Render(dr, mi, scene, args.spp, args.seed, args.passes)
     img = render.image
     assert img.shape == (height, width, 3), img.shape
@@ -519,7 +528,8 @@ def main():
         written.append(args.png)
 
     total_spp = args.spp * args.passes
-    print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant}")
+    print(f"mitsuba {mi.__version__} drjit {dr.__version__} variant {args.variant} "
+          f"sampler {args.sampler}")
     print(f"scene {args.scene}")
     print("anisotropic frames: " + ("the Duff basis of the shading normal" if args.duff_frames
                                      else "Mitsuba's dp_du (mesh: first triangle edge), as raylab's"))
