@@ -91,6 +91,10 @@ impl<A: Accelerator + Sync + ?Sized> Integrator for WithAovs<'_, A> {
         self.inner.sampler_kind()
     }
 
+    fn tile_width(&self) -> u32 {
+        self.inner.tile_width()
+    }
+
     fn layer_count(&self) -> usize {
         self.aovs.len()
     }

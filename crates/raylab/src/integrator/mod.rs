@@ -79,6 +79,13 @@ pub trait Integrator: Sync {
         }
     }
 
+    /// How many pixels wide the tiles are whose camera rays it is handed at once
+    /// ([`radiance_each`](Self::radiance_each)), by default: eight, for 8×8 tiles of coherent
+    /// camera rays. The tiling never changes the pixels.
+    fn tile_width(&self) -> u32 {
+        8
+    }
+
     /// The sampler this integrator's pictures use unless told otherwise.
     fn sampler_kind(&self) -> SamplerKind {
         SamplerKind::Sobol

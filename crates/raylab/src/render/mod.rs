@@ -28,10 +28,8 @@ pub use accumulator::Accumulator;
 /// traced in tiles of `tile`×`band` pixels, whose rays are coherent (the accelerator traces them
 /// as packets).
 const BAND_ROWS: u32 = 8;
-/// Tile width by default: 32×8 tiles, so the wavefront path tracer advances 256 paths at a time.
-/// Measured on Mitsuba's Cornell box (1 thread, 8 spp, CPU time, median of 5): 8×8 tiles 1.63 s,
-/// 32×8 1.52 s, 64×8 1.52 s; the showcase, the materials scene and the engine within 3 %.
-const TILE: u32 = 32;
+/// Tile width by default: the integrator's ([`Integrator::tile_width`]).
+const TILE: u32 = 0;
 
 /// How samples are drawn: the seed, the sampler (`None`: the integrator's choice), the filter and
 /// the tiling (which never changes the pixels, only the order of the work).
@@ -43,7 +41,8 @@ pub struct SampleSettings {
     pub sampler: Option<SamplerKind>,
     /// The pixel filter.
     pub filter: Filter,
-    /// Tile width and height in pixels (their product at most 64).
+    /// Tile width and height in pixels (their product at most 256); width 0 for the
+    /// integrator's choice ([`Integrator::tile_width`]).
     pub tile: (u32, u32),
 }
 

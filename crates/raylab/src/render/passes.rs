@@ -135,7 +135,7 @@ impl Band<'_> {
         let (width, first_row, has_lens) = (self.width, self.first_row, self.has_lens);
         let first_column = self.first_column;
         let rows = pixels.len() / width;
-        let (tile_width, _) = tile_shape(settings.tile);
+        let (tile_width, _) = tile_shape(tile_or_default(settings.tile, integrator));
         // A tile's rays, samplers and colours, on the stack.
         let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_TILE_PIXELS];
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
@@ -197,6 +197,14 @@ impl Band<'_> {
         }
         discarded
     }
+}
+
+/// `tile`, its width 0 replaced by the integrator's ([`Integrator::tile_width`]).
+fn tile_or_default(
+    (width, height): (u32, u32),
+    integrator: &(impl Integrator + ?Sized),
+) -> (u32, u32) {
+    (if width == 0 { integrator.tile_width() } else { width }, height)
 }
 
 /// A tile shape that fits the tile arrays: both sides at least 1, at most 256 pixels.

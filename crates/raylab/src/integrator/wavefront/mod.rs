@@ -122,6 +122,14 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         self.path.discarded_samples()
     }
 
+    /// 32×8 tiles: 256 paths advance together, which fills the lanes of the later bounces
+    /// better. Measured on Mitsuba's Cornell box (1 thread, 8 spp, CPU time, median of 5): 8×8
+    /// tiles 1.63 s, 32×8 1.52 s, 64×8 1.52 s; the showcase, the materials scene and the engine
+    /// within 3 %. (The lab's integrator keeps 8×8: its frame was 2–5 % slower in 32×8 tiles.)
+    fn tile_width(&self) -> u32 {
+        32
+    }
+
     fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
         assert_eq!(rays.len(), out.len(), "one colour per ray");
         assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
