@@ -12,8 +12,10 @@
 //!    one by one through a tree);
 //! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
 //!    `max_depth` end; each vertex's material and shading frame. A diffuse vertex goes straight
-//!    into a lane (its point, frame and reflectance; no copy of its BSDF), any other becomes
-//!    the scalar path's vertex;
+//!    into a lane (its point, shading normal and reflectance; no copy of its BSDF; the lanes
+//!    make its frame), any other becomes the scalar path's vertex. The commonest hit, a plain
+//!    triangle of an untextured diffuse material that is no light's ([`Path::plain_diffuse`]),
+//!    goes without building its interaction;
 //! 3. **draws**: every vertex's numbers (the light's choice and point, the BSDF's lobe and
 //!    direction, the roulette's) in one pass over the vertices' samplers
 //!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
