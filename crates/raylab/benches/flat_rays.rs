@@ -1,7 +1,8 @@
 //! A small scene's flat list against incoherent rays: one ray at a time (sixteen triangles per
 //! instruction) against many rays at once (rays in lanes, one triangle per step), on Mitsuba's
 //! 36-triangle Cornell box. The rays are a path tracer's kind: from points inside the box in
-//! uniformly random directions, 64 to a batch as in the wavefront.
+//! uniformly random directions, 64 to a batch (the wavefront hands over up to 256, fewer at
+//! later bounces).
 //!
 //! `cargo bench -p raylab --bench flat_rays`
 
@@ -11,7 +12,7 @@ use glam::Vec3;
 use raylab::scene::LoadOptions;
 use raylab::{Accelerator, Hit, Ray, Scene, SceneBvh};
 
-/// Rays per measured batch set, and rays per batch (a tile's paths).
+/// Rays per measured batch set, and rays per batch.
 const RAYS: usize = 4096;
 const BATCH: usize = 64;
 

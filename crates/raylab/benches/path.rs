@@ -111,7 +111,7 @@ fn stage_table(_: &mut Criterion) {
     }
 }
 
-/// The sampler's draws for 64 paths (a tile), one by one and a batch at a time
+/// The sampler's draws for 64 paths, one by one and a batch at a time
 /// (`Sampler::next_1d_each`, `next_2d_each`): a path vertex's three 1D and two 2D draws.
 fn draws(c: &mut Criterion) {
     let samplers: Vec<Sampler> =

@@ -361,7 +361,8 @@ pub fn erf_inv(y: f32) -> f32 {
 const SMALL_DISTRIBUTION: usize = 16;
 
 /// A choice among `n` items with probabilities proportional to given weights, by a binary
-/// search of the cumulative distribution (Mitsuba's `DiscreteDistribution`).
+/// search of the cumulative distribution (Mitsuba's `DiscreteDistribution`; a count for a few
+/// items).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DiscreteDistribution {
     /// `cdf[i]` = the sum of the weights before item `i`, normalized; `cdf[n] = 1`.

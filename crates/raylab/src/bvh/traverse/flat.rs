@@ -7,7 +7,7 @@
 //! scene with no branch but the loop's. So for scenes of at most
 //! [`BuildSettings::flat_limit`](crate::bvh::BuildSettings::flat_limit) triangles a [`Bvh`](crate::bvh::Bvh)
 //! also keeps [`Flat`]: the triangles in index order, sixteen to a block, and answers single rays
-//! from it.
+//! from it (and batches of incoherent rays, in lanes: `flat_rays.rs`).
 //!
 //! ## Layout, worked through
 //! A block is the vertices of sixteen triangles coordinate by coordinate,
@@ -83,7 +83,8 @@ impl Flat {
         Flat { blocks }
     }
 
-    /// The triangles in index order, with their indices.
+    /// The triangles in index order, with their indices (for the lanes of `flat_rays.rs`).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     #[inline(always)]
     pub(crate) fn triangles(&self) -> FlatTriangles<'_> {
         FlatTriangles { blocks: self.blocks.iter(), block: None, lanes: 0 }
@@ -103,6 +104,7 @@ impl Flat {
 }
 
 /// [`Flat::triangles`]: the corners and index of each triangle, in index order.
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 pub(crate) struct FlatTriangles<'a> {
     blocks: std::slice::Iter<'a, FlatBlock>,
     /// The block being read, and its lanes not yet read.

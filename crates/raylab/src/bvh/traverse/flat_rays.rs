@@ -14,10 +14,11 @@
 //! Measured (`cargo bench -p raylab --bench flat_rays`, random rays inside Mitsuba's box, one
 //! thread): 87–94 ns a ray one at a time, 53 ns in lanes, 46 ns with the set-up in lanes too;
 //! the path tracer's whole render of the box (1 thread, 8 spp, CPU time) 1.79 → 1.65 s, and
-//! 1.31 → 1.19 s for the set-up in lanes (with the other changes of the day between). Occlusion in lanes was tried and is not kept: a
-//! group runs until its last ray is blocked or has seen every triangle, where a ray alone stops
-//! at its first blocker, and it measured slower, 37 ns a shadow ray one at a time against 47 in
-//! lanes (the render 1.68 s against 1.78). With the set-up in lanes too (below) it measured
+//! 1.31 → 1.19 s for the set-up in lanes (with the other changes of the day between).
+//! Occlusion in lanes was tried and is not kept: a group runs until its last ray is blocked or
+//! has seen every triangle, where a ray alone stops at its first blocker, and it measured
+//! slower, 37 ns a shadow ray one at a time against 47 in lanes (the render 1.68 s against
+//! 1.78). With the set-up in lanes too (below) it measured
 //! even, 1.20 s against 1.20 (1 thread, 8 spp, CPU time, min of 5), so the simpler single-ray
 //! query stays.
 //!

@@ -6,6 +6,7 @@
 //! triangle pre-test is then vectorized for the same set too.
 
 pub(crate) mod flat;
+#[cfg(target_arch = "x86_64")]
 pub(crate) mod flat_rays;
 
 use crate::accel::Hit;
