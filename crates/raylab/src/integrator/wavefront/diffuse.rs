@@ -283,6 +283,16 @@ pub(super) struct LaneResult {
 }
 
 impl DiffuseLanes {
+    /// Room for `n` lanes, so that gathering them never moves the chunks.
+    pub(super) fn with_capacity(n: usize) -> DiffuseLanes {
+        let chunks = n.div_ceil(LANES);
+        DiffuseLanes {
+            inputs: Vec::with_capacity(chunks),
+            outputs: Vec::with_capacity(chunks),
+            len: 0,
+        }
+    }
+
     /// No lanes.
     pub(super) fn clear(&mut self) {
         self.len = 0;

@@ -158,7 +158,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut numbers = Numbers::with_capacity(rays.len());
         // The diffuse vertices in lanes, and their paths. Made per tile: one reused from tile
         // to tile (thread-local) was measured slower (BENCHMARKS.md).
-        let mut diffuse = DiffuseLanes::default();
+        let mut diffuse = DiffuseLanes::with_capacity(rays.len());
         let mut diffuse_paths: Vec<usize> = Vec::with_capacity(rays.len());
         let mut first = true;
         let mut lap = Lap::start(self.times.as_ref());
