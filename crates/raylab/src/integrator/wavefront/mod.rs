@@ -125,9 +125,11 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
     }
 
     /// 32×8 tiles: 256 paths advance together, which fills the lanes of the later bounces
-    /// better. Measured on Mitsuba's Cornell box (1 thread, 8 spp, CPU time, median of 5): 8×8
+    /// better. Measured on Mitsuba's Cornell box (`/usr/bin/time -f %U raylab render
+    /// scenes/cornell-mitsuba.toml --spp 8 --threads 1 -o r.pfm`, CPU time, median of 5): 8×8
     /// tiles 1.63 s, 32×8 1.52 s, 64×8 1.52 s; the showcase, the materials scene and the engine
-    /// within 3 %. (The lab's integrator keeps 8×8: its frame was 2–5 % slower in 32×8 tiles.)
+    /// within 3 %. (The lab's integrator keeps 8×8: its frame was 2–5 % slower in 32×8 tiles,
+    /// `raylab view --headless --frames 300`.) BENCHMARKS.md, "Paths in lanes", has the table.
     fn tile_width(&self) -> u32 {
         32
     }
@@ -188,14 +190,17 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             diffuse_paths.clear();
             for (&i, hit) in alive.iter().zip(&hits) {
                 let state = &mut states[i];
-                // The commonest hit, a plain triangle of a diffuse material, by the shortcut
-                // (nothing is emitted there); any other by the general steps.
-                let plain = hit.as_ref().and_then(|hit| path.plain_diffuse(hit));
+                let last = state.depth + 1 >= max_depth;
+                // The commonest hit, a plain triangle of a diffuse material, by the shortcut:
+                // nothing is emitted there, so at the depth limit it needs nothing at all. Any
+                // other hit by the general steps.
+                let plain =
+                    if last { None } else { hit.as_ref().and_then(|hit| path.plain_diffuse(hit)) };
                 let surface = match plain {
                     Some(plain) => plain,
                     None => {
                         let Some(interaction) = path.arrive(state, hit.as_ref()) else { continue };
-                        if state.depth + 1 >= max_depth {
+                        if last {
                             continue;
                         }
                         match path.diffuse_vertex(&state.ray, &interaction) {
@@ -207,9 +212,6 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                         }
                     }
                 };
-                if state.depth + 1 >= max_depth {
-                    continue;
-                }
                 diffuse.push(&LaneVertex {
                     surface,
                     arrival: state.ray.direction,
