@@ -575,7 +575,7 @@ fn a_far_stored_instanced_light_is_not_occluded_by_itself() {
         let p = Vec3::new(4.0 * rng.next() - 1.0, 0.5 + rng.next(), 4.0 * rng.next() - 2.0);
         let point = raylab::SurfacePoint { p, error: Vec3::splat(1e-6), normal: -Vec3::Y };
         let u = glam::Vec2::new(rng.next(), rng.next());
-        if let Some(sample) = lights.sample(&point, rng.next(), u) {
+        if let Some(sample) = lights.sample(&point, u) {
             samples += 1;
             occluded += bvh.occluded(&sample.shadow_ray) as u32;
         }

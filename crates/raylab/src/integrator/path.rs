@@ -382,25 +382,23 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         sampler: &mut Sampler,
         throughput: Vec3,
     ) -> Option<(Ray, Vec3)> {
-        let u_light = sampler.next_1d();
-        let u_point = sampler.next_2d();
-        self.sample_light_with(vertex, u_light, u_point, throughput)
+        let u = sampler.next_2d();
+        self.sample_light_with(vertex, u, throughput)
     }
 
-    /// [`sample_light`](Self::sample_light) with its numbers drawn: `u_light` picks the light,
-    /// `u_point` the point on it.
+    /// [`sample_light`](Self::sample_light) with its numbers drawn: `u` picks the light and the
+    /// point on it ([`LightSet::sample`]).
     #[inline]
     pub(super) fn sample_light_with(
         &self,
         vertex: &Vertex,
-        u_light: f32,
-        u_point: Vec2,
+        u: Vec2,
         throughput: Vec3,
     ) -> Option<(Ray, Vec3)> {
         if !vertex.bsdf.is_smooth() {
             return None;
         }
-        let light = self.lights.sample(&vertex.point, u_light, u_point)?;
+        let light = self.lights.sample(&vertex.point, u)?;
         let wo = vertex.to_local(light.direction);
         let f = vertex.bsdf.eval(vertex.wi, wo);
         if f == Vec3::ZERO {

@@ -2,7 +2,8 @@
 //!
 //! A [`Sampler`] is made for one sample of one pixel from `(seed, pixel, sample index)` alone, and
 //! hands out numbers in `[0, 1)` dimension by dimension: the pixel position first (two
-//! dimensions), then the lens, then two or three per bounce. Nothing else goes in, so a picture
+//! dimensions), then the lens, then six per path vertex (a pair for the light and the point on it,
+//! one for the BSDF's lobe, a pair for its direction, one for Russian roulette). Nothing else goes in, so a picture
 //! is the same whatever the thread count, the tiling or the order of the work.
 //!
 //! Three kinds ([`SamplerKind`]):
@@ -138,8 +139,8 @@ impl Sampler {
         each_with::<TwoD>(samplers, lanes, out, Isa::detect());
     }
 
-    /// A path vertex's numbers ([`VertexNumbers`]: `next_1d`, `next_2d`, `next_1d`, `next_2d`,
-    /// `next_1d`, in that order) of the samplers `lanes` picks, into `out`: the five draws of
+    /// A path vertex's numbers ([`VertexNumbers`]: `next_2d`, `next_1d`, `next_2d`, `next_1d`,
+    /// in that order) of the samplers `lanes` picks, into `out`: the four draws of
     /// [`next_1d_each`](Self::next_1d_each) and [`next_2d_each`](Self::next_2d_each) in one
     /// pass over the samplers, sixteen lanes at a time.
     ///
@@ -153,9 +154,7 @@ impl Sampler {
 /// The numbers a path tracer draws at a vertex, in the order it draws them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct VertexNumbers {
-    /// Picks the light.
-    pub light: f32,
-    /// Picks the point on the light.
+    /// Picks the light and the point on it.
     pub point: Vec2,
     /// Picks the BSDF's lobe.
     pub lobe: f32,
@@ -209,25 +208,23 @@ impl SobolDraw for TwoD {
     }
 }
 
-/// [`Sampler::next_vertex_each`]: a 1D, a 2D, a 1D, a 2D and a 1D draw.
+/// [`Sampler::next_vertex_each`]: a 2D, a 1D, a 2D and a 1D draw.
 struct VertexDraw;
 
 impl SobolDraw for VertexDraw {
     type Number = VertexNumbers;
-    const DIMENSIONS: u32 = 7;
+    const DIMENSIONS: u32 = 6;
     #[inline(always)]
     fn draw(base: u32, reversed_index: u32, dimension: u32) -> VertexNumbers {
         VertexNumbers {
-            light: OneD::draw(base, reversed_index, dimension),
-            point: TwoD::draw(base, reversed_index, dimension + 1),
-            lobe: OneD::draw(base, reversed_index, dimension + 3),
-            direction: TwoD::draw(base, reversed_index, dimension + 4),
-            roulette: OneD::draw(base, reversed_index, dimension + 6),
+            point: TwoD::draw(base, reversed_index, dimension),
+            lobe: OneD::draw(base, reversed_index, dimension + 2),
+            direction: TwoD::draw(base, reversed_index, dimension + 3),
+            roulette: OneD::draw(base, reversed_index, dimension + 5),
         }
     }
     fn one_by_one(sampler: &mut Sampler) -> VertexNumbers {
         VertexNumbers {
-            light: sampler.next_1d(),
             point: sampler.next_2d(),
             lobe: sampler.next_1d(),
             direction: sampler.next_2d(),

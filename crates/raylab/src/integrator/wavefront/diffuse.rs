@@ -548,10 +548,10 @@ mod tests {
             state.throughput = Vec3::new(hostile(&mut rng, 0.0, 1.0), rng.next_f32(), 0.7);
             state.eta = hostile(&mut rng, 0.0, 1.5);
             state.depth = rng.next_u32() % 8;
-            let u = [(); 7].map(|_| number(&mut rng));
+            let u = [(); 6].map(|_| number(&mut rng));
             cases.push((vertex, state, u, (surface, arrival)));
         }
-        type Case<'a> = (Vertex<'a>, PathState, [f32; 7], (DiffuseSurface, Vec3));
+        type Case<'a> = (Vertex<'a>, PathState, [f32; 6], (DiffuseSurface, Vec3));
         let lane_vertex = |(_, state, _, (surface, arrival)): &Case| LaneVertex {
             surface: *surface,
             arrival: *arrival,
@@ -559,11 +559,9 @@ mod tests {
             eta: state.eta,
             roulette: state.depth + 1 >= PathSettings::default().rr_depth,
         };
-        let lane_draws = |u: &[f32; 7]| LaneDraws {
-            light: path.lights().pick_for_lanes(u[0]),
-            u_point: Vec2::new(u[1], u[2]),
-            u_direction: Vec2::new(u[4], u[5]),
-            u_roulette: u[6],
+        let lane_draws = |u: &[f32; 6]| {
+            let (light, u_point) = path.lights().pick_for_lanes(Vec2::new(u[0], u[1]));
+            LaneDraws { light, u_point, u_direction: Vec2::new(u[3], u[4]), u_roulette: u[5] }
         };
         for isa in Isa::ALL.into_iter().filter(|isa| isa.is_supported()) {
             let mut lanes = DiffuseLanes::default();
@@ -579,9 +577,9 @@ mod tests {
                     continue;
                 }
                 exact += 1;
-                let light = path.lights().pick_for_lanes(u[0]);
+                let (light, _) = path.lights().pick_for_lanes(Vec2::new(u[0], u[1]));
                 let expected =
-                    path.sample_light_with(vertex, u[0], Vec2::new(u[1], u[2]), state.throughput);
+                    path.sample_light_with(vertex, Vec2::new(u[0], u[1]), state.throughput);
                 match (light, result.shadow) {
                     (LanePick::Other, shadow) => assert!(shadow.is_none(), "{isa:?} lane {lane}"),
                     (_, None) => assert!(expected.is_none(), "{isa:?} lane {lane}: {expected:?}"),
@@ -598,8 +596,8 @@ mod tests {
                     }
                 }
                 let mut scalar = *state;
-                let goes_on = path.bounce(&mut scalar, vertex, u[3], Vec2::new(u[4], u[5]))
-                    && path.survives_roulette(&mut scalar, u[6]);
+                let goes_on = path.bounce(&mut scalar, vertex, u[2], Vec2::new(u[3], u[4]))
+                    && path.survives_roulette(&mut scalar, u[5]);
                 assert_eq!(result.next.is_some(), goes_on, "{isa:?} lane {lane}");
                 if let Some((ray, throughput, pdf)) = result.next {
                     bounces += 1;
