@@ -141,25 +141,47 @@ impl Band<'_> {
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
             std::array::from_fn(|_| Sampler::new(kind, 0, (0, 0), 0));
         let mut colours = [Vec3::ZERO; MAX_TILE_PIXELS];
+        // A tile's film positions and lens numbers, and its lanes' indices for the samplers'
+        // draws in lanes.
+        let mut film = [Vec2::ZERO; MAX_TILE_PIXELS];
+        let mut lens = [Vec2::ZERO; MAX_TILE_PIXELS];
+        let all_lanes: [usize; MAX_TILE_PIXELS] = std::array::from_fn(|k| k);
         // The layers' values of a tile's rays, ray by ray (empty without layers).
         let layer_count = layers.len();
         let mut layer_values = vec![Vec3::ZERO; MAX_TILE_PIXELS * layer_count];
         for tile_x in (0..width).step_by(tile_width) {
             let columns = tile_x..(tile_x + tile_width).min(width);
             let n = columns.len() * rows;
-            let mut slot = tile_rays.iter_mut().zip(samplers.iter_mut());
+            let mut slot = samplers.iter_mut().zip(&mut film);
             for y in first_row..first_row + rows {
                 for x in columns.clone() {
-                    let (ray, sampler) = slot.next().expect("a tile's rays fit");
+                    let (sampler, film) = slot.next().expect("a tile's rays fit");
                     let x = first_column + x;
                     *sampler = Sampler::new(kind, settings.seed, (x as u32, y as u32), sample);
-                    let offset = settings.filter.offset(sampler.pixel_2d());
-                    let film = Vec2::new(x as f32 + offset.x, y as f32 + offset.y);
-                    *ray = if has_lens {
-                        rays.lens_ray(film, sampler.next_2d())
-                    } else {
-                        rays.ray(film.x, film.y)
-                    };
+                    *film = Vec2::new(x as f32, y as f32);
+                }
+            }
+            // The pixel positions (and lens numbers): the Sobol' kind's in lanes, the same
+            // numbers as one by one (`pixel_2d` is its first `next_2d`).
+            let (samplers, lanes) = (&mut samplers[..n], &all_lanes[..n]);
+            if kind == SamplerKind::Sobol {
+                Sampler::next_2d_each(samplers, lanes, &mut lens[..n]);
+            } else {
+                for (sampler, u) in samplers.iter_mut().zip(&mut lens) {
+                    *u = sampler.pixel_2d();
+                }
+            }
+            for (film, &u) in film[..n].iter_mut().zip(&lens) {
+                *film += settings.filter.offset(u);
+            }
+            if has_lens {
+                Sampler::next_2d_each(samplers, lanes, &mut lens[..n]);
+                for ((ray, film), &u) in tile_rays.iter_mut().zip(&film[..n]).zip(&lens) {
+                    *ray = rays.lens_ray(*film, u);
+                }
+            } else {
+                for (ray, film) in tile_rays.iter_mut().zip(&film[..n]) {
+                    *ray = rays.ray(film.x, film.y);
                 }
             }
             if layer_count == 0 {
