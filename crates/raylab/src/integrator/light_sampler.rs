@@ -112,9 +112,6 @@ pub struct LightSample {
     pub shadow_ray: Ray,
 }
 
-/// The fraction of a shadow ray toward a point on a surface light that is tested: the rest
-/// (a relative 10⁻⁴) keeps the light's own triangle out of the test (PBR 4th ed.'s
-/// `ShadowEpsilon`).
 /// What [`LightSet::pick_for_lanes`] picked.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum LanePick {
@@ -126,8 +123,8 @@ pub(super) enum LanePick {
     Other,
 }
 
-/// A triangle light sampled uniformly by area, with a constant radiance, and the probability
-/// of having picked it.
+/// A triangle light sampled uniformly by area, with a constant radiance, the probability of
+/// having picked it, and where its share of the first number starts.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct LaneTriangle {
     pub corners: [Vec3; 3],
@@ -136,8 +133,12 @@ pub(super) struct LaneTriangle {
     pub area: f32,
     pub radiance: Vec3,
     pub selection: f32,
+    pub start: f32,
 }
 
+/// The fraction of a shadow ray toward a point on a surface light that is tested: the rest
+/// (a relative 10⁻⁴) keeps the light's own triangle out of the test (PBR 4th ed.'s
+/// `ShadowEpsilon`).
 pub(super) const SHADOW_RAY_LENGTH: f32 = 1.0 - 1e-4;
 
 impl LightSet {
@@ -352,14 +353,16 @@ impl LightSet {
         }
     }
 
-    /// The light that `u` picks ([`pick`](Self::pick)), as the wavefront's lanes take it, and the
-    /// numbers left for the point on it: a triangle sampled uniformly by area with a constant
-    /// radiance, which the lanes sample as [`sample`](Self::sample) does; any other light, which a
-    /// lane leaves to `sample` (with `u` itself); or nothing, without lights.
+    /// The light that `u.x` picks ([`pick`](Self::pick)), as the wavefront's lanes take it: a
+    /// triangle sampled uniformly by area with a constant radiance, which the lanes sample as
+    /// [`sample`](Self::sample) does (`u.x` rescaled in lanes, [`rescaled`](crate::sampling::rescaled) of the triangle's
+    /// `start` and `selection`); any other light, which a lane leaves to `sample`; or nothing,
+    /// without lights.
     #[inline]
-    pub(super) fn pick_for_lanes(&self, u: Vec2) -> (LanePick, Vec2) {
-        let Some((index, selection, u_point)) = self.pick(u) else { return (LanePick::Nothing, u) };
-        let pick = match self.lights[index] {
+    pub(super) fn pick_for_lanes(&self, u: Vec2) -> LanePick {
+        let Some(distribution) = &self.distribution else { return LanePick::Nothing };
+        let (index, selection, start) = distribution.pick(u.x);
+        match self.lights[index] {
             SampledLight::Triangle { corners, normal, error, area, radiance, texture }
                 if self.triangle_sampling == TriangleSampling::Area
                     && self.textures.get(texture as usize).is_none() =>
@@ -371,11 +374,11 @@ impl LightSet {
                     area,
                     radiance,
                     selection,
+                    start,
                 })
             }
             _ => LanePick::Other,
-        };
-        (pick, u_point)
+        }
     }
 
     /// The radiance a ray from `origin` (the previous path vertex's point) sees at `hit` on an

@@ -422,13 +422,26 @@ impl DiscreteDistribution {
     /// item's interval (so it can be used again).
     #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
+        let (i, pmf, start) = self.pick(u);
+        (i, pmf, rescaled(u, start, pmf))
+    }
+
+    /// The item that `u ∈ [0, 1)` picks, its probability, and where its interval starts:
+    /// [`sample`](Self::sample) without the rescaling, for callers that rescale many at once
+    /// ([`rescaled`]).
+    #[inline]
+    pub fn pick(&self, u: f32) -> (usize, f32, f32) {
         // The last i with cdf[i] <= u, skipping items of probability zero.
         let i = (self.below_or_at(u).max(1) - 1).min(self.pmf.len() - 1);
-        let pmf = self.pmf[i];
-        let reused =
-            if pmf > 0.0 { ((u - self.cdf[i]) / pmf).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 };
-        (i, pmf, reused)
+        (i, self.pmf[i], self.cdf[i])
     }
+}
+
+/// `u` rescaled to `[0, 1)` within an item's interval, which starts at `start` and has
+/// probability `pmf` ([`DiscreteDistribution::pick`]); 0 for an item of probability zero.
+#[inline(always)]
+pub fn rescaled(u: f32, start: f32, pmf: f32) -> f32 {
+    if pmf > 0.0 { ((u - start) / pmf).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 }
 }
 
 // ---------------------------------------------------------------------------------------------

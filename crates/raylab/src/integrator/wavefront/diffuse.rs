@@ -40,7 +40,7 @@ use crate::material::{Bsdf, Diffuse};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
 #[cfg(doc)]
 use crate::sampling::square_to_cosine_hemisphere;
-use crate::sampling::{power_heuristic, square_to_uniform_triangle};
+use crate::sampling::{power_heuristic, rescaled, square_to_uniform_triangle};
 
 /// Lanes per chunk: one AVX-512 register of floats.
 pub(super) const LANES: usize = 16;
@@ -99,6 +99,8 @@ struct Input {
     area: Row,
     radiance: Rows3,
     selection: Row,
+    /// Where the light's share of the first number starts.
+    start: Row,
     /// The numbers: the light's point, the BSDF's direction, the roulette's.
     u_point: [Row; 2],
     u_direction: [Row; 2],
@@ -140,7 +142,8 @@ fn shade_lane(input: &Input, output: &mut Output, k: usize) {
     let throughput = input.throughput.get(k);
 
     // LightSet::sample's triangle, sampled by area.
-    let u = Vec2::new(input.u_point[0][k], input.u_point[1][k]);
+    let u_x = rescaled(input.u_point[0][k], input.start[k], input.selection[k]);
+    let u = Vec2::new(u_x, input.u_point[1][k]);
     let [b0, b1, b2] = square_to_uniform_triangle(u);
     let target = b0 * input.v0.get(k) + b1 * input.v1.get(k) + b2 * input.v2.get(k);
     let to_light = target - point.p;
@@ -265,6 +268,7 @@ pub(super) struct LaneVertex {
 /// A lane's light and numbers, as [`DiffuseLanes::set_draws`] takes them.
 pub(super) struct LaneDraws {
     pub light: LanePick,
+    /// The light's numbers as drawn (the lanes rescale the first within the light's share).
     pub u_point: Vec2,
     pub u_direction: Vec2,
     pub u_roulette: f32,
@@ -345,6 +349,7 @@ impl DiffuseLanes {
             area,
             radiance,
             selection,
+            start,
         }) = light
         {
             input.v0.set(k, v0);
@@ -355,6 +360,7 @@ impl DiffuseLanes {
             input.area[k] = area;
             input.radiance.set(k, radiance);
             input.selection[k] = selection;
+            input.start[k] = start;
         }
         input.u_point[0][k] = draws.u_point.x;
         input.u_point[1][k] = draws.u_point.y;
@@ -560,8 +566,9 @@ mod tests {
             roulette: state.depth + 1 >= PathSettings::default().rr_depth,
         };
         let lane_draws = |u: &[f32; 6]| {
-            let (light, u_point) = path.lights().pick_for_lanes(Vec2::new(u[0], u[1]));
-            LaneDraws { light, u_point, u_direction: Vec2::new(u[3], u[4]), u_roulette: u[5] }
+            let (u_point, u_direction) = (Vec2::new(u[0], u[1]), Vec2::new(u[3], u[4]));
+            let light = path.lights().pick_for_lanes(u_point);
+            LaneDraws { light, u_point, u_direction, u_roulette: u[5] }
         };
         for isa in Isa::ALL.into_iter().filter(|isa| isa.is_supported()) {
             let mut lanes = DiffuseLanes::default();
@@ -577,7 +584,7 @@ mod tests {
                     continue;
                 }
                 exact += 1;
-                let (light, _) = path.lights().pick_for_lanes(Vec2::new(u[0], u[1]));
+                let light = path.lights().pick_for_lanes(Vec2::new(u[0], u[1]));
                 let expected =
                     path.sample_light_with(vertex, Vec2::new(u[0], u[1]), state.throughput);
                 match (light, result.shadow) {

@@ -249,7 +249,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             for (lane, &i) in diffuse_paths.iter().enumerate() {
                 let v = first_lane + lane;
                 let drawn = numbers.drawn[v];
-                let (light, u_point) = path.lights().pick_for_lanes(drawn.point);
+                let light = path.lights().pick_for_lanes(drawn.point);
                 if let LanePick::Other = light {
                     shadows
                         .add(i, numbers.sample_light(path, &states[i], &diffuse.vertex(lane), v));
@@ -258,7 +258,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                     lane,
                     &LaneDraws {
                         light,
-                        u_point,
+                        u_point: drawn.point,
                         u_direction: drawn.direction,
                         u_roulette: drawn.roulette,
                     },
