@@ -240,6 +240,71 @@ pub(super) fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
 mod tests {
     use super::*;
 
+    /// A band makes each pixel's sampler and camera ray as they are made one at a time
+    /// (`Sampler::new`, `pixel_2d`, the filter's offset, then the lens's `next_2d`): the Sobol'
+    /// kind's numbers are drawn for a whole tile in lanes, the others one by one. An integrator
+    /// that returns its ray and its sampler's next number shows both, for every sampler kind,
+    /// with and without a lens, over tiles cut short by the image's edge.
+    #[test]
+    fn a_band_makes_the_rays_and_samplers_made_one_by_one() {
+        struct Echo(SamplerKind);
+        impl Integrator for Echo {
+            fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
+                let d = ray.direction.normalize();
+                Vec3::new(ray.origin.x + d.x, ray.origin.y + d.y, d.z + sampler.next_1d())
+            }
+            fn sampler_kind(&self) -> SamplerKind {
+                self.0
+            }
+        }
+        let (width, height) = (45, 19);
+        for lens in [false, true] {
+            let mut camera = crate::Camera::lab(width, height);
+            if lens {
+                camera.aperture_radius = 0.05;
+                camera.focus_distance = 3.0;
+            }
+            let rays = camera.rays();
+            for (_, kind) in SamplerKind::ALL {
+                let settings = SampleSettings { seed: 7, ..SampleSettings::default() };
+                let (_, band_rows) = tile_shape(settings.tile);
+                for sample in [0, 5] {
+                    let mut pixels = vec![Vec3::ZERO; width as usize * height as usize];
+                    for (b, rows) in pixels.chunks_mut(width as usize * band_rows).enumerate() {
+                        let band = Band {
+                            camera: &rays,
+                            has_lens: camera.has_lens(),
+                            kind,
+                            settings: &settings,
+                            sample,
+                            width: width as usize,
+                            first_row: b * band_rows,
+                            first_column: 0,
+                        };
+                        assert_eq!(band.add(&Echo(kind), rows, &mut []), 0);
+                    }
+                    for (i, &pixel) in pixels.iter().enumerate() {
+                        let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
+                        let mut sampler = Sampler::new(kind, settings.seed, (x, y), sample);
+                        let offset = settings.filter.offset(sampler.pixel_2d());
+                        let film = Vec2::new(x as f32 + offset.x, y as f32 + offset.y);
+                        let ray = if lens {
+                            rays.lens_ray(film, sampler.next_2d())
+                        } else {
+                            rays.ray(film.x, film.y)
+                        };
+                        let expected = Echo(kind).radiance(&ray, &mut sampler);
+                        assert_eq!(
+                            pixel.to_array().map(f32::to_bits),
+                            expected.to_array().map(f32::to_bits),
+                            "{kind:?}, lens {lens}, sample {sample}, pixel ({x}, {y})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     /// A band renders the same bits compiled for AVX2 as for the baseline instruction set, for
     /// the lab's integrator and the path tracer (a pinhole and a lens), two samples each.
     #[cfg(target_arch = "x86_64")]
