@@ -20,7 +20,7 @@
 //!    direction, the roulette's) in one pass over the vertices' samplers
 //!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
 //! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes
-//!    (`diffuse.rs`: sixteen to a chunk in structure-of-arrays form) get their lights and
+//!    (`diffuse/`: sixteen to a chunk in structure-of-arrays form) get their lights and
 //!    numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per AVX-512
 //!    instruction; the other materials, lights other than area-sampled triangles, and the
 //!    rare lane whose offset point overflows run the scalar path's steps
