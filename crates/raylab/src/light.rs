@@ -2,7 +2,8 @@
 //!
 //! Area lights are triangles whose material emits (see `Material::emission`);
 //! the path integrator gathers every light, these and the area lights, into one set that it
-//! samples by power (`integrator::LightSet`).
+//! samples by power, the environment half the time beside other lights
+//! (`integrator::LightSet`).
 
 use std::f32::consts::PI;
 

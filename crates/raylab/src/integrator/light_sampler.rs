@@ -1,12 +1,14 @@
-//! Light sampling for the path tracer: every light of a scene in one set, chosen by power.
+//! Light sampling for the path tracer: every light of a scene in one set, chosen by power, the
+//! environment half the time beside other lights.
 //!
 //! [`LightSet`] gathers the scene's point lights, its emissive triangles (area lights) and the
-//! environment, picks one in proportion to its power (the environment half the time when there
-//! are other lights), and samples a direction toward it with its
-//! density per unit solid angle (next-event estimation). A material's emission texture makes a
-//! triangle shine in a pattern: its radiance is read at the sampled point (and where a ray hits
-//! it), and its power for choosing among lights is the texture's mean over the triangle,
-//! estimated on a grid.
+//! environment, picks one in proportion to its power (the environment, unless black, half the
+//! time when there are other lights), and samples a direction toward it with its density per
+//! unit solid angle (next-event estimation). One pair of numbers picks the light (its first
+//! number, rescaled within the light's share) and the point on it, as in Mitsuba. A material's
+//! emission texture makes a triangle shine in a pattern: its radiance is read at the sampled
+//! point (and where a ray hits it), and its power for choosing among lights is the texture's
+//! mean over the triangle, estimated on a grid.
 
 use std::f32::consts::PI;
 
@@ -24,7 +26,7 @@ use crate::texture::{Texture, TextureQuery};
 use crate::unknown_name::UnknownName;
 
 /// Every light of a scene, ready to be sampled: point lights, the emissive triangles (area
-/// lights) and the environment, chosen by power.
+/// lights) and the environment, chosen by power (the environment half the time beside others).
 ///
 /// A triangle light is one-sided, as Mitsuba's `area` emitter: it emits its material's
 /// `emission` from its front (counter-clockwise) side only. Points on it are sampled uniformly by
@@ -32,7 +34,7 @@ use crate::unknown_name::UnknownName;
 #[derive(Clone, Debug)]
 pub struct LightSet {
     lights: Vec<SampledLight>,
-    /// By power; `None` without lights.
+    /// By power, the environment's share apart; `None` without lights.
     distribution: Option<DiscreteDistribution>,
     /// For each triangle, the index of its light, or `u32::MAX`.
     triangle_light: Vec<u32>,
@@ -206,14 +208,19 @@ impl LightSet {
             })
             .collect();
         // The environment is picked half the time when there are other lights, and always
-        // without (pbrt-v4's `BVHLightSampler`, Mitsuba's uniform choice among two emitters).
-        // Its power through a disk the size of the scene (PBR 4th ed. §12.5) ranks it by the
-        // floor around the scene's subject: on the materials scene it took 75 % of the picks
-        // from the light above the spheres, and 13 % more squared error at 64 spp (RMSE 0.0136
-        // against 0.0128 with half, `tests/data/mitsuba-materials`).
-        if let Some((_, index)) = environment {
-            let others: f32 = powers.iter().sum();
-            powers[index as usize] = if others > 0.0 { others } else { 1.0 };
+        // without (pbrt-v4's `BVHLightSampler`, Mitsuba's uniform choice among two emitters); a
+        // black one never. Its power through a disk the size of the scene (PBR 4th ed. §12.5)
+        // ranks it by the floor around the scene's subject: on the materials scene it took 75 %
+        // of the picks from the light above the spheres, and 13 % more squared error at 64 spp
+        // (RMSE 0.0136 against 0.0128 with half, `tests/data/mitsuba-materials`). The others
+        // are summed as `DiscreteDistribution::new` sums them (in f64, negatives as zero).
+        if let Some((radiance, index)) = environment {
+            let others: f64 = powers.iter().map(|&p| p.max(0.0) as f64).sum();
+            powers[index as usize] = match (mean(radiance) > 0.0, others > 0.0) {
+                (false, _) => 0.0,
+                (true, true) => others as f32,
+                (true, false) => 1.0,
+            };
         }
         LightSet {
             lights,
@@ -279,15 +286,19 @@ impl LightSet {
     /// pairs that fall to a light are a stretched strip of the sampler's stratified pairs, so each
     /// light's points stay stratified. A separate number for the choice scatters a random subset
     /// of the pairs onto each light; on the materials scene (an area light and the environment,
-    /// `tests/data/mitsuba-materials`) that cost 9 % in RMSE at 64 spp (0.0128 against 0.0122).
+    /// `tests/data/mitsuba-materials`) it had 8 % more RMSE at 64 spp (0.0128 against 0.0118).
+    /// The price: a light of tiny probability `p` sees its first number in steps of about
+    /// `2⁻²⁴/p` (Mitsuba's too), which stratification, not resolution, matters for here.
     #[inline]
     fn pick(&self, u: Vec2) -> Option<(usize, f32, Vec2)> {
         let (index, selection, x) = self.distribution.as_ref()?.sample(u.x);
         Some((index, selection, Vec2::new(x, u.y)))
     }
 
-    /// Picks a light and a point on it with `u` ([`pick`](Self::pick)), as seen from `point`;
-    /// `None` when there is nothing to sample or the point sees the light's back or nothing of it.
+    /// Picks a light and a point on it with `u`, as seen from `point`: `u.x` picks the light and,
+    /// rescaled to `[0, 1)` within the light's share, places the point with `u.y` (Mitsuba's
+    /// emitter sampling; each light's points stay stratified). `None` when there is nothing to
+    /// sample or the point sees the light's back or nothing of it.
     #[inline]
     pub fn sample(&self, point: &SurfacePoint, u: Vec2) -> Option<LightSample> {
         let (index, selection, u) = self.pick(u)?;
@@ -355,9 +366,9 @@ impl LightSet {
 
     /// The light that `u.x` picks ([`pick`](Self::pick)), as the wavefront's lanes take it: a
     /// triangle sampled uniformly by area with a constant radiance, which the lanes sample as
-    /// [`sample`](Self::sample) does (`u.x` rescaled in lanes, [`rescaled`](crate::sampling::rescaled) of the triangle's
-    /// `start` and `selection`); any other light, which a lane leaves to `sample`; or nothing,
-    /// without lights.
+    /// [`sample`](Self::sample) does (`u.x` rescaled in lanes by
+    /// [`rescaled`](crate::sampling::rescaled) of the triangle's `start` and `selection`); any
+    /// other light, which a lane leaves to `sample`; or nothing, without lights.
     #[inline]
     pub(super) fn pick_for_lanes(&self, u: Vec2) -> LanePick {
         let Some(distribution) = &self.distribution else { return LanePick::Nothing };
@@ -529,8 +540,9 @@ mod tests {
         assert_eq!((sample.radiance, sample.pdf), (radiance, pdf));
     }
 
-    /// With other lights, the environment takes half the picks whatever its power; each light's
-    /// share of a stratified row of first numbers, rescaled, is a stratified row again.
+    /// With other lights, the environment takes half the picks whatever its power (none if it is
+    /// black); each light's share of a stratified row of first numbers, rescaled, is a
+    /// stratified row again.
     #[test]
     fn the_environment_takes_half_the_picks_and_each_light_keeps_its_points_stratified() {
         let mut scene = Scene::built_in("cornell").unwrap();
@@ -558,7 +570,15 @@ mod tests {
                 }
             }
         }
+        // A black environment takes none.
+        scene.lights.truncate(1);
+        scene.lights.push(Light::Environment { radiance: Vec3::ZERO });
+        let lights = LightSet::new(&scene);
+        assert_eq!(lights.environment(Vec3::Z).1, 0.0);
+        assert_eq!(lights.pick(Vec2::new(0.999, 0.5)).map(|(i, p, _)| (i, p)), Some((0, 1.0)));
         // Alone, the environment takes every pick.
+        scene.lights.truncate(1);
+        scene.lights.push(Light::Environment { radiance: Vec3::splat(0.3) });
         scene.lights.remove(0);
         let lights = LightSet::new(&scene);
         assert_eq!(lights.environment(Vec3::Z).1, 1.0 / (4.0 * PI));

@@ -2,9 +2,10 @@
 //!
 //! A [`Sampler`] is made for one sample of one pixel from `(seed, pixel, sample index)` alone, and
 //! hands out numbers in `[0, 1)` dimension by dimension: the pixel position first (two
-//! dimensions), then the lens, then six per path vertex (a pair for the light and the point on it,
-//! one for the BSDF's lobe, a pair for its direction, one for Russian roulette). Nothing else goes in, so a picture
-//! is the same whatever the thread count, the tiling or the order of the work.
+//! dimensions), then the lens, then six per path vertex (a pair for the light and the point on
+//! it, one for the BSDF's lobe, a pair for its direction, one for Russian roulette). Nothing
+//! else goes in, so a picture is the same whatever the thread count, the tiling or the order of
+//! the work.
 //!
 //! Three kinds ([`SamplerKind`]):
 //! - `lab`: the lab's pixel sampling (`sample_offset`: the centre, then

@@ -13,13 +13,14 @@
 //!
 //! ## The scalar path's bits
 //! `shade_lane` is the scalar path's arithmetic, operation for operation: it calls the same
-//! frame ([`Frame::about`], [`facing`]), the same [`Diffuse`] BSDF, the same warps ([`square_to_uniform_triangle`],
-//! [`square_to_cosine_hemisphere`] with its polynomial sine and cosine), the same
+//! frame ([`Frame::about`], [`facing`]), the same [`Diffuse`] BSDF, the same warps
+//! ([`square_to_uniform_triangle`], [`square_to_cosine_hemisphere`] with its polynomial sine and
+//! cosine), the light's rescaled number ([`rescaled`]), the same
 //! [`power_heuristic`] and the same ray offset ([`offset_ray_origin_finite`]), and Rust neither
 //! fuses nor reorders floating-point operations, in vector code or not. So a lane's shadow ray,
 //! contribution, next ray and throughput are those of [`Path::sample_light_with`],
 //! [`Path::bounce`] and [`Path::survives_roulette`] to the bit (`tests/wavefront.rs` compares
-//! whole renders; the tests below compare lanes on hostile inputs on every instruction set).
+//! whole renders; `tests.rs` compares lanes on hostile inputs on every instruction set).
 //!
 //! What the lanes cannot do they leave to the scalar code, lane by lane: a light other than a
 //! triangle sampled by area with a constant radiance ([`LanePick::Other`]), and the rare point
