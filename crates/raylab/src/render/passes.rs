@@ -240,6 +240,21 @@ pub(super) fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
 mod tests {
     use super::*;
 
+    /// Band `b` of pass `sample` (whole rows of an image `width` wide, from its left edge).
+    fn band<'a>(
+        rays: &'a RayGenerator,
+        has_lens: bool,
+        kind: SamplerKind,
+        settings: &'a SampleSettings,
+        sample: u32,
+        width: u32,
+        b: usize,
+    ) -> Band<'a> {
+        let (_, band_rows) = tile_shape(settings.tile);
+        let (width, first_row) = (width as usize, b * band_rows);
+        Band { camera: rays, has_lens, kind, settings, sample, width, first_row, first_column: 0 }
+    }
+
     /// A band makes each pixel's sampler and camera ray as they are made one at a time
     /// (`Sampler::new`, `pixel_2d`, the filter's offset, then the lens's `next_2d`): the Sobol'
     /// kind's numbers are drawn for a whole tile in lanes, the others one by one. An integrator
@@ -271,16 +286,8 @@ mod tests {
                 for sample in [0, 5] {
                     let mut pixels = vec![Vec3::ZERO; width as usize * height as usize];
                     for (b, rows) in pixels.chunks_mut(width as usize * band_rows).enumerate() {
-                        let band = Band {
-                            camera: &rays,
-                            has_lens: camera.has_lens(),
-                            kind,
-                            settings: &settings,
-                            sample,
-                            width: width as usize,
-                            first_row: b * band_rows,
-                            first_column: 0,
-                        };
+                        let band =
+                            band(&rays, camera.has_lens(), kind, &settings, sample, width, b);
                         assert_eq!(band.add(&Echo(kind), rows, &mut []), 0);
                     }
                     for (i, &pixel) in pixels.iter().enumerate() {
@@ -342,16 +349,8 @@ mod tests {
                     for (b, (base, wide)) in
                         base.chunks_mut(chunk).zip(wide.chunks_mut(chunk)).enumerate()
                     {
-                        let band = Band {
-                            camera: &rays,
-                            has_lens: camera.has_lens(),
-                            kind,
-                            settings: &settings,
-                            sample,
-                            width: width as usize,
-                            first_row: b * band_rows,
-                            first_column: 0,
-                        };
+                        let band =
+                            band(&rays, camera.has_lens(), kind, &settings, sample, width, b);
                         assert_eq!(band.add(integrator, base, &mut []), 0);
                         // SAFETY: AVX2 was detected above.
                         assert_eq!(unsafe { band.add_avx2(integrator, wide, &mut []) }, 0);
