@@ -141,10 +141,10 @@ impl Band<'_> {
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
             std::array::from_fn(|_| Sampler::new(kind, 0, (0, 0), 0));
         let mut colours = [Vec3::ZERO; MAX_TILE_PIXELS];
-        // A tile's film positions and lens numbers, and its lanes' indices for the samplers'
-        // draws in lanes.
+        // A tile's film positions, its numbers drawn in lanes (the pixel positions', then the
+        // lens's), and its lanes' indices for those draws.
         let mut film = [Vec2::ZERO; MAX_TILE_PIXELS];
-        let mut lens = [Vec2::ZERO; MAX_TILE_PIXELS];
+        let mut drawn = [Vec2::ZERO; MAX_TILE_PIXELS];
         let all_lanes: [usize; MAX_TILE_PIXELS] = std::array::from_fn(|k| k);
         // The layers' values of a tile's rays, ray by ray (empty without layers).
         let layer_count = layers.len();
@@ -165,18 +165,18 @@ impl Band<'_> {
             // numbers as one by one (`pixel_2d` is its first `next_2d`).
             let (samplers, lanes) = (&mut samplers[..n], &all_lanes[..n]);
             if kind == SamplerKind::Sobol {
-                Sampler::next_2d_each(samplers, lanes, &mut lens[..n]);
+                Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
             } else {
-                for (sampler, u) in samplers.iter_mut().zip(&mut lens) {
+                for (sampler, u) in samplers.iter_mut().zip(&mut drawn) {
                     *u = sampler.pixel_2d();
                 }
             }
-            for (film, &u) in film[..n].iter_mut().zip(&lens) {
+            for (film, &u) in film[..n].iter_mut().zip(&drawn) {
                 *film += settings.filter.offset(u);
             }
             if has_lens {
-                Sampler::next_2d_each(samplers, lanes, &mut lens[..n]);
-                for ((ray, film), &u) in tile_rays.iter_mut().zip(&film[..n]).zip(&lens) {
+                Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
+                for ((ray, film), &u) in tile_rays.iter_mut().zip(&film[..n]).zip(&drawn) {
                     *ray = rays.lens_ray(*film, u);
                 }
             } else {

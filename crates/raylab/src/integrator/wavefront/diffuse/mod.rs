@@ -34,7 +34,7 @@ use glam::{Vec2, Vec3};
 
 use std::borrow::Cow;
 
-use super::super::light_sampler::{LanePick, LaneTriangle, SHADOW_RAY_LENGTH};
+use super::super::light_sampler::{LanePick, SHADOW_RAY_LENGTH};
 use super::super::path::{DiffuseSurface, Frame, Vertex, facing};
 use crate::cpu::Isa;
 use crate::material::{Bsdf, Diffuse};
@@ -343,25 +343,16 @@ impl DiffuseLanes {
         input.has_light[k] = light.is_some();
         // A lane without a triangle computes a harmless light (the last one, or zeros) that
         // `has_light` discards.
-        if let Some(LaneTriangle {
-            corners: [v0, v1, v2],
-            normal,
-            error,
-            area,
-            radiance,
-            selection,
-            start,
-        }) = light
-        {
-            input.v0.set(k, v0);
-            input.v1.set(k, v1);
-            input.v2.set(k, v2);
-            input.light_normal.set(k, normal);
-            input.light_error.set(k, error);
-            input.area[k] = area;
-            input.radiance.set(k, radiance);
-            input.selection[k] = selection;
-            input.start[k] = start;
+        if let Some(light) = light {
+            input.v0.set(k, light.corners[0]);
+            input.v1.set(k, light.corners[1]);
+            input.v2.set(k, light.corners[2]);
+            input.light_normal.set(k, light.normal);
+            input.light_error.set(k, light.error);
+            input.area[k] = light.area;
+            input.radiance.set(k, light.radiance);
+            input.selection[k] = light.selection;
+            input.start[k] = light.start;
         }
         input.u_point[0][k] = draws.u_point.x;
         input.u_point[1][k] = draws.u_point.y;
