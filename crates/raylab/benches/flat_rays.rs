@@ -1,8 +1,8 @@
 //! A small scene's flat list against incoherent rays: one ray at a time (sixteen triangles per
 //! instruction) against many rays at once (rays in lanes, one triangle per step), on Mitsuba's
 //! 36-triangle Cornell box. The rays are a path tracer's kind: from points inside the box in
-//! uniformly random directions, 64 to a batch (the wavefront hands over up to 256, fewer at
-//! later bounces).
+//! uniformly random directions for closest hits, segments between two such points for
+//! occlusion, 64 to a batch (the wavefront hands over up to 256, fewer at later bounces).
 //!
 //! `cargo bench -p raylab --bench flat_rays`
 
@@ -41,7 +41,8 @@ impl Random {
     }
 }
 
-fn rays() -> (SceneBvh, Vec<Ray>) {
+/// The box's BVH, random rays inside it, and random segments inside it.
+fn rays() -> (SceneBvh, Vec<Ray>, Vec<Ray>) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
     let file = root.join("cornell-mitsuba.toml").display().to_string();
     let scene = Scene::open(&file, &LoadOptions::default()).expect("the scene file").scene;
@@ -50,11 +51,17 @@ fn rays() -> (SceneBvh, Vec<Ray>) {
     let inner = (lo + (hi - lo) * 0.02, hi - (hi - lo) * 0.02);
     let mut random = Random(0x9e37_79b9_7f4a_7c15);
     let bounces = (0..RAYS).map(|_| Ray::new(random.inside(inner), random.direction())).collect();
-    (accel, bounces)
+    let shadows = (0..RAYS)
+        .map(|_| {
+            let (from, to) = (random.inside(inner), random.inside(inner));
+            Ray::segment(from, to - from, 1.0)
+        })
+        .collect();
+    (accel, bounces, shadows)
 }
 
 fn flat_rays(c: &mut Criterion) {
-    let (accel, bounces) = rays();
+    let (accel, bounces, shadows) = rays();
     let mut hits = vec![None::<Hit>; RAYS];
     let mut group = c.benchmark_group("cornell_flat_4096_rays");
     group.throughput(Throughput::Elements(RAYS as u64));
@@ -69,6 +76,22 @@ fn flat_rays(c: &mut Criterion) {
         b.iter(|| {
             for (rays, hits) in bounces.chunks(BATCH).zip(hits.chunks_mut(BATCH)) {
                 accel.closest_hits_incoherent(rays, hits);
+            }
+        })
+    });
+    // Shadow rays: segments between two points inside the box.
+    let mut blocked = vec![false; RAYS];
+    group.bench_function("occluded_one_by_one", |b| {
+        b.iter(|| {
+            for (ray, blocked) in shadows.iter().zip(&mut blocked) {
+                *blocked = accel.occluded(ray);
+            }
+        })
+    });
+    group.bench_function("occluded_in_lanes", |b| {
+        b.iter(|| {
+            for (rays, blocked) in shadows.chunks(BATCH).zip(blocked.chunks_mut(BATCH)) {
+                accel.occluded_incoherent(rays, blocked);
             }
         })
     });

@@ -425,7 +425,7 @@ fn rays_with_nan_or_empty_ranges_agree_on_every_kernel() {
 }
 
 /// Every variant, refitted to moved triangles, gives brute force's answers for the new
-/// positions (single rays and packets): vertices jittered, a cluster moved far away, one triangle
+/// positions (single rays, packets, and batches in lanes): vertices jittered, a cluster moved far away, one triangle
 /// flattened onto a line and one given a NaN vertex (both then never hit). Refitting to the
 /// build's own positions changes nothing; a wrong count, or a triangle the build left out that
 /// now has area, is refused and leaves the tree as it was.
@@ -490,6 +490,12 @@ fn refitted_trees_agree_with_brute_force_on_moved_triangles() {
             bvh.occluded_each(&rays, &mut occluded);
             for (i, (c, o)) in expected.iter().enumerate() {
                 assert_eq!((closest[i], occluded[i]), (*c, *o), "{name} packet: {:?}", rays[i]);
+            }
+            // Incoherent batches: in lanes against the flat list of a small scene.
+            bvh.closest_hits_incoherent(&rays, &mut closest);
+            bvh.occluded_incoherent(&rays, &mut occluded);
+            for (i, (c, o)) in expected.iter().enumerate() {
+                assert_eq!((closest[i], occluded[i]), (*c, *o), "{name} lanes: {:?}", rays[i]);
             }
         }
     }

@@ -81,6 +81,19 @@ pub trait Accelerator: Sync {
         }
     }
 
+    /// Whether each of many incoherent rays (a path tracer's shadow rays) is occluded,
+    /// `occluded[i]` for `rays[i]`: exactly what [`occluded`](Self::occluded) answers one ray at
+    /// a time, faster on accelerators that trace such rays together.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    fn occluded_incoherent(&self, rays: &[crate::Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one answer per ray");
+        for (ray, o) in rays.iter().zip(occluded) {
+            *o = self.occluded(ray);
+        }
+    }
+
     /// The closest hit of each of many incoherent rays (a path tracer's bounces), `hits[i]` for
     /// `rays[i]`: exactly what [`closest_hit`](Self::closest_hit) answers one ray at a time,
     /// faster on accelerators that trace such rays together.

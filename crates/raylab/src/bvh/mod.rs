@@ -275,6 +275,21 @@ impl Accelerator for Bvh {
 
     /// A small scene's flat list traces the rays in lanes, one triangle per step
     /// (`traverse/flat_rays.rs`); the tree traces them one by one.
+    fn occluded_incoherent(&self, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one answer per ray");
+        match &self.flat {
+            // SAFETY: as above.
+            Some(flat) => unsafe { (self.queries.flat_occluded_each)(flat, rays, occluded) },
+            None => {
+                for (ray, o) in rays.iter().zip(occluded) {
+                    *o = self.occluded(ray);
+                }
+            }
+        }
+    }
+
+    /// A small scene's flat list traces the rays in lanes, one triangle per step
+    /// (`traverse/flat_rays.rs`); the tree traces them one by one.
     fn closest_hits_incoherent(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
         match &self.flat {

@@ -36,6 +36,8 @@ pub(crate) struct Queries {
     pub flat_occluded: unsafe fn(&Flat, &Ray) -> bool,
     /// Closest hits of incoherent rays, in lanes, in a small scene's flat list.
     pub flat_closest_hits: unsafe fn(&Flat, &[Ray], &mut [Option<Hit>]),
+    /// Occlusion of incoherent rays, in lanes, in a small scene's flat list.
+    pub flat_occluded_each: unsafe fn(&Flat, &[Ray], &mut [bool]),
 }
 
 impl std::fmt::Debug for Queries {
@@ -82,6 +84,11 @@ macro_rules! queries {
             // SAFETY: as above.
             unsafe { <$kernel as FlatKernel>::closest_hits(flat, rays, out) }
         }
+        $(#[target_feature(enable = $features)])?
+        unsafe fn flat_occluded_each(flat: &Flat, rays: &[Ray], out: &mut [bool]) {
+            // SAFETY: as above.
+            unsafe { <$kernel as FlatKernel>::occluded_each(flat, rays, out) }
+        }
         Queries {
             isa: $isa,
             closest_hit,
@@ -91,6 +98,7 @@ macro_rules! queries {
             flat_closest_hit,
             flat_occluded,
             flat_closest_hits,
+            flat_occluded_each,
         }
     }};
 }

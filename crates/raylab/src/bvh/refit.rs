@@ -143,11 +143,9 @@ impl Bvh {
 impl Flat {
     /// The flat list's part of [`Bvh::refit`]: every lane's triangle as given, or parked on NaN.
     pub(super) fn refit(&mut self, triangles: &[[Vec3; 3]]) {
-        for (block, ids) in self.blocks_and_ids_mut() {
-            for (lane, &id) in ids.iter().enumerate().filter(|(_, id)| **id != u32::MAX) {
-                let triangle = triangles[id as usize];
-                block.set(lane, if hittable(triangle) { triangle } else { [Vec3::NAN; 3] });
-            }
-        }
+        self.move_triangles(|id| {
+            let triangle = triangles[id as usize];
+            if hittable(triangle) { triangle } else { [Vec3::NAN; 3] }
+        });
     }
 }

@@ -89,6 +89,13 @@ impl Accelerator for SceneBvh {
         }
     }
 
+    fn occluded_incoherent(&self, rays: &[Ray], occluded: &mut [bool]) {
+        match self {
+            SceneBvh::Flat(bvh) => bvh.occluded_incoherent(rays, occluded),
+            SceneBvh::Instanced(two) => two.occluded_incoherent(rays, occluded),
+        }
+    }
+
     fn closest_hits_incoherent(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         match self {
             SceneBvh::Flat(bvh) => bvh.closest_hits_incoherent(rays, hits),

@@ -402,8 +402,9 @@ fn traversal_counts_are_the_nodes_leaves_and_records_visited() {
 /// answers, which are brute force's: scenes on a coarse grid (edge functions exactly zero, so
 /// the double-precision path decides), with duplicated triangles (ties at equal `t`, which go to
 /// the lower index), rays starting just off a surface (the self-intersection bound), explicit
-/// `t_min`, short segments, and 1 to 40 triangles (full, partial and several blocks). The
-/// rays of a case are also traced together, in lanes (`flat_rays.rs`), with rays that can hit
+/// `t_min`, short segments, meshes whose corners are shared (as the lanes share them), and 1 to
+/// 40 triangles (full, partial and several blocks). The rays of a case are also traced together,
+/// for closest hits and for occlusion, in lanes (`flat_rays.rs`), with rays that can hit
 /// nothing among them (NaN, zero or infinite parts, an empty range), in batches of every length
 /// up to 47, so that groups are full, partial, and padded.
 #[test]
@@ -415,8 +416,15 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
     for case in 0..1500 {
         let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
         let count = 1 + case % 40;
+        // Every fourth case a mesh: corners drawn from a few points, each shared by several
+        // triangles, as the lanes share them (`SharedCorners`).
+        let pool: Vec<Vec3> = (0..2 + count / 2).map(|_| snap(rng.vec() * 4.0 - 2.0)).collect();
+        let corner = |rng: &mut Lcg| pool[(rng.next() * pool.len() as f32) as usize % pool.len()];
         let mut triangles: Vec<[Vec3; 3]> = (0..count)
             .map(|_| {
+                if case % 4 == 1 {
+                    return [corner(&mut rng), corner(&mut rng), corner(&mut rng)];
+                }
                 let p = snap(rng.vec() * 4.0 - 2.0);
                 [p, snap(p + rng.vec() * 2.0 - 1.0), snap(p + rng.vec() * 2.0 - 1.0)]
             })
@@ -481,6 +489,8 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
         let batch = &batch[..=(case % batch.len())];
         let expected: Vec<_> =
             batch.iter().map(|r| traverse::flat::closest_hit_scalar(flat, r)).collect();
+        let expected_occluded: Vec<_> =
+            batch.iter().map(|r| traverse::flat::occluded_scalar(flat, r)).collect();
         for (k, isa) in Isa::ALL.into_iter().enumerate() {
             let Some(simd) = Bvh::build(&triangles, &settings).with_isa(isa) else {
                 continue;
@@ -489,6 +499,14 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
             let mut hits = vec![Some(Hit { t: -1.0, triangle: 7, b1: 0.0, b2: 0.0 }); batch.len()];
             simd.closest_hits_incoherent(batch, &mut hits);
             assert_eq!(hits, expected, "{} in lanes, case {case}: {batch:?}", isa.name());
+            let mut occluded: Vec<bool> = (0..batch.len()).map(|i| i % 2 == 0).collect();
+            simd.occluded_incoherent(batch, &mut occluded);
+            assert_eq!(
+                occluded,
+                expected_occluded,
+                "{} occlusion in lanes, case {case}",
+                isa.name()
+            );
         }
     }
     for (k, isa) in Isa::ALL.into_iter().enumerate() {
@@ -516,4 +534,28 @@ fn more_triangles_than_a_bvh_holds_are_an_error_not_a_panic() {
         .collect();
     let bvh = Bvh::new(&triangles);
     assert!(Bvh::build_bytes_estimate(5000) >= 2 * bvh.stats().bytes() as u64);
+}
+
+/// Mitsuba's box shares its corners as its shapes do: each of its six rectangles (five walls
+/// and the light) has four corners, two of them in both its triangles, and each of its two
+/// boxes eight, each in the triangles of three faces. Four of the walls' corners come out of
+/// two walls' matrices with the same bits and are shared too. So 36 triangles, 108 triangle
+/// corners, 6 × 4 − 4 + 2 × 8 = 36 distinct corners; each triangle's corners are its own.
+#[test]
+fn the_flat_list_shares_the_corners_of_mitsubas_box() {
+    use crate::scene::{LoadOptions, Scene};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let file = root.join("cornell-mitsuba.toml").display().to_string();
+    let scene = Scene::open(&file, &LoadOptions::default()).expect("the scene file").scene;
+    let triangles = scene.geometry.vertices();
+    let bvh = Bvh::build(&triangles, &BuildSettings::MEDIUM);
+    let shared = bvh.flat.as_ref().expect("a small scene's flat list").shared();
+    assert_eq!((triangles.len(), shared.triangles.len(), shared.corners.len()), (36, 36, 36));
+    let bits: std::collections::HashSet<_> =
+        shared.corners.iter().map(|c| c.to_array().map(f32::to_bits)).collect();
+    assert_eq!(bits.len(), shared.corners.len(), "distinct corners");
+    for (k, &(corners, id)) in shared.triangles.iter().enumerate() {
+        assert_eq!(id as usize, k, "in index order");
+        assert_eq!(shared.triangle(corners), triangles[k], "triangle {id}");
+    }
 }

@@ -13,7 +13,7 @@ mod watertight;
 
 pub(crate) use watertight::{
     LaneHits, RayBroadcast, RayLanes, ShearedLanes, shear_point, watertight_lanes_with,
-    watertight_sheared,
+    watertight_sheared, watertight_sheared_scaled,
 };
 
 /// The vector operations of the kernels. Every method is `unsafe`: the CPU must support the

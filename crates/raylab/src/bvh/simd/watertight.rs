@@ -112,10 +112,29 @@ pub(crate) unsafe fn watertight_sheared<V: Lanes, const EARLY_OUT: bool>(
     ray: &RayLanes<V>,
     lanes: u32,
 ) -> LaneHits<V> {
-    use crate::float::gamma;
     // SAFETY: the caller's guarantee.
     unsafe {
         let sz = ray.shear_z;
+        let scaled = [sz.mul(sheared.z[0]), sz.mul(sheared.z[1]), sz.mul(sheared.z[2])];
+        watertight_sheared_scaled::<V, EARLY_OUT>(sheared, scaled, ray, lanes)
+    }
+}
+
+/// [`watertight_sheared`] with the corners' `kz` coordinates already scaled by the ray's
+/// `shear_z` (`scaled`): for corners put in the ray's frame once and tested in many triangles.
+///
+/// # Safety
+/// The CPU must support `V`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn watertight_sheared_scaled<V: Lanes, const EARLY_OUT: bool>(
+    sheared: &ShearedLanes<V>,
+    [az, bz, cz]: [V; 3],
+    ray: &RayLanes<V>,
+    lanes: u32,
+) -> LaneHits<V> {
+    use crate::float::gamma;
+    // SAFETY: the caller's guarantee.
+    unsafe {
         let [ax, bx, cx] = sheared.x;
         let [ay, by, cy] = sheared.y;
         let [a_kz, b_kz, c_kz] = sheared.z;
@@ -129,9 +148,6 @@ pub(crate) unsafe fn watertight_sheared<V: Lanes, const EARLY_OUT: bool>(
         // the three signs agree; NaN lanes are rejected below by the range test.
         let inside = e0.xor(e1).or_bits(e0.xor(e2)).sign_clear();
         let det = e0.add(e1).add(e2);
-        let az = sz.mul(a_kz);
-        let bz = sz.mul(b_kz);
-        let cz = sz.mul(c_kz);
         let t_scaled = e0.mul(az).add(e1.mul(bz)).add(e2.mul(cz));
         let t_limit = ray.t_max.mul(det).mul(V::splat(crate::triangle::T_LIMIT_SLACK));
         // `det > 0 and 0 < t_scaled < t_limit`, or the same mirrored for `det < 0`: both as

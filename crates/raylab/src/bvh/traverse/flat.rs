@@ -54,17 +54,61 @@ pub(crate) struct FlatBlock {
     lanes: u32,
 }
 
-/// Every triangle of a small scene, in index order, in blocks of sixteen.
+/// Every triangle of a small scene, in index order, in blocks of sixteen; and the same
+/// triangles as corners shared between them, for the rays in lanes.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Flat {
     blocks: Vec<FlatBlock>,
+    shared: SharedCorners,
+}
+
+/// The flat list's triangles as indices into its distinct corners, in index order (see
+/// `flat_rays.rs`: a corner is put in each ray's frame once, not once per triangle that has it).
+///
+/// Corners are the same when their bits are, so a triangle's corners are exactly its own.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SharedCorners {
+    /// The distinct corners.
+    pub(crate) corners: Vec<Vec3>,
+    /// Each triangle's corners (indices into `corners`) and its index in the scene.
+    pub(crate) triangles: Vec<([u32; 3], u32)>,
+}
+
+impl SharedCorners {
+    /// The triangles of `blocks`, in order, with their corners shared.
+    fn new(blocks: &[FlatBlock]) -> SharedCorners {
+        let mut shared = SharedCorners::default();
+        let mut seen = std::collections::HashMap::<[u32; 3], u32>::new();
+        for block in blocks {
+            let mut lanes = block.lanes;
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let corners = block.triangles.triangle(lane).map(|p| {
+                    *seen.entry(p.to_array().map(f32::to_bits)).or_insert_with(|| {
+                        shared.corners.push(p);
+                        // At most three a triangle, and a BVH holds fewer than 2^27.
+                        (shared.corners.len() - 1) as u32
+                    })
+                });
+                shared.triangles.push((corners, block.ids[lane]));
+            }
+        }
+        shared
+    }
+
+    /// The corners that `corners` (a triangle's indices) name.
+    #[inline(always)]
+    pub(crate) fn triangle(&self, [a, b, c]: [u32; 3]) -> [Vec3; 3] {
+        [self.corners[a as usize], self.corners[b as usize], self.corners[c as usize]]
+    }
 }
 
 impl Flat {
     /// The triangles `indices` (ascending, each of non-zero area with finite vertices).
     pub(crate) fn new(triangles: &[[Vec3; 3]], indices: &[u32]) -> Flat {
         debug_assert!(indices.windows(2).all(|w| w[0] < w[1]), "indices ascend");
-        let blocks = indices
+        let blocks: Vec<FlatBlock> = indices
             .chunks(FLAT_LANES)
             .map(|chunk| {
                 let mut block = FlatBlock {
@@ -80,55 +124,36 @@ impl Flat {
                 block
             })
             .collect();
-        Flat { blocks }
+        let shared = SharedCorners::new(&blocks);
+        Flat { blocks, shared }
     }
 
-    /// The triangles in index order, with their indices (for the lanes of `flat_rays.rs`).
+    /// The triangles in index order with their corners shared (for the lanes of
+    /// `flat_rays.rs`).
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     #[inline(always)]
-    pub(crate) fn triangles(&self) -> FlatTriangles<'_> {
-        FlatTriangles { blocks: self.blocks.iter(), block: None, lanes: 0 }
+    pub(crate) fn shared(&self) -> &SharedCorners {
+        &self.shared
     }
 
-    /// Bytes of the blocks.
+    /// Bytes of the blocks and the shared corners.
     pub(crate) fn bytes(&self) -> usize {
         self.blocks.len() * size_of::<FlatBlock>()
+            + self.shared.corners.len() * size_of::<Vec3>()
+            + self.shared.triangles.len() * size_of::<([u32; 3], u32)>()
     }
 
-    /// Each block's triangles, to move them, with their indices.
-    pub(crate) fn blocks_and_ids_mut(
-        &mut self,
-    ) -> impl Iterator<Item = (&mut TriangleBlock<FLAT_LANES>, &[u32; FLAT_LANES])> {
-        self.blocks.iter_mut().map(|b| (&mut b.triangles, &b.ids))
-    }
-}
-
-/// [`Flat::triangles`]: the corners and index of each triangle, in index order.
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-pub(crate) struct FlatTriangles<'a> {
-    blocks: std::slice::Iter<'a, FlatBlock>,
-    /// The block being read, and its lanes not yet read.
-    block: Option<&'a FlatBlock>,
-    lanes: u32,
-}
-
-impl Iterator for FlatTriangles<'_> {
-    type Item = ([Vec3; 3], u32);
-
-    #[inline(always)]
-    fn next(&mut self) -> Option<([Vec3; 3], u32)> {
-        loop {
-            if let Some(block) = self.block
-                && self.lanes != 0
-            {
-                let lane = self.lanes.trailing_zeros() as usize;
-                self.lanes &= self.lanes - 1;
-                return Some((block.triangles.triangle(lane), block.ids[lane]));
+    /// Moves each lane's triangle to `moved(index)`, and shares the new corners.
+    pub(crate) fn move_triangles(&mut self, moved: impl Fn(u32) -> [Vec3; 3]) {
+        for block in &mut self.blocks {
+            let mut lanes = block.lanes;
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                block.triangles.set(lane, moved(block.ids[lane]));
             }
-            let block = self.blocks.next()?;
-            self.block = Some(block);
-            self.lanes = block.lanes;
         }
+        self.shared = SharedCorners::new(&self.blocks);
     }
 }
 
@@ -204,6 +229,20 @@ pub(crate) trait FlatKernel {
         for (ray, hit) in rays.iter().zip(hits) {
             // SAFETY: the caller's guarantee.
             *hit = unsafe { Self::closest_hit(flat, ray) };
+        }
+    }
+    /// Whether each ray is occluded, `occluded[i]` for `rays[i]`: exactly
+    /// [`occluded`](Self::occluded)'s answers, by default ray by ray (the scalar twin of
+    /// `flat_rays.rs`).
+    ///
+    /// # Safety
+    /// As for [`closest_hit`](Self::closest_hit).
+    #[inline(always)]
+    unsafe fn occluded_each(flat: &Flat, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one answer per ray");
+        for (ray, o) in rays.iter().zip(occluded) {
+            // SAFETY: the caller's guarantee.
+            *o = unsafe { Self::occluded(flat, ray) };
         }
     }
 }
@@ -387,6 +426,11 @@ mod x86 {
                 unsafe fn closest_hits(flat: &Flat, rays: &[Ray], hits: &mut [Option<Hit>]) {
                     // SAFETY: as above.
                     unsafe { flat_rays::closest_hits::<$register, $lanes>(flat, rays, hits) }
+                }
+                #[inline(always)]
+                unsafe fn occluded_each(flat: &Flat, rays: &[Ray], occluded: &mut [bool]) {
+                    // SAFETY: as above.
+                    unsafe { flat_rays::occluded::<$register, $lanes>(flat, rays, occluded) }
                 }
             }
         };

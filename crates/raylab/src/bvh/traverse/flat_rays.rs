@@ -15,13 +15,25 @@
 //! thread): 87–94 ns a ray one at a time, 53 ns in lanes, 46 ns with the set-up in lanes too;
 //! the path tracer's whole render of the box (1 thread, 8 spp, CPU time) 1.79 → 1.65 s, and
 //! 1.31 → 1.19 s for the set-up in lanes (with the other changes of the day between).
-//! Occlusion in lanes was tried and is not kept: a group runs until its last ray is blocked or
-//! has seen every triangle, where a ray alone stops at its first blocker, and it measured
-//! slower, 37 ns a shadow ray one at a time against 47 in lanes (the render 1.68 s against
-//! 1.78). With the set-up in lanes too (below) it measured
-//! even, 1.20 s against 1.20 (1 thread, 8 spp, CPU time, min of 5), so the simpler single-ray
-//! query stays.
+//! Occlusion in lanes was tried twice before and not kept: a group runs until its last ray is
+//! blocked or has seen every triangle, where a ray alone stops at its first blocker, and it
+//! measured slower (47 ns a shadow ray against 37 one at a time), then even (the render 1.20 s
+//! against 1.20). With the corners shared (below) it is the faster: 30 ns a shadow ray against
+//! 37 (`occluded_in_lanes` against `occluded_one_by_one` in the bench above), and the path
+//! tracer's whole render 2.08 → 1.95 s (min of 7; 2.02 against 2.08 in medians; Mitsuba's box,
+//! 512², 16 spp, 1 thread, CPU time, the same pixels). In the box 87 % of shadow rays are
+//! unblocked (BENCHMARKS.md), so a lone ray seldom stops early anyway.
 //!
+//! ## Corners shared
+//! A closed mesh's corner belongs to about six triangles; Mitsuba's 36-triangle box has 108
+//! triangle corners but only 36 distinct ones (`SharedCorners`, made with the list). A group
+//! of rays puts each distinct corner in its lanes' ray frames once (the permutation below and
+//! the shear, sixteen operations a corner, and `kz` scaled by `shear_z`), then tests each
+//! triangle from three loads per coordinate. Corners are distinct by their bits, so a
+//! triangle's frame coordinates are those it would compute itself, bit for bit. Measured on
+//! the path tracer's whole render as above: 2.20 → 2.16 s for the shared frame, 2.12 with `kz`
+//! scaled once too (min of 7).
+
 //! ## The permutation, lane by lane
 //! The watertight test looks at a triangle along the ray's dominant axis `kz`, with `kx`, `ky`
 //! the other two ([`WatertightRay`]). Rays in lanes have different axes, so each lane picks its
@@ -43,7 +55,9 @@ use glam::Vec3;
 use super::can_hit;
 use super::flat::Flat;
 use crate::accel::Hit;
-use crate::bvh::simd::{LaneMask, Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
+use crate::bvh::simd::{
+    LaneMask, Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared_scaled,
+};
 use crate::ray::Ray;
 use crate::triangle::WatertightRay;
 
@@ -166,17 +180,23 @@ impl<V: Lanes> RayRegisters<V> {
             shear_point(self.origin, self.shear, permuted)
         }
     }
+}
 
-    /// The three corners of `triangle` in each lane's ray frame.
+impl<V: Lanes> RayRegisters<V> {
+    /// Each of `corners` in every lane's ray frame: [`corner`](Self::corner)'s coordinates,
+    /// then the `kz` one scaled by `shear_z`.
     ///
     /// # Safety
     /// The CPU must support `V`'s instruction set.
     #[inline(always)]
-    unsafe fn sheared(&self, [v0, v1, v2]: [Vec3; 3]) -> ShearedLanes<V> {
-        // SAFETY: the caller's guarantee.
-        let ([ax, ay, az], [bx, by, bz], [cx, cy, cz]) =
-            unsafe { (self.corner(v0), self.corner(v1), self.corner(v2)) };
-        ShearedLanes { x: [ax, bx, cx], y: [ay, by, cy], z: [az, bz, cz] }
+    unsafe fn frame(&self, corners: &[Vec3], frame: &mut [[V; 4]]) {
+        for (slot, &p) in frame.iter_mut().zip(corners) {
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                let [x, y, z] = self.corner(p);
+                *slot = [x, y, z, self.ray.shear_z.mul(z)];
+            }
+        }
     }
 }
 
@@ -224,6 +244,9 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
 ) {
     assert_eq!(rays.len(), hits.len(), "one answer per ray");
     debug_assert!(W <= MAX_LANES);
+    let shared = flat.shared();
+    // SAFETY: any bits are a valid register of floats.
+    let mut frame = vec![[unsafe { std::mem::zeroed::<V>() }; 4]; shared.corners.len()];
     for (rays, hits) in rays.chunks(W).zip(hits.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         // SAFETY: (the whole block) the caller's guarantee; stores write `W` floats into rows
@@ -242,10 +265,14 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
             // Hits only the double-precision test could decide, per lane.
             let mut rare = [None; MAX_LANES];
             if rows.live != 0 {
-                for (triangle, id) in flat.triangles() {
-                    let sheared = registers.sheared(triangle);
+                // Each distinct corner in every lane's ray frame, once: a closed mesh's corner
+                // belongs to about six triangles.
+                registers.frame(&shared.corners, &mut frame);
+                for &(corners, id) in &shared.triangles {
+                    let (sheared, scaled) = corners_of(&frame, corners);
                     let ray = RayLanes { t_max: best_t, ..registers.ray };
-                    let decided = watertight_sheared::<V, true>(&sheared, &ray, rows.live);
+                    let decided =
+                        watertight_sheared_scaled::<V, true>(&sheared, scaled, &ray, rows.live);
                     if decided.hits != 0 {
                         // Hits are strictly nearer than the lane's best (`t < t_max`), so the
                         // earlier triangle keeps a tie; padding lanes are never hit (their
@@ -261,6 +288,7 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
                     while undecided != 0 {
                         let lane = undecided.trailing_zeros() as usize;
                         undecided &= undecided - 1;
+                        let triangle = shared.triangle(corners);
                         decide_rarely(rays, lane, triangle, id, &mut rare[lane]);
                     }
                 }
@@ -286,6 +314,84 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
             }
         }
     }
+}
+
+/// Whether each ray is blocked, `W` rays to a register `V`: exactly
+/// [`occluded`](super::flat::occluded_scalar)'s answers. A group stops once every live lane is
+/// blocked.
+///
+/// # Safety
+/// The CPU must support `V`'s instruction set, and `V` must hold `W` floats (`W <= 16`).
+#[inline(always)]
+pub(crate) unsafe fn occluded<V: Lanes, const W: usize>(
+    flat: &Flat,
+    rays: &[Ray],
+    occluded: &mut [bool],
+) {
+    assert_eq!(rays.len(), occluded.len(), "one answer per ray");
+    debug_assert!(W <= MAX_LANES);
+    let shared = flat.shared();
+    // SAFETY: any bits are a valid register of floats.
+    let mut frame = vec![[unsafe { std::mem::zeroed::<V>() }; 4]; shared.corners.len()];
+    for (rays, occluded) in rays.chunks(W).zip(occluded.chunks_mut(W)) {
+        let rows = RayRows::new(rays);
+        // The lanes found blocked.
+        let mut blocked = 0;
+        // SAFETY: (the whole block) the caller's guarantee.
+        unsafe {
+            let registers = RayRegisters::<V>::new(&rows);
+            if rows.live != 0 {
+                registers.frame(&shared.corners, &mut frame);
+                for &(corners, _) in &shared.triangles {
+                    let open = rows.live & !blocked;
+                    if open == 0 {
+                        break;
+                    }
+                    let (sheared, scaled) = corners_of(&frame, corners);
+                    let decided = watertight_sheared_scaled::<V, true>(
+                        &sheared,
+                        scaled,
+                        &registers.ray,
+                        open,
+                    );
+                    blocked |= decided.hits;
+                    let mut undecided = decided.undecided;
+                    while undecided != 0 {
+                        let lane = undecided.trailing_zeros() as usize;
+                        undecided &= undecided - 1;
+                        if blocked_rarely(&rays[lane], shared.triangle(corners)) {
+                            blocked |= 1 << lane;
+                        }
+                    }
+                }
+            }
+        }
+        for (lane, occluded) in occluded.iter_mut().enumerate() {
+            *occluded = blocked & (1 << lane) != 0;
+        }
+    }
+}
+
+/// A triangle's corners in the lanes' ray frames, as [`watertight_sheared_scaled`] takes them,
+/// from the frames of the flat list's distinct corners.
+///
+/// # Safety
+/// Every index of `corners` must be below `frame.len()`.
+#[inline(always)]
+unsafe fn corners_of<V: Lanes>(frame: &[[V; 4]], corners: [u32; 3]) -> (ShearedLanes<V>, [V; 3]) {
+    // SAFETY: the caller's guarantee.
+    let [a, b, c] = corners.map(|k| unsafe { *frame.get_unchecked(k as usize) });
+    let sheared =
+        ShearedLanes { x: [a[0], b[0], c[0]], y: [a[1], b[1], c[1]], z: [a[2], b[2], c[2]] };
+    (sheared, [a[3], b[3], c[3]])
+}
+
+/// Whether `ray` hits `triangle` by the double-precision test (an edge function rounded to
+/// zero).
+#[cold]
+#[inline(never)]
+fn blocked_rarely(ray: &Ray, [v0, v1, v2]: [Vec3; 3]) -> bool {
+    WatertightRay::new(ray).intersect(v0, v1, v2, ray.t_max).is_some()
 }
 
 /// Lane `lane`'s test of `triangle` in double precision (an edge function rounded to zero),

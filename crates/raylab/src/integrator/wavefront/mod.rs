@@ -25,7 +25,16 @@
 //!    instruction; the other materials, lights other than area-sampled triangles, and the
 //!    rare lane whose offset point overflows run the scalar path's steps
 //!    ([`Path::sample_light_with`], `bounce`, `survives_roulette`) one by one;
-//! 5. **occlusion** of the shadow rays, one by one, and the light they bring.
+//! 5. **occlusion** of the shadow rays as one batch ([`Accelerator::occluded_incoherent`]: in
+//!    lanes against a small scene's flat list, one by one through a tree), and the light they
+//!    bring.
+//!
+//! Stages 2 to 4 run a chunk at a time: as soon as sixteen diffuse vertices are gathered, their
+//! numbers are drawn and they are shaded, while their rows are still in the first-level cache
+//! (a chunk and its results take 4.3 KiB, a 256-path wavefront's 69 KiB, more than the 32 KiB of
+//! this machine's first-level cache). Each path draws from its own
+//! sampler, so the order in which paths draw changes no number. Measured on Mitsuba's box
+//! (512², 16 spp, 1 thread, CPU time, min of 7, the same pixels): 2.12 → 2.07 s.
 //!
 //! Grouping by material is what keeps the lanes full: a chunk holds only diffuse vertices,
 //! whichever paths they belong to.
@@ -160,8 +169,10 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut numbers = Numbers::with_capacity(rays.len());
         // The diffuse vertices in lanes, and their paths. Made per tile: one reused from tile
         // to tile (thread-local) was measured slower (BENCHMARKS.md).
-        let mut diffuse = DiffuseLanes::with_capacity(rays.len());
-        let mut diffuse_paths: Vec<usize> = Vec::with_capacity(rays.len());
+        let mut diffuse = DiffuseLanes::with_capacity(diffuse::LANES);
+        let mut diffuse_paths: Vec<usize> = Vec::with_capacity(diffuse::LANES);
+        // The paths that go on after this bounce.
+        let mut bounced: Vec<usize> = Vec::with_capacity(rays.len());
         let mut first = true;
         let mut lap = Lap::start(self.times.as_ref());
         while !alive.is_empty() {
@@ -183,9 +194,13 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             first = false;
             lap.end(|t| &t.closest_hits);
 
-            // 2. Light found; paths that leave the scene or reach the depth limit end. Diffuse
-            // vertices go straight into lanes, the others become the scalar steps' vertices.
+            // 2–4. Light found; paths that leave the scene or reach the depth limit end.
+            // Diffuse vertices go straight into lanes and are shaded sixteen at a time as
+            // soon as a chunk is full, while its rows are in the first-level cache; the
+            // others become the scalar steps' vertices, shaded after.
             vertices.clear();
+            shadows.clear();
+            bounced.clear();
             diffuse.clear();
             diffuse_paths.clear();
             for (&i, hit) in alive.iter().zip(&hits) {
@@ -220,87 +235,56 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                     roulette: state.depth + 1 >= rr_depth,
                 });
                 diffuse_paths.push(i);
+                if diffuse.len() == diffuse::LANES {
+                    lap.end(|t| &t.surfaces);
+                    let mut chunk = Chunk {
+                        states: &mut states,
+                        samplers,
+                        numbers: &mut numbers,
+                        shadows: &mut shadows,
+                        bounced: &mut bounced,
+                        lap: &mut lap,
+                    };
+                    self.shade_lanes(&mut chunk, &mut diffuse, &diffuse_paths);
+                    diffuse.clear();
+                    diffuse_paths.clear();
+                }
             }
             lap.end(|t| &t.surfaces);
-
-            // 3. Every vertex's numbers, in the scalar path's order, a batch at a time: the
-            // scalar steps' vertices first, then the lanes. The roulette's are drawn for every
-            // vertex, where the scalar path draws them only for the paths that bounced: a path
-            // that did not has ended and draws no more.
+            let mut chunk = Chunk {
+                states: &mut states,
+                samplers,
+                numbers: &mut numbers,
+                shadows: &mut shadows,
+                bounced: &mut bounced,
+                lap: &mut lap,
+            };
+            if diffuse.len() > 0 {
+                self.shade_lanes(&mut chunk, &mut diffuse, &diffuse_paths);
+            }
+            // The scalar steps' vertices, one by one, with their numbers drawn a batch at a
+            // time.
             lanes.clear();
             lanes.extend(vertices.iter().map(|(i, _)| *i));
-            lanes.extend(&diffuse_paths);
-            numbers.draw(samplers, &lanes);
-            lap.end(|t| &t.draws);
-
-            // 4. Light sampling, BSDF sampling and roulette: the scalar steps' vertices one by
-            // one, the diffuse vertices in lanes.
-            shadows.clear();
-            let mut bounced = std::mem::take(&mut alive);
-            bounced.clear();
+            chunk.numbers.draw(chunk.samplers, &lanes);
+            chunk.lap.end(|t| &t.draws);
             for (v, (i, vertex)) in vertices.iter().enumerate() {
-                let state = &mut states[*i];
-                shadows.add(*i, numbers.sample_light(path, state, vertex, v));
-                if numbers.bounce(path, state, vertex, v) {
-                    bounced.push(*i);
+                let state = &mut chunk.states[*i];
+                chunk.shadows.add(*i, chunk.numbers.sample_light(path, state, vertex, v));
+                if chunk.numbers.bounce(path, state, vertex, v) {
+                    chunk.bounced.push(*i);
                 }
             }
-            let first_lane = vertices.len();
-            for (lane, &i) in diffuse_paths.iter().enumerate() {
-                let v = first_lane + lane;
-                let drawn = numbers.drawn[v];
-                let light = path.lights().pick_for_lanes(drawn.point);
-                if let LanePick::Other = light {
-                    shadows
-                        .add(i, numbers.sample_light(path, &states[i], &diffuse.vertex(lane), v));
-                }
-                diffuse.set_draws(
-                    lane,
-                    &LaneDraws {
-                        light,
-                        u_point: drawn.point,
-                        u_direction: drawn.direction,
-                        u_roulette: drawn.roulette,
-                    },
-                );
-            }
-            diffuse.shade(self.isa);
-            for (lane, &i) in diffuse_paths.iter().enumerate() {
-                let state = &mut states[i];
-                let result = diffuse.result(lane);
-                if !result.exact {
-                    // An offset point was not finite: the scalar steps decide the lane.
-                    let (vertex, v) = (diffuse.vertex(lane), first_lane + lane);
-                    if result.light_in_lanes {
-                        shadows.add(i, numbers.sample_light(path, state, &vertex, v));
-                    }
-                    if numbers.bounce(path, state, &vertex, v) {
-                        bounced.push(i);
-                    }
-                    continue;
-                }
-                shadows.add(i, result.shadow);
-                if let Some((ray, throughput, pdf)) = result.next {
-                    state.ray = ray;
-                    state.throughput = throughput;
-                    state.previous_pdf = pdf;
-                    state.previous_delta = false;
-                    state.previous_point = diffuse.point(lane);
-                    state.depth += 1;
-                    bounced.push(i);
-                }
-            }
-            alive = bounced;
+            std::mem::swap(&mut alive, &mut bounced);
             if let Some(times) = &self.times {
-                let lanes = diffuse.len() as u64;
-                times.vertices.fetch_add(vertices.len() as u64 + lanes, Ordering::Relaxed);
-                times.lanes.fetch_add(lanes, Ordering::Relaxed);
+                times.vertices.fetch_add(vertices.len() as u64, Ordering::Relaxed);
             }
             lap.end(|t| &t.shading);
 
             // 5. Occlusion of the shadow rays, and the light they bring.
-            for (ray, &(i, contribution)) in shadows.rays.iter().zip(&shadows.light) {
-                if !super::occluded_opaque(scene, accel, ray) {
+            shadows.trace(scene, accel);
+            for (&blocked, &(i, contribution)) in shadows.blocked.iter().zip(&shadows.light) {
+                if !blocked {
                     states[i].radiance += contribution;
                 }
             }
@@ -315,16 +299,108 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
     }
 }
 
+/// What shading a chunk of lanes reads and adds to: the paths' states and samplers, the
+/// numbers' buffer, and the stage's shadow rays and paths that go on.
+struct Chunk<'s, 'c> {
+    states: &'s mut [PathState],
+    samplers: &'s mut [Sampler],
+    numbers: &'s mut Numbers,
+    shadows: &'s mut ShadowRays,
+    bounced: &'s mut Vec<usize>,
+    lap: &'s mut Lap<'c>,
+}
+
+impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
+    /// Draws the numbers of `diffuse`'s lanes (the vertices of `paths`), shades them, and
+    /// takes their results: shadow rays, and the next rays of the paths that go on.
+    fn shade_lanes(&self, chunk: &mut Chunk, diffuse: &mut DiffuseLanes, paths: &[usize]) {
+        let path = &self.path;
+        chunk.numbers.draw(chunk.samplers, paths);
+        chunk.lap.end(|t| &t.draws);
+        for (lane, &i) in paths.iter().enumerate() {
+            let drawn = chunk.numbers.drawn[lane];
+            let light = path.lights().pick_for_lanes(drawn.point);
+            if let LanePick::Other = light {
+                let vertex = diffuse.vertex(lane);
+                chunk
+                    .shadows
+                    .add(i, chunk.numbers.sample_light(path, &chunk.states[i], &vertex, lane));
+            }
+            diffuse.set_draws(
+                lane,
+                &LaneDraws {
+                    light,
+                    u_point: drawn.point,
+                    u_direction: drawn.direction,
+                    u_roulette: drawn.roulette,
+                },
+            );
+        }
+        diffuse.shade(self.isa);
+        for (lane, &i) in paths.iter().enumerate() {
+            let state = &mut chunk.states[i];
+            let result = diffuse.result(lane);
+            if !result.exact {
+                // An offset point was not finite: the scalar steps decide the lane.
+                let vertex = diffuse.vertex(lane);
+                if result.light_in_lanes {
+                    chunk.shadows.add(i, chunk.numbers.sample_light(path, state, &vertex, lane));
+                }
+                if chunk.numbers.bounce(path, state, &vertex, lane) {
+                    chunk.bounced.push(i);
+                }
+                continue;
+            }
+            chunk.shadows.add(i, result.shadow);
+            if let Some((ray, throughput, pdf)) = result.next {
+                state.ray = ray;
+                state.throughput = throughput;
+                state.previous_pdf = pdf;
+                state.previous_delta = false;
+                state.previous_point = diffuse.point(lane);
+                state.depth += 1;
+                chunk.bounced.push(i);
+            }
+        }
+        if let Some(times) = &self.times {
+            let lanes = paths.len() as u64;
+            times.vertices.fetch_add(lanes, Ordering::Relaxed);
+            times.lanes.fetch_add(lanes, Ordering::Relaxed);
+        }
+        chunk.lap.end(|t| &t.shading);
+    }
+}
+
 /// The shadow rays of a stage's vertices, and the light each brings to its path if nothing
 /// blocks it.
 struct ShadowRays {
     rays: Vec<Ray>,
     light: Vec<(usize, Vec3)>,
+    /// Whether each ray is blocked, once [traced](Self::trace).
+    blocked: Vec<bool>,
 }
 
 impl ShadowRays {
     fn with_capacity(n: usize) -> ShadowRays {
-        ShadowRays { rays: Vec::with_capacity(n), light: Vec::with_capacity(n) }
+        ShadowRays {
+            rays: Vec::with_capacity(n),
+            light: Vec::with_capacity(n),
+            blocked: Vec::with_capacity(n),
+        }
+    }
+
+    /// Finds which rays are blocked: as a batch ([`Accelerator::occluded_incoherent`]), or one
+    /// by one through their holes in a scene with cut-outs.
+    fn trace<A: Accelerator + ?Sized>(&mut self, scene: &Scene, accel: &A) {
+        self.blocked.clear();
+        self.blocked.resize(self.rays.len(), false);
+        if scene.has_cut_outs() {
+            for (ray, blocked) in self.rays.iter().zip(&mut self.blocked) {
+                *blocked = super::occluded_opaque(scene, accel, ray);
+            }
+        } else {
+            accel.occluded_incoherent(&self.rays, &mut self.blocked);
+        }
     }
 
     fn clear(&mut self) {
