@@ -3,7 +3,9 @@
 
 Made for crates/raylab/tests/data/mitsuba-materials/materials.toml (five spheres of sphere.obj:
 gold, glass, frosted glass, blue plastic and brushed aluminium, on a grey floor under a
-rectangular light, in a constant environment), but it translates the scene format generically
+rectangular light, in a constant environment) and for
+crates/raylab/tests/data/mitsuba-gltf/boxes.toml (a textured glTF box drawn eighteen times by its
+nodes), but it translates the scene format generically
 (docs/scene-format.md), as far as Mitsuba has the same thing:
 
   [render]   size -> hdrfilm width/height (pixel_format rgb, float32); filter box -> rfilter box,
@@ -16,7 +18,9 @@ rectangular light, in a constant environment), but it translates the scene forma
   [camera]   position + target (up [0, 1, 0]), or position + yaw/pitch: perspective with
              to_world = look_at(position, target, up), fov, fov_axis; aperture_radius > 0 ->
              thinlens (aperture_radius, focus_distance).
-  materials  diffuse, conductor, roughconductor (RGB eta/k; a named metal is raylab's RGB table,
+  materials  diffuse (its reflectance a colour, or an image texture { texture = "file.png",
+             wrap, scale } as Mitsuba's bitmap: sRGB decoded, bilinear, wrap_mode, to_uv scale),
+             conductor, roughconductor (RGB eta/k; a named metal is raylab's RGB table,
              not Mitsuba's spectral data), dielectric, roughdielectric, plastic, twosided. Named
              IORs become raylab's numbers (the same table as Mitsuba's). Rough materials always get
              distribution ggx (Mitsuba's default would be beckmann) and sample_visible true.
@@ -26,7 +30,10 @@ rectangular light, in a constant environment), but it translates the scene forma
              Duff basis of the shading normal instead (raylab's frame before).
   shapes     rectangle, cube (Mitsuba's plugins), sphere (raylab's 48 x 96 UV sphere with vertex
              normals, written to a temporary PLY), mesh (.obj / .ply through Mitsuba's plugins, with
-             face_normals false and flip_normals false, and a named material). Transform: scale,
+             face_normals false and flip_normals false, and a named material; a .gltf / .glb
+             file's default scene through gltf_mesh.py: each mesh once, written to a temporary
+             OBJ with its normals and texture coordinates, in a shapegroup, and an instance of it
+             for each node that draws it, at the node's world matrix). Transform: scale,
              then rotate (right-handed, degrees), then translate, then to_world:
              to_world = M . T . R . S. `emission` -> an `area` emitter on the shape (its BSDF is
              the named material, or black diffuse without one).
@@ -101,6 +108,7 @@ def rgb(v, what="colour"):
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from mitsuba_run import Render, load_mitsuba  # noqa: E402
 from pfm import write_pfm  # noqa: E402
+import gltf_mesh  # noqa: E402
 
 
 # ---------------------------------------------------------------------------------------------
@@ -261,10 +269,39 @@ def material(doc, raylab_frames=True):
     return d
 
 
+def colour(value, what="colour"):
+    """A colour, or an image texture table ({ texture = "file.png", wrap, scale }) as Mitsuba's
+    bitmap: sRGB-decoded to linear, then bilinear (raylab's path tracer reads level 0 of its
+    mip-map bilinearly, in linear light, texel centres at (x + 1/2)/w as Mitsuba's)."""
+    if not isinstance(value, dict):
+        return rgb(value, what)
+    name = value.get("texture", "")
+    if os.path.splitext(name)[1].lower() not in (".png", ".jpg", ".jpeg"):
+        raise SceneError(f"{what}: only image textures are translated, not {name!r}")
+    if value.get("srgb", True) is not True or "colors" in value:
+        raise SceneError(f"{what}: an image texture with srgb or colors is not translated")
+    wrap = value.get("wrap", "repeat")
+    if wrap not in ("repeat", "clamp", "mirror"):
+        raise SceneError(f"{what}: wrap {wrap!r}")
+    scale = float(value.get("scale", 1.0))
+    return {"type": "bitmap", "filename": os.path.join(TEXTURE_FOLDER[0], name),
+            "filter_type": "bilinear", "wrap_mode": wrap, "raw": False,
+            "to_uv": mi_module().ScalarTransform4f().scale([scale, scale, 1.0])}
+
+
+# The scene file's folder (textures are read beside it) and the Mitsuba module, set by main.
+TEXTURE_FOLDER = [""]
+_MI = []
+
+
+def mi_module():
+    return _MI[0]
+
+
 def plain_material(doc, raylab_frames):
     kind = doc.get("type")
     if kind == "diffuse":
-        return {"type": "diffuse", "reflectance": rgb(doc["reflectance"])}
+        return {"type": "diffuse", "reflectance": colour(doc["reflectance"], "reflectance")}
     if kind == "conductor":
         return {"type": "conductor", **metal(doc)}
     if kind == "roughconductor":
@@ -344,11 +381,29 @@ def shape_dicts(mi, doc, folder, materials, sphere_dir, raylab_frames):
                              "translated)")
         if kind in ("rectangle", "cube"):
             d = {"type": kind, "to_world": mi.ScalarTransform4f(m.tolist())}
+        elif kind == "mesh" and os.path.splitext(s["file"])[1].lower() in (".gltf", ".glb"):
+            # Each glTF mesh once (a shapegroup), placed by its nodes (instances).
+            path = os.path.join(folder, s["file"])
+            if "emission" in s:
+                raise SceneError(f"mesh {path}: a glTF mesh with `emission` is not translated")
+            os.makedirs(sphere_dir, exist_ok=True)
+            for j, (triangles, worlds) in enumerate(gltf_mesh.read(path)):
+                obj = os.path.join(sphere_dir, f"{key}_{j}.obj")
+                gltf_mesh.write_obj(obj, triangles)
+                group = f"{key}_{j}_group"
+                out[group] = {"type": "shapegroup",
+                              "mesh": {"type": "obj", "filename": obj, "face_normals": False,
+                                       "flip_normals": False, "bsdf": bsdf}}
+                for k, world in enumerate(worlds):
+                    out[f"{key}_{j}_instance_{k:03d}"] = {
+                        "type": "instance", "shapegroup": {"type": "ref", "id": group},
+                        "to_world": mi.ScalarTransform4f((m @ world).tolist())}
+            continue
         elif kind == "mesh":
             path = os.path.join(folder, s["file"])
             ext = os.path.splitext(path)[1].lower()
             if ext not in (".obj", ".ply"):
-                raise SceneError(f"mesh {path}: only .obj and .ply are translated")
+                raise SceneError(f"mesh {path}: only .obj, .ply, .gltf and .glb are translated")
             d = {"type": ext[1:], "filename": path, "face_normals": False,
                  "flip_normals": False, "to_world": mi.ScalarTransform4f(m.tolist())}
         elif kind == "sphere":
@@ -485,6 +540,8 @@ def main():
     with open(args.scene, "rb") as f:
         doc = tomllib.load(f)
     folder = os.path.dirname(os.path.abspath(args.scene))
+    TEXTURE_FOLDER[0] = folder
+    _MI.append(mi)
     render = doc.get("render", {})
     width, height = args.size if args.size else render.get("size", [500, 500])
     max_depth = args.max_depth if args.max_depth is not None else render.get("max_depth", -1)
