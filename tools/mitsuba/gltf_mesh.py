@@ -6,10 +6,12 @@ nodes' transforms (`matrix`, or translation x rotation x scale), composed down t
 each mesh's triangle primitives: POSITION, NORMAL, TEXCOORD_0 and the indices. Each mesh is
 returned once with the world matrices of the nodes that place it, as instances.
 
-Texture coordinates are glTF's (v down from the image's top row). Mitsuba's OBJ loader flips v
-(its v = 1 - v_obj) and its bitmap texture reads v up from the bottom row, so an OBJ's vt is
-glTF's v unchanged: write_obj writes it as it is (measured: with vt = 1 - v the logo came out
-upside down against raylab's render of the glTF).
+Texture coordinates are written as the file has them. A scene file's image texture reads a
+mesh's coordinates as OBJ's, v up from the bottom row (docs/scene-format.md), whatever file the
+mesh came from; Mitsuba's OBJ loader flips v and its bitmap reads v down from the top row, so
+Mitsuba reads an OBJ's vt the same way. Written unchanged, the coordinates reach both renderers
+alike (measured: with vt = 1 - v the logo came out upside down in Mitsuba against raylab's
+render). A glTF file's own textures, which read v down, are not translated.
 """
 
 import base64
@@ -57,6 +59,8 @@ def _buffers(doc, folder, binary):
 
 def _accessor(doc, buffers, index):
     a = doc["accessors"][index]
+    if "bufferView" not in a or "sparse" in a:
+        raise GltfError(f"accessor {index}: without a bufferView, or sparse: not translated")
     view = doc["bufferViews"][a["bufferView"]]
     dtype = np.dtype(COMPONENTS[a["componentType"]])
     width = WIDTHS[a["type"]]
@@ -64,7 +68,11 @@ def _accessor(doc, buffers, index):
     stride = view.get("byteStride", dtype.itemsize * width)
     raw = buffers[view["buffer"]]
     rows = [np.frombuffer(raw, dtype, width, start + k * stride) for k in range(a["count"])]
-    return np.array(rows).reshape(a["count"], width)
+    out = np.array(rows).reshape(a["count"], width)
+    if a.get("normalized") and dtype.kind in "iu":
+        # glTF's normalized integers: unsigned to [0, 1], signed to [-1, 1].
+        out = np.maximum(out.astype(np.float64) / np.iinfo(dtype).max, -1.0)
+    return out
 
 
 def _quaternion(q):

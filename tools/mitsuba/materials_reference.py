@@ -283,10 +283,14 @@ def colour(value, what="colour"):
     wrap = value.get("wrap", "repeat")
     if wrap not in ("repeat", "clamp", "mirror"):
         raise SceneError(f"{what}: wrap {wrap!r}")
-    scale = float(value.get("scale", 1.0))
+    # raylab reads an image at (s u, 1 - s v) from its top-left corner (the OBJ convention, v
+    # up, then the scale); Mitsuba at to_uv(u, 1 - v), its OBJ loader having flipped v: so
+    # to_uv = translate(0, 1 - s) . scale(s).
+    s = float(value.get("scale", 1.0))
+    to_uv = mi_module().ScalarTransform4f().translate([0.0, 1.0 - s, 0.0]) @ \
+        mi_module().ScalarTransform4f().scale([s, s, 1.0])
     return {"type": "bitmap", "filename": os.path.join(TEXTURE_FOLDER[0], name),
-            "filter_type": "bilinear", "wrap_mode": wrap, "raw": False,
-            "to_uv": mi_module().ScalarTransform4f().scale([scale, scale, 1.0])}
+            "filter_type": "bilinear", "wrap_mode": wrap, "raw": False, "to_uv": to_uv}
 
 
 # The scene file's folder (textures are read beside it) and the Mitsuba module, set by main.

@@ -491,7 +491,10 @@ fn refitted_trees_agree_with_brute_force_on_moved_triangles() {
             for (i, (c, o)) in expected.iter().enumerate() {
                 assert_eq!((closest[i], occluded[i]), (*c, *o), "{name} packet: {:?}", rays[i]);
             }
-            // Incoherent batches: in lanes against the flat list of a small scene.
+            // Incoherent batches: in lanes against the flat list of a small scene, into buffers
+            // that hold wrong answers first.
+            closest.fill(Some(raylab::Hit { t: -1.0, triangle: 7, b1: 0.0, b2: 0.0 }));
+            occluded.iter_mut().enumerate().for_each(|(i, o)| *o = i % 2 == 0);
             bvh.closest_hits_incoherent(&rays, &mut closest);
             bvh.occluded_incoherent(&rays, &mut occluded);
             for (i, (c, o)) in expected.iter().enumerate() {

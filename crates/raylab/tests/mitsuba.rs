@@ -250,8 +250,9 @@ fn every_material_matches_mitsuba() {
 /// (`tools/mitsuba/materials_reference.py`, which places the glTF's mesh by its nodes as
 /// Mitsuba's shapegroup and instances; 64×64, 16,384 spp, `multijitter`): the whole image's mean
 /// within 0.5 % and each 8×8 block's within 4 % (measured: 0.02 % and 0.77 %). The boxes' logo
-/// is read through the glTF's texture coordinates (its `v` runs down the image): read upside
-/// down, the worst block is 38 % off.
+/// is read through the glTF's texture coordinates, as a scene file's image texture reads any
+/// mesh's (`v` up from the bottom row, as OBJ's and Mitsuba's): with the coordinates turned
+/// upside down the worst block is 38 % off.
 #[test]
 fn a_textured_instanced_gltf_scene_matches_mitsuba() {
     let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba-gltf");

@@ -136,6 +136,8 @@ impl Bvh {
         self.wide.root = self.wide.root_bounds();
         self.stats.indexed_triangles = indexed;
         self.stats.leaf_bytes = self.wide.leaves.bytes();
+        // Moved corners may be shared differently.
+        self.stats.flat_bytes = self.flat.as_ref().map_or(0, Flat::bytes);
         Ok(())
     }
 }

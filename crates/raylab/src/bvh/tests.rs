@@ -416,13 +416,13 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
     for case in 0..1500 {
         let snap = |v: Vec3| if case % 2 == 0 { (v * 4.0).round() / 4.0 } else { v };
         let count = 1 + case % 40;
-        // Every fourth case a mesh: corners drawn from a few points, each shared by several
-        // triangles, as the lanes share them (`SharedCorners`).
+        // Two cases in four a mesh: corners drawn from a few points, each shared by several
+        // triangles, as the lanes share them (`SharedCorners`); every other one on the grid.
         let pool: Vec<Vec3> = (0..2 + count / 2).map(|_| snap(rng.vec() * 4.0 - 2.0)).collect();
         let corner = |rng: &mut Lcg| pool[(rng.next() * pool.len() as f32) as usize % pool.len()];
         let mut triangles: Vec<[Vec3; 3]> = (0..count)
             .map(|_| {
-                if case % 4 == 1 {
+                if case % 4 == 1 || case % 4 == 2 {
                     return [corner(&mut rng), corner(&mut rng), corner(&mut rng)];
                 }
                 let p = snap(rng.vec() * 4.0 - 2.0);
@@ -558,4 +558,19 @@ fn the_flat_list_shares_the_corners_of_mitsubas_box() {
         assert_eq!(id as usize, k, "in index order");
         assert_eq!(shared.triangle(corners), triangles[k], "triangle {id}");
     }
+}
+
+/// A flat list longer than [`BuildSettings::MAX_FLAT_LIMIT`] is never made, whatever the
+/// settings ask: its lanes' frames would grow with it.
+#[test]
+fn the_flat_limit_is_clamped() {
+    let triangles: Vec<[Vec3; 3]> = (0..=BuildSettings::MAX_FLAT_LIMIT)
+        .map(|i| {
+            let p = Vec3::new(i as f32, 0.0, 0.0);
+            [p, p + Vec3::X, p + Vec3::Y]
+        })
+        .collect();
+    let settings = BuildSettings { flat_limit: usize::MAX, ..BuildSettings::FAST };
+    assert!(Bvh::build(&triangles, &settings).flat.is_none());
+    assert!(Bvh::build(&triangles[1..], &settings).flat.is_some());
 }

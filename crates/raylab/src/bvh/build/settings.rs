@@ -17,7 +17,8 @@ pub struct BuildSettings {
     pub record_cost: f32,
     /// Scenes of at most this many triangles (of non-zero area) also keep them in a flat list,
     /// and single rays test them all, sixteen per instruction, instead of walking the tree
-    /// (`flat`): faster for a few dozen triangles. `0` always walks the tree.
+    /// (`flat`): faster for a few dozen triangles. `0` always walks the tree; at most
+    /// [`MAX_FLAT_LIMIT`](Self::MAX_FLAT_LIMIT) (larger limits are clamped to it).
     pub flat_limit: usize,
 }
 
@@ -57,6 +58,12 @@ impl BuildSettings {
     /// the tree is 1.3 to 1.7 times as fast.
     pub const FLAT_LIMIT: usize = 48;
 
+    /// The largest [`flat_limit`](Self::flat_limit): the rays in lanes put every distinct corner
+    /// of the list in their frames at once (`flat_rays.rs`, 256 bytes a corner with AVX-512),
+    /// which stays a few megabytes at 4,096 triangles, and a list that long is already many
+    /// times slower than the tree.
+    pub const MAX_FLAT_LIMIT: usize = 4096;
+
     /// Scenes below this many triangles get leaves of at most four triangles (see
     /// [`for_triangles`](Self::for_triangles)).
     pub const SMALL_SCENE: usize = 4096;
@@ -92,7 +99,7 @@ impl BuildSettings {
             } else {
                 1.0
             },
-            flat_limit: self.flat_limit,
+            flat_limit: self.flat_limit.min(Self::MAX_FLAT_LIMIT),
         }
     }
 }

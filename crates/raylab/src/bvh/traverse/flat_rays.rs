@@ -9,7 +9,8 @@
 //! ray stream: `W` rays sit in the lanes of a register (sixteen on AVX-512, eight on AVX2, four
 //! on SSE2), and each triangle of the list is broadcast to all of them. A lane keeps its own
 //! nearest hit in registers, so nothing is reduced across lanes, and a triangle that no lane can
-//! hit skips the division and the error bound ([`watertight_sheared`]'s early out).
+//! hit skips the division and the error bound
+//! ([`watertight_sheared_scaled`]'s early out).
 //!
 //! Measured (`cargo bench -p raylab --bench flat_rays`, random rays inside Mitsuba's box, one
 //! thread): 87–94 ns a ray one at a time, 53 ns in lanes, 46 ns with the set-up in lanes too;
@@ -33,16 +34,17 @@
 //! triangle's frame coordinates are those it would compute itself, bit for bit. Measured on
 //! the path tracer's whole render as above: 2.20 → 2.16 s for the shared frame, 2.12 with `kz`
 //! scaled once too (min of 7).
-
+//!
 //! ## The permutation, lane by lane
 //! The watertight test looks at a triangle along the ray's dominant axis `kz`, with `kx`, `ky`
 //! the other two ([`WatertightRay`]). Rays in lanes have different axes, so each lane picks its
 //! own coordinates of the broadcast corners: `kx = 0, 1, 2` selects `x`, `y` or `z` with two
-//! selects per coordinate, eighteen per triangle, masks made once per group of rays. Sorting the
-//! rays by axis instead would leave up to six part-filled groups in every batch.
+//! selects per coordinate, six per corner (once per distinct corner and group, below), masks
+//! made once per group of rays. Sorting the rays by axis instead would leave up to six
+//! part-filled groups in every batch.
 //!
 //! ## The answers are the single-ray query's
-//! Each lane runs [`watertight_sheared`], the same operations in the same order as
+//! Each lane runs [`watertight_sheared_scaled`], the same operations in the same order as
 //! [`WatertightRay::intersect`]; lanes whose edge functions round to zero are decided by
 //! `intersect` itself in double precision. Triangles come in index order and a lane takes a hit
 //! only if it is strictly nearer, so at equal `t` the lowest index wins, and the rare hits are
@@ -247,10 +249,15 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
     let shared = flat.shared();
     // SAFETY: any bits are a valid register of floats.
     let mut frame = vec![[unsafe { std::mem::zeroed::<V>() }; 4]; shared.corners.len()];
+    // `corners_of` reads the frame at the triangles' corner indices: all below this length.
+    debug_assert!(
+        shared.triangles.iter().all(|(c, _)| c.iter().all(|&k| (k as usize) < frame.len()))
+    );
     for (rays, hits) in rays.chunks(W).zip(hits.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         // SAFETY: (the whole block) the caller's guarantee; stores write `W` floats into rows
-        // of 16.
+        // of 16; `corners_of` reads `frame` at indices below its length (one slot per corner
+        // of `SharedCorners`, whose triangles index only the corners it holds).
         unsafe {
             let registers = RayRegisters::<V>::new(&rows);
             // Each lane's nearest decided hit so far: its `t` is also the lane's limit, so
@@ -333,11 +340,17 @@ pub(crate) unsafe fn occluded<V: Lanes, const W: usize>(
     let shared = flat.shared();
     // SAFETY: any bits are a valid register of floats.
     let mut frame = vec![[unsafe { std::mem::zeroed::<V>() }; 4]; shared.corners.len()];
+    // `corners_of` reads the frame at the triangles' corner indices: all below this length.
+    debug_assert!(
+        shared.triangles.iter().all(|(c, _)| c.iter().all(|&k| (k as usize) < frame.len()))
+    );
     for (rays, occluded) in rays.chunks(W).zip(occluded.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         // The lanes found blocked.
         let mut blocked = 0;
-        // SAFETY: (the whole block) the caller's guarantee.
+        // SAFETY: (the whole block) the caller's guarantee; `corners_of` reads `frame` at
+        // indices below its length (one slot per corner of `SharedCorners`, whose triangles
+        // index only the corners it holds).
         unsafe {
             let registers = RayRegisters::<V>::new(&rows);
             if rows.live != 0 {
@@ -379,7 +392,7 @@ pub(crate) unsafe fn occluded<V: Lanes, const W: usize>(
 /// Every index of `corners` must be below `frame.len()`.
 #[inline(always)]
 unsafe fn corners_of<V: Lanes>(frame: &[[V; 4]], corners: [u32; 3]) -> (ShearedLanes<V>, [V; 3]) {
-    // SAFETY: the caller's guarantee.
+    // SAFETY: every index is below `frame.len()` (the caller's guarantee).
     let [a, b, c] = corners.map(|k| unsafe { *frame.get_unchecked(k as usize) });
     let sheared =
         ShearedLanes { x: [a[0], b[0], c[0]], y: [a[1], b[1], c[1]], z: [a[2], b[2], c[2]] };

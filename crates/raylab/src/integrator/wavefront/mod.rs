@@ -17,8 +17,8 @@
 //!    triangle of an untextured diffuse material that is no light's ([`Path::plain_diffuse`]),
 //!    goes without building its interaction;
 //! 3. **draws**: every vertex's numbers (the light's choice and point, the BSDF's lobe and
-//!    direction, the roulette's) in one pass over the vertices' samplers
-//!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
+//!    direction, the roulette's), a chunk of lanes or the scalar steps' vertices in one pass
+//!    over their samplers ([`Sampler::next_vertex_each`], sixteen lanes per loop);
 //! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes
 //!    (`diffuse/`: sixteen to a chunk in structure-of-arrays form) get their lights and
 //!    numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per AVX-512
@@ -107,7 +107,8 @@ impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
     }
 
     /// The same, measuring the time each stage takes (summed over threads): for the stage
-    /// table of the benchmarks. Costs a clock reading per stage and tile.
+    /// table of the benchmarks. Costs a clock reading per stage and tile, and three per chunk
+    /// of diffuse lanes.
     pub fn with_stage_times(mut self) -> Self {
         self.times = Some(StageClock::default());
         self
