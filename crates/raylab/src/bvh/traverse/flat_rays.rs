@@ -55,7 +55,7 @@
 use glam::Vec3;
 
 use super::can_hit;
-use super::flat::Flat;
+use super::flat::{Flat, SharedCorners};
 use crate::accel::Hit;
 use crate::bvh::simd::{
     LaneMask, Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared_scaled,
@@ -247,12 +247,7 @@ pub(crate) unsafe fn closest_hits<V: Lanes, const W: usize>(
     assert_eq!(rays.len(), hits.len(), "one answer per ray");
     debug_assert!(W <= MAX_LANES);
     let shared = flat.shared();
-    // SAFETY: any bits are a valid register of floats.
-    let mut frame = vec![[unsafe { std::mem::zeroed::<V>() }; 4]; shared.corners.len()];
-    // `corners_of` reads the frame at the triangles' corner indices: all below this length.
-    debug_assert!(
-        shared.triangles.iter().all(|(c, _)| c.iter().all(|&k| (k as usize) < frame.len()))
-    );
+    let mut frame = frame_for::<V>(shared);
     for (rays, hits) in rays.chunks(W).zip(hits.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         // SAFETY: (the whole block) the caller's guarantee; stores write `W` floats into rows
@@ -338,12 +333,7 @@ pub(crate) unsafe fn occluded<V: Lanes, const W: usize>(
     assert_eq!(rays.len(), occluded.len(), "one answer per ray");
     debug_assert!(W <= MAX_LANES);
     let shared = flat.shared();
-    // SAFETY: any bits are a valid register of floats.
-    let mut frame = vec![[unsafe { std::mem::zeroed::<V>() }; 4]; shared.corners.len()];
-    // `corners_of` reads the frame at the triangles' corner indices: all below this length.
-    debug_assert!(
-        shared.triangles.iter().all(|(c, _)| c.iter().all(|&k| (k as usize) < frame.len()))
-    );
+    let mut frame = frame_for::<V>(shared);
     for (rays, occluded) in rays.chunks(W).zip(occluded.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         // The lanes found blocked.
@@ -383,6 +373,17 @@ pub(crate) unsafe fn occluded<V: Lanes, const W: usize>(
             *occluded = blocked & (1 << lane) != 0;
         }
     }
+}
+
+/// A slot per distinct corner of `shared`, for [`RayRegisters::frame`] to fill.
+fn frame_for<V: Lanes>(shared: &SharedCorners) -> Vec<[V; 4]> {
+    // SAFETY: any bits are a valid register of floats.
+    let frame = vec![[unsafe { std::mem::zeroed::<V>() }; 4]; shared.corners.len()];
+    // `corners_of` reads the frame at the triangles' corner indices: all below its length.
+    debug_assert!(
+        shared.triangles.iter().flat_map(|(c, _)| c).all(|&k| (k as usize) < frame.len())
+    );
+    frame
 }
 
 /// A triangle's corners in the lanes' ray frames, as [`watertight_sheared_scaled`] takes them,

@@ -204,8 +204,16 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             bounced.clear();
             diffuse.clear();
             diffuse_paths.clear();
+            let mut chunk = Chunk {
+                states: &mut states,
+                samplers,
+                numbers: &mut numbers,
+                shadows: &mut shadows,
+                bounced: &mut bounced,
+                lap: &mut lap,
+            };
             for (&i, hit) in alive.iter().zip(&hits) {
-                let state = &mut states[i];
+                let state = &mut chunk.states[i];
                 let last = state.depth + 1 >= max_depth;
                 // The commonest hit, a plain triangle of a diffuse material, by the shortcut:
                 // nothing is emitted there, so at the depth limit it needs nothing at all. Any
@@ -237,29 +245,13 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                 });
                 diffuse_paths.push(i);
                 if diffuse.len() == diffuse::LANES {
-                    lap.end(|t| &t.surfaces);
-                    let mut chunk = Chunk {
-                        states: &mut states,
-                        samplers,
-                        numbers: &mut numbers,
-                        shadows: &mut shadows,
-                        bounced: &mut bounced,
-                        lap: &mut lap,
-                    };
+                    chunk.lap.end(|t| &t.surfaces);
                     self.shade_lanes(&mut chunk, &mut diffuse, &diffuse_paths);
                     diffuse.clear();
                     diffuse_paths.clear();
                 }
             }
-            lap.end(|t| &t.surfaces);
-            let mut chunk = Chunk {
-                states: &mut states,
-                samplers,
-                numbers: &mut numbers,
-                shadows: &mut shadows,
-                bounced: &mut bounced,
-                lap: &mut lap,
-            };
+            chunk.lap.end(|t| &t.surfaces);
             if diffuse.len() > 0 {
                 self.shade_lanes(&mut chunk, &mut diffuse, &diffuse_paths);
             }
