@@ -15,7 +15,7 @@ use raylab::film::Display;
 use raylab::image_compare::save_failure_images;
 use raylab::integrator::PathWavefront;
 use raylab::{
-    Accumulator, Bvh, Film, PathSettings, SampleSettings, SamplerKind, Scene, SceneBvh,
+    Accumulator, Bvh, Camera, Film, PathSettings, SampleSettings, SamplerKind, Scene, SceneBvh,
     TriangleSampling, image_io,
 };
 
@@ -188,30 +188,41 @@ fn the_same_pixels_for_any_thread_count_and_tiling() {
     assert!(films[0].pixels().iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
 }
 
+/// A scene file under `tests/data` rendered by the wavefront path tracer at the size of the
+/// Mitsuba reference beside it (`reference.pfm`), `spp` samples with `seed`, through the scene's
+/// own accelerator (two levels where it draws a mesh in several places): the accelerator, the
+/// camera, the render and the reference.
+fn render_beside_its_reference(file: &str, spp: u32, seed: u64) -> (SceneBvh, Camera, Film, Film) {
+    let scene_file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file);
+    let scene = raylab::scene::load_scene_file(&scene_file).unwrap();
+    let reference = image_io::load_film(&scene_file.with_file_name("reference.pfm")).unwrap();
+    let (width, height) = (reference.width(), reference.height());
+    let camera = scene.camera.unwrap().camera(width, height);
+    let accel = SceneBvh::build(&scene.geometry).unwrap();
+    let max_depth = scene.settings.max_depth.unwrap();
+    let path =
+        PathWavefront::new(&scene, &accel, PathSettings { max_depth, ..PathSettings::default() });
+    let mut accumulator = Accumulator::new(width, height).unwrap();
+    accumulator.settings = SampleSettings { seed, ..SampleSettings::default() };
+    for _ in 0..spp {
+        accumulator.add_sample(&camera, &path);
+    }
+    let film = accumulator.mean().unwrap();
+    drop(path);
+    (accel, camera, film, reference)
+}
+
 /// Five materials side by side (`tests/data/mitsuba-materials/materials.toml`: rough gold,
 /// glass, frosted glass, plastic, brushed aluminium on a diffuse floor, an area light and a
 /// sky) against Mitsuba 3's render of the same file, same sphere mesh
 /// (`tools/mitsuba/materials_reference.py`, 160×64, 16,384 spp): the mean radiance of a patch on
-/// each sphere within 3 % (measured: 0.5–1.2 %) and of the whole image within 0.5 % (0.02 %).
+/// each sphere within 3 % (measured: 0.2–0.7 %) and of the whole image within 0.5 % (0.06 %).
 /// The brushed sphere is anisotropic: its look depends on the shading frame, which is Mitsuba's
 /// in both (the tangent along `dp/du`: a mesh without UVs, each triangle's first edge).
 #[test]
 fn every_material_matches_mitsuba() {
-    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba-materials");
-    let scene = raylab::scene::load_scene_file(&folder.join("materials.toml")).unwrap();
-    let reference = image_io::load_film(&folder.join("reference.pfm")).unwrap();
-    let (width, height) = (reference.width(), reference.height());
-    let camera = scene.camera.unwrap().camera(width, height);
-    let bvh = Bvh::new(&scene.vertices());
-    let max_depth = scene.settings.max_depth.unwrap();
-    let path =
-        PathWavefront::new(&scene, &bvh, PathSettings { max_depth, ..PathSettings::default() });
-    let mut accumulator = Accumulator::new(width, height).unwrap();
-    accumulator.settings = SampleSettings { seed: 11, ..SampleSettings::default() };
-    for _ in 0..128 {
-        accumulator.add_sample(&camera, &path);
-    }
-    let film = accumulator.mean().unwrap();
+    let (_, camera, film, reference) =
+        render_beside_its_reference("mitsuba-materials/materials.toml", 128, 11);
     // A 5×5 patch at the middle of each sphere (the file's centres, y-up, in the lab's frame).
     let patch = |film: &Film, centre: glam::Vec3| {
         let p = camera.project(raylab::scene::model_to_lab(centre)).expect("in view");
@@ -255,22 +266,10 @@ fn every_material_matches_mitsuba() {
 /// upside down the worst block is 38 % off.
 #[test]
 fn a_textured_instanced_gltf_scene_matches_mitsuba() {
-    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba-gltf");
-    let scene = raylab::scene::load_scene_file(&folder.join("boxes.toml")).unwrap();
-    let reference = image_io::load_film(&folder.join("reference.pfm")).unwrap();
+    let (accel, _, film, reference) =
+        render_beside_its_reference("mitsuba-gltf/boxes.toml", 256, 12);
     let (width, height) = (reference.width(), reference.height());
-    let camera = scene.camera.unwrap().camera(width, height);
-    let accel = SceneBvh::build(&scene.geometry).unwrap();
     assert!(matches!(accel, SceneBvh::Instanced(_)), "the boxes are instances");
-    let max_depth = scene.settings.max_depth.unwrap();
-    let path =
-        PathWavefront::new(&scene, &accel, PathSettings { max_depth, ..PathSettings::default() });
-    let mut accumulator = Accumulator::new(width, height).unwrap();
-    accumulator.settings = SampleSettings { seed: 12, ..SampleSettings::default() };
-    for _ in 0..256 {
-        accumulator.add_sample(&camera, &path);
-    }
-    let film = accumulator.mean().unwrap();
     let block = |film: &Film, bx: u32, by: u32| {
         let mut sum = DVec3::ZERO;
         for y in by * 8..by * 8 + 8 {

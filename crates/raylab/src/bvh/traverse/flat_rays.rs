@@ -21,7 +21,8 @@
 //! measured slower (47 ns a shadow ray against 37 one at a time), then even (the render 1.20 s
 //! against 1.20). With the corners shared (below) it is the faster: 30 ns a shadow ray against
 //! 37 (`occluded_in_lanes` against `occluded_one_by_one` in the bench above), and the path
-//! tracer's whole render 2.08 → 1.95 s (min of 7; 2.02 against 2.08 in medians; Mitsuba's box,
+//! tracer's whole render 2.08 → 1.95 s (min of 7; 2.02 against 2.08 in medians; `/usr/bin/time
+//! -f %U raylab render scenes/cornell-mitsuba.toml --spp 16 --threads 1 -o r.pfm`: Mitsuba's box,
 //! 512², 16 spp, 1 thread, CPU time, the same pixels). In the box 87 % of shadow rays are
 //! unblocked (BENCHMARKS.md), so a lone ray seldom stops early anyway.
 //!
