@@ -1,6 +1,8 @@
 //! The path tracer, scalar (`Path`, one path at a time) against the wavefront
-//! (`PathWavefront`, a tile's paths stage by stage with batched queries): one pass at a quarter of the scene's size
-//! samples of the scene files' Mitsuba scenes, one thread, the scenes' own depth limits.
+//! (`PathWavefront`, a tile's paths stage by stage with batched queries): one pass at a quarter
+//! of the scene's size, one thread, the scenes' own depth limits, on `scenes/`'s Mitsuba box and
+//! showcase and on the two Mitsuba comparison scenes of `tests/data` (the materials and the
+//! instanced glTF boxes, at a quarter of the 256×256 they are compared at).
 //!
 //! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
 //! stage (`PathWavefront::with_stage_times`, 16 passes, one thread), then times the sampler's
@@ -15,17 +17,26 @@ use raylab::scene::LoadOptions;
 use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
 use raylab::{Accumulator, Camera, SamplerKind, Scene, SceneBvh};
 
-/// A scene file of `scenes/` with its BVH, settings and its camera at a quarter of its size
-/// (128×128 for the Cornell box, 160×120 for the showcase): the same view as a full render.
+/// A scene file of `scenes/` (or `materials`, `gltf-boxes` of `tests/data`) with its BVH,
+/// settings and its camera at a quarter of its size (128×128 for the Cornell box, 160×120 for
+/// the showcase, 64×64 for the comparison scenes): the same view as a full render.
 fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-    let file = root.join(format!("{name}.toml"));
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let file = match name {
+        "materials" => root.join("tests/data/mitsuba-materials/materials.toml"),
+        "gltf-boxes" => root.join("tests/data/mitsuba-gltf/boxes.toml"),
+        _ => root.join(format!("../../scenes/{name}.toml")),
+    };
     let opened =
         Scene::open(&file.display().to_string(), &LoadOptions::default()).expect("the scene file");
     let scene = opened.scene;
     let accel = SceneBvh::build(&scene.geometry).expect("a BVH");
     let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
-    let (width, height) = scene.settings.size.expect("the scene file's size");
+    // The Mitsuba comparison scenes are timed at 256×256 (BENCHMARKS.md).
+    let (width, height) = match name {
+        "materials" | "gltf-boxes" => (256, 256),
+        _ => scene.settings.size.expect("the scene file's size"),
+    };
     let cameras = CameraOptions { size: Some((width / 4, height / 4)), ..CameraOptions::default() };
     let camera = cameras.camera(scene.camera, &scene, false, &accel).expect("a camera");
     (scene, accel, settings, camera)
@@ -60,7 +71,7 @@ fn stage_table(_: &mut Criterion) {
         "lanes",
         "vertices"
     );
-    for name in ["cornell-mitsuba", "showcase"] {
+    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes"] {
         let (scene, accel, settings, camera) = load(name);
         let scalar = Path::new(&scene, &accel, settings.path_settings());
         let wavefront =
@@ -154,7 +165,7 @@ fn path(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     let mut group = c.benchmark_group("path_quarter_size_1spp_1_thread");
     group.sample_size(20);
-    for name in ["cornell-mitsuba", "showcase"] {
+    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes"] {
         let (scene, accel, settings, camera) = load(name);
         let scalar = Path::new(&scene, &accel, settings.path_settings());
         let wavefront = PathWavefront::new(&scene, &accel, settings.path_settings());
