@@ -1,0 +1,151 @@
+//! The rays a path tracer really traces, and what each costs: renders a few passes of a scene
+//! with the wavefront path tracer, records every batch of rays it asks the BVH for (the camera
+//! rays, the later bounces' closest hits, the shadow rays), then traces them again, one by one
+//! and as the batches they came in, and prints per kind the rays per sample, the share that hits,
+//! the nanoseconds per ray (the best of five replays, one thread) and, for a one-level BVH, what
+//! a ray visits (`Bvh::closest_hit_counted`).
+//!
+//! ```sh
+//! cargo run --release --example path_rays -- crates/raylab/tests/data/mitsuba-gltf/boxes.toml
+//! cargo run --release --example path_rays -- scenes/cornell-mitsuba.toml 128 4  # size, passes
+//! ```
+//!
+//! Replayed rays find the tree in the cache where the render's rays may not: the figures are
+//! the queries' own cost, a lower bound on their share of a render.
+
+use std::sync::Mutex;
+use std::time::Instant;
+
+use raylab::bvh::TraversalStats;
+use raylab::integrator::PathWavefront;
+use raylab::scene::LoadOptions;
+use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
+use raylab::{Accelerator, Accumulator, Hit, Ray, Scene, SceneBvh};
+
+/// The rays a render asks for, batch by batch, kind by kind; the answers come from the BVH.
+struct Recorder<'a> {
+    bvh: &'a SceneBvh,
+    camera: Mutex<Vec<Vec<Ray>>>,
+    bounces: Mutex<Vec<Vec<Ray>>>,
+    shadows: Mutex<Vec<Vec<Ray>>>,
+}
+
+impl Accelerator for Recorder<'_> {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.bvh.closest_hit(ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.bvh.occluded(ray)
+    }
+    fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.camera.lock().unwrap().push(rays.to_vec());
+        self.bvh.closest_hits(rays, hits)
+    }
+    fn closest_hits_incoherent(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.bounces.lock().unwrap().push(rays.to_vec());
+        self.bvh.closest_hits_incoherent(rays, hits)
+    }
+    fn occluded_incoherent(&self, rays: &[Ray], occluded: &mut [bool]) {
+        self.shadows.lock().unwrap().push(rays.to_vec());
+        self.bvh.occluded_incoherent(rays, occluded)
+    }
+}
+
+/// The best of five timings of `run`, in seconds.
+fn best_of_five(mut run: impl FnMut()) -> f64 {
+    (0..5)
+        .map(|_| {
+            let start = Instant::now();
+            run();
+            start.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let file = args.next().ok_or("usage: path_rays SCENE.toml [SIZE [PASSES]]")?;
+    let size: u32 = args.next().map_or(Ok(256), |s| s.parse())?;
+    let passes: u32 = args.next().map_or(Ok(4), |s| s.parse())?;
+    let scene = Scene::open(&file, &LoadOptions::default())?.scene;
+    let bvh = SceneBvh::build(&scene.geometry)?;
+    let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
+    let cameras = CameraOptions { size: Some((size, size)), ..CameraOptions::default() };
+    let camera = cameras.camera(scene.camera, &scene, false, &bvh)?;
+    let recorder = Recorder {
+        bvh: &bvh,
+        camera: Mutex::default(),
+        bounces: Mutex::default(),
+        shadows: Mutex::default(),
+    };
+    let wavefront = PathWavefront::new(&scene, &recorder, settings.path_settings());
+    let mut accumulator = Accumulator::new(camera.width, camera.height)?;
+    accumulator.settings = settings.samples;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    pool.install(|| (0..passes).for_each(|_| accumulator.add_sample(&camera, &wavefront)));
+    let samples = f64::from(passes) * f64::from(camera.width * camera.height);
+    println!("{file}: {}×{}, {passes} passes, one thread", camera.width, camera.height);
+    println!(
+        "{:8} {:>11} {:>6} {:>11} {:>11} {:>7} {:>7}",
+        "rays", "per sample", "hit", "single ns", "batched ns", "nodes", "leaves"
+    );
+    let kinds = [
+        ("camera", recorder.camera.into_inner()?, false),
+        ("bounces", recorder.bounces.into_inner()?, false),
+        ("shadows", recorder.shadows.into_inner()?, true),
+    ];
+    for (name, batches, shadow) in &kinds {
+        let count: usize = batches.iter().map(Vec::len).sum();
+        if count == 0 {
+            continue;
+        }
+        let query = |ray: &Ray| {
+            if *shadow { bvh.occluded(ray) } else { bvh.closest_hit(ray).is_some() }
+        };
+        let hits = batches.iter().flatten().filter(|ray| query(ray)).count();
+        let single = best_of_five(|| {
+            for ray in batches.iter().flatten() {
+                std::hint::black_box(query(std::hint::black_box(ray)));
+            }
+        });
+        // As the render asked: packets for the camera's tiles, the batch entry points after.
+        let batched = best_of_five(|| {
+            for batch in batches {
+                if *shadow {
+                    let mut occluded = vec![false; batch.len()];
+                    bvh.occluded_incoherent(batch, &mut occluded);
+                    std::hint::black_box(&occluded);
+                } else {
+                    let mut hits = vec![None; batch.len()];
+                    match *name {
+                        "camera" => bvh.closest_hits(batch, &mut hits),
+                        _ => bvh.closest_hits_incoherent(batch, &mut hits),
+                    }
+                    std::hint::black_box(&hits);
+                }
+            }
+        });
+        let (nodes, leaves) = match &bvh {
+            SceneBvh::Flat(tree) => {
+                let mut stats = TraversalStats::default();
+                for ray in batches.iter().flatten() {
+                    match shadow {
+                        true => tree.occluded_counted(ray, &mut stats),
+                        false => tree.closest_hit_counted(ray, &mut stats).is_some(),
+                    };
+                }
+                let [nodes, leaves, _] = stats.per_ray();
+                (format!("{nodes:.2}"), format!("{leaves:.2}"))
+            }
+            SceneBvh::Instanced(_) => ("-".into(), "-".into()),
+        };
+        println!(
+            "{name:8} {:>11.3} {:>5.1}% {:>11.1} {:>11.1} {nodes:>7} {leaves:>7}",
+            count as f64 / samples,
+            100.0 * hits as f64 / count as f64,
+            single * 1e9 / count as f64,
+            batched * 1e9 / count as f64,
+        );
+    }
+    Ok(())
+}
