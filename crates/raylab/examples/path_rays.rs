@@ -147,5 +147,41 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             batched * 1e9 / count as f64,
         );
     }
+    camera_orders(&bvh, &camera);
     Ok(())
+}
+
+/// Camera rays traced as packets in two orders: 64 pixels, one sample each (the wavefront's
+/// tiles, 8×8 pixels), and 4 pixels with 16 samples each (2×2 pixels; Mitsuba's lanes are the
+/// samples of one pixel). The same kind of rays, 16 samples of every pixel either way.
+fn camera_orders(bvh: &SceneBvh, camera: &raylab::Camera) {
+    let rays = camera.rays();
+    let ray = |x: u32, y: u32, s: u32| {
+        let mut sampler = raylab::sampling::Sampler::new(raylab::SamplerKind::Sobol, 0, (x, y), s);
+        let u = sampler.pixel_2d();
+        rays.ray(x as f32 + u.x, y as f32 + u.y)
+    };
+    let (w, h) = (camera.width - camera.width % 8, camera.height - camera.height % 8);
+    let mut pixel_major = Vec::new();
+    let mut sample_major = Vec::new();
+    for s in 0..16 {
+        for (bx, by) in (0..h / 8).flat_map(|by| (0..w / 8).map(move |bx| (bx, by))) {
+            pixel_major.push((0..64).map(|k| ray(bx * 8 + k % 8, by * 8 + k / 8, s)).collect());
+        }
+    }
+    for (bx, by) in (0..h / 2).flat_map(|by| (0..w / 2).map(move |bx| (bx, by))) {
+        sample_major.push((0..64).map(|k| ray(bx * 2 + k / 16 % 2, by * 2 + k / 32, k % 16)).collect());
+    }
+    for (name, batches) in [("8×8 pixels × 1 sample", &pixel_major), ("2×2 pixels × 16 samples", &sample_major)] {
+        let batches: &Vec<Vec<Ray>> = batches;
+        let count: usize = batches.iter().map(Vec::len).sum();
+        let time = best_of_five(|| {
+            for batch in batches {
+                let mut hits = vec![None; batch.len()];
+                bvh.closest_hits(batch, &mut hits);
+                std::hint::black_box(&hits);
+            }
+        });
+        println!("camera packets of {name}: {:.1} ns per ray", time * 1e9 / count as f64);
+    }
 }
