@@ -170,9 +170,12 @@ fn camera_orders(bvh: &SceneBvh, camera: &raylab::Camera) {
         }
     }
     for (bx, by) in (0..h / 2).flat_map(|by| (0..w / 2).map(move |bx| (bx, by))) {
-        sample_major.push((0..64).map(|k| ray(bx * 2 + k / 16 % 2, by * 2 + k / 32, k % 16)).collect());
+        sample_major
+            .push((0..64).map(|k| ray(bx * 2 + k / 16 % 2, by * 2 + k / 32, k % 16)).collect());
     }
-    for (name, batches) in [("8×8 pixels × 1 sample", &pixel_major), ("2×2 pixels × 16 samples", &sample_major)] {
+    for (name, batches) in
+        [("8×8 pixels × 1 sample", &pixel_major), ("2×2 pixels × 16 samples", &sample_major)]
+    {
         let batches: &Vec<Vec<Ray>> = batches;
         let count: usize = batches.iter().map(Vec::len).sum();
         let time = best_of_five(|| {

@@ -418,19 +418,32 @@ impl Geometry {
     #[inline]
     pub fn surface_point(&self, hit: &Hit) -> SurfacePoint {
         let (s, placement) = self.locate(hit.triangle as usize);
+        self.surface_point_at(s, placement, hit).0
+    }
+
+    /// [`surface_point`](Self::surface_point) on stored triangle `s` where `placement` puts it
+    /// (as [`locate`](Self::locate) finds them), and the triangle's world corners
+    /// ([`triangle`](Self::triangle)), which the placed point's normal needs anyway.
+    #[inline(always)]
+    fn surface_point_at(
+        &self,
+        s: usize,
+        placement: Option<&Placement>,
+        hit: &Hit,
+    ) -> (SurfacePoint, [Vec3; 3]) {
         let corners = self.stored_triangle(s);
-        let interpolate = |corners| interpolate_point(corners, hit);
         match placement {
             None => {
-                let (p, error) = interpolate(corners);
-                SurfacePoint { p, error, normal: self.normals[s] }
+                let (p, error) = interpolate_point(corners, hit);
+                (SurfacePoint { p, error, normal: self.normals[s] }, corners)
             }
             // Interpolated where the hit was found, in object space, then placed with a bound
             // that covers the way there and back (`Placement::world_point`).
             Some(placement) => {
-                let (p, error) = interpolate(placement.corners(corners));
+                let (p, error) = interpolate_point(placement.corners(corners), hit);
                 let (p, error) = placement.world_point(p, error);
-                SurfacePoint { p, error, normal: geometric_normal(placement.triangle(corners)) }
+                let world = placement.triangle(corners);
+                (SurfacePoint { p, error, normal: geometric_normal(world) }, world)
             }
         }
     }
@@ -468,9 +481,10 @@ impl Geometry {
     /// found for it).
     #[inline]
     pub fn interaction(&self, _ray: &Ray, hit: &Hit) -> SurfaceInteraction {
-        let point = self.surface_point(hit);
+        // One lookup of the instance and one placing of the corners serve the point, its
+        // normal and the parametrization (on the glTF boxes this was three and two).
         let (s, placement) = self.locate(hit.triangle as usize);
-        let [v0, v1, v2] = self.triangle(hit.triangle as usize);
+        let (point, [v0, v1, v2]) = self.surface_point_at(s, placement, hit);
         let (b0, b1, b2) = (hit.b0(), hit.b1, hit.b2);
         let mut shading_normal = point.normal;
         if let Some(mut corners) = Self::corner_values(&self.shading_normals, s, placement)
