@@ -58,7 +58,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N")]
     seed: Option<u64>,
 
-    /// Sample generator: sobol (Owen-scrambled, the default for path), independent, or lab.
+    /// Sample generator: sobol (Owen-scrambled, the default for path), multijitter (correlated
+    /// multi-jittered points laid out for --spp: lower error where pixels hold edges),
+    /// independent, or lab.
     #[arg(long, value_name = "NAME")]
     sampler: Option<SamplerKind>,
 

@@ -146,7 +146,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         view,
         max_spp: args.max_spp,
         path_settings: settings.path_settings(),
-        sample_settings: settings.samples,
+        // Frames go on without a known end: no sample count (`multijitter` is then `sobol`).
+        sample_settings: SampleSettings { count: 0, ..settings.samples },
         screenshot: args.screenshot.as_deref(),
         exit_after_frames: args.exit_after_frames,
     };

@@ -9,7 +9,7 @@ mod common;
 use raylab::integrator::{Integrator, Path as PathTracer, PathSettings, PathWavefront};
 use raylab::scene::LoadOptions;
 use raylab::session::CameraOptions;
-use raylab::{Accumulator, Camera, Film, Scene, SceneBvh};
+use raylab::{Accumulator, Camera, Film, SampleSettings, SamplerKind, Scene, SceneBvh};
 
 const SIZE: (u32, u32) = (32, 24);
 
@@ -22,9 +22,16 @@ fn bits(film: &Film) -> Vec<[u32; 3]> {
     film.pixels().iter().map(|p| p.to_array().map(f32::to_bits)).collect()
 }
 
-/// The sums of `passes` passes of `integrator`.
-fn sums(camera: &Camera, integrator: &dyn Integrator, passes: u32) -> Film {
+/// The sums of `passes` passes of `integrator`, with `sampler` (`None`: the integrator's) in a
+/// render of 16 samples (the count `multijitter` lays out).
+fn sums(
+    camera: &Camera,
+    integrator: &dyn Integrator,
+    passes: u32,
+    sampler: Option<SamplerKind>,
+) -> Film {
     let mut accumulator = Accumulator::new(camera.width, camera.height).unwrap();
+    accumulator.settings = SampleSettings { sampler, count: 16, ..SampleSettings::default() };
     for _ in 0..passes {
         accumulator.add_sample(camera, integrator);
     }
@@ -34,17 +41,26 @@ fn sums(camera: &Camera, integrator: &dyn Integrator, passes: u32) -> Film {
 /// Checks the wavefront against the scalar path on `scene` seen by `camera`.
 fn check(name: &str, scene: &Scene, camera: &Camera) {
     let accel = SceneBvh::build(&scene.geometry).unwrap();
-    for max_depth in [Some(1), Some(2), Some(4), None] {
+    // The default sampler at every depth, `multijitter` (its draws in lanes) at two.
+    let runs = [Some(1), Some(2), Some(4), None]
+        .map(|depth| (depth, None))
+        .into_iter()
+        .chain([(Some(2), Some(SamplerKind::MultiJitter)), (None, Some(SamplerKind::MultiJitter))]);
+    for (max_depth, sampler) in runs {
         let settings = PathSettings { max_depth, ..PathSettings::default() };
         let scalar = PathTracer::new(scene, &accel, settings);
         let wavefront = PathWavefront::new(scene, &accel, settings);
-        let (expected, got) = (sums(camera, &scalar, 2), sums(camera, &wavefront, 2));
+        let (expected, got) =
+            (sums(camera, &scalar, 2, sampler), sums(camera, &wavefront, 2, sampler));
         assert!(
             expected.pixels().iter().any(|p| p.max_element() > 0.0) || max_depth == Some(1),
             "{name}: a black picture proves nothing"
         );
         let differing = bits(&expected).iter().zip(bits(&got)).filter(|(a, b)| *a != b).count();
-        assert_eq!(differing, 0, "{name}, max depth {max_depth:?}: pixels that differ");
+        assert_eq!(
+            differing, 0,
+            "{name}, max depth {max_depth:?}, {sampler:?}: pixels that differ"
+        );
     }
 }
 

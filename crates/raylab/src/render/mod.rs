@@ -44,11 +44,21 @@ pub struct SampleSettings {
     /// Tile width and height in pixels (their product at most 256); width 0 for the
     /// integrator's choice ([`Integrator::tile_width`]).
     pub tile: (u32, u32),
+    /// The samples per pixel the render is to reach, which the `multijitter` sampler lays out
+    /// as one pattern ([`Sampler::counted`](crate::sampling::Sampler::counted)); 0 where no end
+    /// is known (progressive frames, a time limit): `multijitter` is then `sobol`.
+    pub count: u32,
 }
 
 impl Default for SampleSettings {
     fn default() -> Self {
-        SampleSettings { seed: 0, sampler: None, filter: Filter::Box, tile: (TILE, BAND_ROWS) }
+        SampleSettings {
+            seed: 0,
+            sampler: None,
+            filter: Filter::Box,
+            tile: (TILE, BAND_ROWS),
+            count: 0,
+        }
     }
 }
 

@@ -15,7 +15,7 @@ use crate::film::Film;
 use crate::integrator::Integrator;
 use crate::ray::Ray;
 use crate::region::Region;
-use crate::sampling::{Sampler, SamplerKind};
+use crate::sampling::{Grid, Sampler, SamplerKind};
 
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
 const MAX_TILE_PIXELS: usize = 256;
@@ -140,6 +140,8 @@ impl Band<'_> {
         let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_TILE_PIXELS];
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
             std::array::from_fn(|_| Sampler::new(kind, 0, (0, 0), 0));
+        // The pattern `multijitter` lays the render's samples out in.
+        let grid = Grid::new(settings.count);
         let mut colours = [Vec3::ZERO; MAX_TILE_PIXELS];
         // A tile's film positions, its numbers drawn in lanes (the pixel positions', then the
         // lens's), and its lanes' indices for those draws.
@@ -157,7 +159,8 @@ impl Band<'_> {
                 for x in columns.clone() {
                     let (sampler, film) = slot.next().expect("a tile's rays fit");
                     let x = first_column + x;
-                    *sampler = Sampler::new(kind, settings.seed, (x as u32, y as u32), sample);
+                    let pixel = (x as u32, y as u32);
+                    *sampler = Sampler::counted(kind, settings.seed, pixel, sample, grid);
                     *film = Vec2::new(x as f32, y as f32);
                 }
             }
@@ -281,7 +284,8 @@ mod tests {
             }
             let rays = camera.rays();
             for (_, kind) in SamplerKind::ALL {
-                let settings = SampleSettings { seed: 7, ..SampleSettings::default() };
+                // A render of 16 samples: `multijitter` lays out its pattern.
+                let settings = SampleSettings { seed: 7, count: 16, ..SampleSettings::default() };
                 let (_, band_rows) = tile_shape(settings.tile);
                 for sample in [0, 5] {
                     let mut pixels = vec![Vec3::ZERO; width as usize * height as usize];
@@ -292,7 +296,9 @@ mod tests {
                     }
                     for (i, &pixel) in pixels.iter().enumerate() {
                         let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
-                        let mut sampler = Sampler::new(kind, settings.seed, (x, y), sample);
+                        let grid = Grid::new(settings.count);
+                        let mut sampler =
+                            Sampler::counted(kind, settings.seed, (x, y), sample, grid);
                         let offset = settings.filter.offset(sampler.pixel_2d());
                         let film = Vec2::new(x as f32 + offset.x, y as f32 + offset.y);
                         let ray = if lens {

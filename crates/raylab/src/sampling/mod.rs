@@ -10,6 +10,7 @@
 //! - [`Sampler`]: the numbers behind every random decision of a path, derived from
 //!   (seed, pixel, sample index) alone, so pictures do not depend on threads or tiling.
 
+mod multijitter;
 mod pcg;
 mod sampler;
 mod sobol;
@@ -21,6 +22,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 use glam::{DVec3, Vec2, Vec3};
 
+pub use multijitter::Grid;
 pub use pcg::{Pcg32, mix64};
 pub use sampler::{Sampler, SamplerKind, VertexNumbers};
 

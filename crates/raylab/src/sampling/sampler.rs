@@ -7,7 +7,7 @@
 //! else goes in, so a picture is the same whatever the thread count, the tiling or the order of
 //! the work.
 //!
-//! Three kinds ([`SamplerKind`]):
+//! Four kinds ([`SamplerKind`]):
 //! - `lab`: the lab's pixel sampling (`sample_offset`: the centre, then
 //!   R₂), independent numbers after it. One sample per pixel is the lab's frame.
 //! - `independent`: every number from a PCG32 stream seeded by a hash of the triple.
@@ -16,9 +16,15 @@
 //!   Sobol'; Burley, "Practical Hash-based Owen Scrambling", JCGT 2020). Every power-of-two
 //!   prefix of a pixel's samples is stratified in each pair, so it converges faster than
 //!   independent samples, and the scrambling keeps it unbiased.
+//! - `multijitter`: each pair of dimensions is a correlated multi-jittered pattern of the
+//!   render's sample count (Kensler 2013; Mitsuba 3's best sampler for most scenes; see
+//!   `multijitter.rs`): lower error than `sobol` where pixels integrate edges, higher where they
+//!   integrate smooth functions. It needs the sample count up front ([`Sampler::counted`]); made
+//!   without one, or for a sample beyond it, a sampler of this kind is a `sobol` one.
 
 use glam::Vec2;
 
+use super::multijitter::{self, Grid};
 use super::pcg::{Pcg32, mix64, u32_to_unit};
 use super::sobol::{laine_karras_permutation, shuffled_scrambled_sobol_2d};
 use super::{pixel_hash, sample_offset};
@@ -37,14 +43,17 @@ pub enum SamplerKind {
     /// Owen-scrambled, shuffled 2D Sobol' points per pair of dimensions.
     #[default]
     Sobol,
+    /// Correlated multi-jittered points of the render's sample count per pair of dimensions.
+    MultiJitter,
 }
 
 impl SamplerKind {
     /// Every kind with its command-line name.
-    pub const ALL: [(&'static str, SamplerKind); 3] = [
+    pub const ALL: [(&'static str, SamplerKind); 4] = [
         ("lab", SamplerKind::Lab),
         ("independent", SamplerKind::Independent),
         ("sobol", SamplerKind::Sobol),
+        ("multijitter", SamplerKind::MultiJitter),
     ];
 
     /// The command-line name.
@@ -60,7 +69,7 @@ impl std::str::FromStr for SamplerKind {
             .iter()
             .find(|(name, _)| *name == s)
             .map(|(_, kind)| *kind)
-            .ok_or_else(|| UnknownName::new("sampler", s, "lab, independent or sobol"))
+            .ok_or_else(|| UnknownName::new("sampler", s, "lab, independent, sobol or multijitter"))
     }
 }
 
@@ -76,18 +85,48 @@ pub struct Sampler {
     reversed_index: u32,
     /// The next dimension to hand out.
     dimension: u32,
+    /// The `multijitter` kind's grid of the render's samples.
+    grid: Grid,
     /// The independent numbers' stream, started at its first use (the lab's one sample per
     /// pixel never draws one).
     rng: Option<Pcg32>,
 }
 
 impl Sampler {
-    /// The sampler of sample `index` of pixel `(x, y)` in a render with `seed`.
+    /// The sampler of sample `index` of pixel `(x, y)` in a render with `seed`. A `multijitter`
+    /// sampler made here, without the render's sample count, is a `sobol` one
+    /// ([`counted`](Self::counted) gives it the count).
     #[inline]
     pub fn new(kind: SamplerKind, seed: u64, pixel: (u32, u32), index: u32) -> Sampler {
+        Self::counted(kind, seed, pixel, index, Grid::new(1))
+    }
+
+    /// [`new`](Self::new) for a render of `grid.count()` samples per pixel, the pattern that
+    /// `multijitter` stratifies (`Grid::new(spp)`, made once per render); a sample beyond the
+    /// count, or a count of one, makes a `multijitter` sampler a `sobol` one.
+    #[inline]
+    pub fn counted(
+        kind: SamplerKind,
+        seed: u64,
+        pixel: (u32, u32),
+        index: u32,
+        grid: Grid,
+    ) -> Sampler {
         let pixel_seed = mix64(pixel_hash(pixel.0, pixel.1) ^ mix64(seed));
         let reversed_index = index.reverse_bits();
-        Sampler { kind, pixel, index, pixel_seed, reversed_index, dimension: 0, rng: None }
+        let kind = match kind {
+            SamplerKind::MultiJitter if grid.count() < 2 || index >= grid.count() => {
+                SamplerKind::Sobol
+            }
+            kind => kind,
+        };
+        Sampler { kind, pixel, index, pixel_seed, reversed_index, dimension: 0, grid, rng: None }
+    }
+
+    /// What it hands out: the kind it was made with, or `sobol` for a `multijitter` sampler
+    /// made without its count ([`counted`](Self::counted)).
+    pub fn kind(&self) -> SamplerKind {
+        self.kind
     }
 
     /// The stream of independent numbers: per sample, its state per pixel.
@@ -168,13 +207,63 @@ pub struct VertexNumbers {
 /// Lanes per batch.
 const LANES: usize = 16;
 
-/// A Sobol' draw of one or two dimensions, as a function of a sampler's state alone.
+/// A point set whose numbers are a function of a pixel's folded seed, a sample's index word
+/// and a dimension alone, so that sixteen lanes draw them in one loop.
+trait Points: Copy {
+    /// What a sampler contributes as the index word.
+    fn index_word(sampler: &Sampler) -> u32;
+    /// One dimension.
+    fn one(self, base: u32, index_word: u32, dimension: u32) -> f32;
+    /// Two dimensions.
+    fn two(self, base: u32, index_word: u32, dimension: u32) -> Vec2;
+}
+
+/// The `sobol` kind's points (the index word is the bit-reversed index).
+#[derive(Clone, Copy)]
+struct SobolPoints;
+
+impl Points for SobolPoints {
+    #[inline(always)]
+    fn index_word(sampler: &Sampler) -> u32 {
+        sampler.reversed_index
+    }
+    #[inline(always)]
+    fn one(self, base: u32, reversed_index: u32, dimension: u32) -> f32 {
+        sobol_1d(base, reversed_index, dimension)
+    }
+    #[inline(always)]
+    fn two(self, base: u32, reversed_index: u32, dimension: u32) -> Vec2 {
+        sobol_2d(base, reversed_index, dimension)
+    }
+}
+
+/// The `multijitter` kind's points on a grid whose sides are powers of two (16, 32, 64, 128
+/// or 256 samples...), where they need no division and no walk: straight-line code for lanes.
+#[derive(Clone, Copy)]
+struct GridPoints(Grid);
+
+impl Points for GridPoints {
+    #[inline(always)]
+    fn index_word(sampler: &Sampler) -> u32 {
+        sampler.index
+    }
+    #[inline(always)]
+    fn one(self, base: u32, index: u32, dimension: u32) -> f32 {
+        multijitter::point_1d_pow2(index, &self.0, dimension_seeds(base, dimension))
+    }
+    #[inline(always)]
+    fn two(self, base: u32, index: u32, dimension: u32) -> Vec2 {
+        multijitter::point_2d_pow2(index, &self.0, dimension_seeds(base, dimension))
+    }
+}
+
+/// A draw of one or two dimensions, as a function of a sampler's state alone.
 trait SobolDraw {
     type Number: Copy + Default;
     /// The dimensions a draw takes.
     const DIMENSIONS: u32;
-    /// The draw for a pixel's folded seed, a sample's bit-reversed index and a dimension.
-    fn draw(base: u32, reversed_index: u32, dimension: u32) -> Self::Number;
+    /// The draw of `points` for a pixel's folded seed, a sample's index word and a dimension.
+    fn draw<P: Points>(points: P, base: u32, index_word: u32, dimension: u32) -> Self::Number;
     /// The same draw by a sampler of any kind, one at a time.
     fn one_by_one(sampler: &mut Sampler) -> Self::Number;
 }
@@ -186,8 +275,8 @@ impl SobolDraw for OneD {
     type Number = f32;
     const DIMENSIONS: u32 = 1;
     #[inline(always)]
-    fn draw(base: u32, reversed_index: u32, dimension: u32) -> f32 {
-        sobol_1d(base, reversed_index, dimension)
+    fn draw<P: Points>(points: P, base: u32, index_word: u32, dimension: u32) -> f32 {
+        points.one(base, index_word, dimension)
     }
     fn one_by_one(sampler: &mut Sampler) -> f32 {
         sampler.next_1d()
@@ -201,8 +290,8 @@ impl SobolDraw for TwoD {
     type Number = Vec2;
     const DIMENSIONS: u32 = 2;
     #[inline(always)]
-    fn draw(base: u32, reversed_index: u32, dimension: u32) -> Vec2 {
-        sobol_2d(base, reversed_index, dimension)
+    fn draw<P: Points>(points: P, base: u32, index_word: u32, dimension: u32) -> Vec2 {
+        points.two(base, index_word, dimension)
     }
     fn one_by_one(sampler: &mut Sampler) -> Vec2 {
         sampler.next_2d()
@@ -216,12 +305,12 @@ impl SobolDraw for VertexDraw {
     type Number = VertexNumbers;
     const DIMENSIONS: u32 = 6;
     #[inline(always)]
-    fn draw(base: u32, reversed_index: u32, dimension: u32) -> VertexNumbers {
+    fn draw<P: Points>(points: P, base: u32, index_word: u32, dimension: u32) -> VertexNumbers {
         VertexNumbers {
-            point: TwoD::draw(base, reversed_index, dimension),
-            lobe: OneD::draw(base, reversed_index, dimension + 2),
-            direction: TwoD::draw(base, reversed_index, dimension + 3),
-            roulette: OneD::draw(base, reversed_index, dimension + 5),
+            point: points.two(base, index_word, dimension),
+            lobe: points.one(base, index_word, dimension + 2),
+            direction: points.two(base, index_word, dimension + 3),
+            roulette: points.one(base, index_word, dimension + 5),
         }
     }
     fn one_by_one(sampler: &mut Sampler) -> VertexNumbers {
@@ -242,51 +331,72 @@ fn each_with<D: SobolDraw>(
 ) {
     let out = &mut out[..lanes.len()];
     for (lanes, out) in lanes.chunks(LANES).zip(out.chunks_mut(LANES)) {
-        if lanes.iter().any(|&i| samplers[i].kind != SamplerKind::Sobol) {
+        let first = &samplers[lanes[0]];
+        let same = |kind| lanes.iter().all(|&i| samplers[i].kind == kind);
+        if same(SamplerKind::Sobol) {
+            chunk_with::<D, _>(SobolPoints, samplers, lanes, out, isa);
+        } else if same(SamplerKind::MultiJitter)
+            && first.grid.is_power_of_two()
+            && lanes.iter().all(|&i| samplers[i].grid == first.grid)
+        {
+            let points = GridPoints(first.grid);
+            chunk_with::<D, _>(points, samplers, lanes, out, isa);
+        } else {
             for (&i, number) in lanes.iter().zip(out.iter_mut()) {
                 *number = D::one_by_one(&mut samplers[i]);
             }
-            continue;
         }
-        let mut base = [0u32; LANES];
-        let mut reversed_index = [0u32; LANES];
-        let mut dimension = [0u32; LANES];
-        for (k, &i) in lanes.iter().enumerate() {
-            let sampler = &mut samplers[i];
-            (base[k], reversed_index[k], dimension[k]) =
-                (sampler.seed_base(), sampler.reversed_index, sampler.dimension);
-            sampler.dimension += D::DIMENSIONS;
-        }
-        let mut numbers = [D::Number::default(); LANES];
-        match isa {
-            // SAFETY: `Isa::detect` picks a set only where the CPU has it (the tests pick the
-            // sets this CPU supports).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe {
-                lanes_avx512::<D>(&base, &reversed_index, &dimension, &mut numbers)
-            },
-            // SAFETY: as above.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe {
-                lanes_avx2::<D>(&base, &reversed_index, &dimension, &mut numbers)
-            },
-            _ => lanes_of::<D>(&base, &reversed_index, &dimension, &mut numbers),
-        }
-        out.copy_from_slice(&numbers[..out.len()]);
     }
+}
+
+/// Up to sixteen lanes' draws of `points`, in one loop.
+#[inline(always)]
+fn chunk_with<D: SobolDraw, P: Points>(
+    points: P,
+    samplers: &mut [Sampler],
+    lanes: &[usize],
+    out: &mut [D::Number],
+    isa: Isa,
+) {
+    let mut base = [0u32; LANES];
+    let mut index_word = [0u32; LANES];
+    let mut dimension = [0u32; LANES];
+    for (k, &i) in lanes.iter().enumerate() {
+        let sampler = &mut samplers[i];
+        (base[k], index_word[k], dimension[k]) =
+            (sampler.seed_base(), P::index_word(sampler), sampler.dimension);
+        sampler.dimension += D::DIMENSIONS;
+    }
+    let mut numbers = [D::Number::default(); LANES];
+    match isa {
+        // SAFETY: `Isa::detect` picks a set only where the CPU has it (the tests pick the sets
+        // this CPU supports).
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 => unsafe {
+            lanes_avx512::<D, P>(points, &base, &index_word, &dimension, &mut numbers)
+        },
+        // SAFETY: as above.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe {
+            lanes_avx2::<D, P>(points, &base, &index_word, &dimension, &mut numbers)
+        },
+        _ => lanes_of::<D, P>(points, &base, &index_word, &dimension, &mut numbers),
+    }
+    out.copy_from_slice(&numbers[..out.len()]);
 }
 
 /// Sixteen draws at once: a plain loop that the compiler turns into vector code where it is
 /// compiled with vector instructions (the wrappers below); its scalar compilation is the twin.
 #[inline(always)]
-fn lanes_of<D: SobolDraw>(
+fn lanes_of<D: SobolDraw, P: Points>(
+    points: P,
     base: &[u32; LANES],
-    reversed_index: &[u32; LANES],
+    index_word: &[u32; LANES],
     dimension: &[u32; LANES],
     out: &mut [D::Number; LANES],
 ) {
     for k in 0..LANES {
-        out[k] = D::draw(base[k], reversed_index[k], dimension[k]);
+        out[k] = D::draw(points, base[k], index_word[k], dimension[k]);
     }
 }
 
@@ -296,13 +406,14 @@ fn lanes_of<D: SobolDraw>(
 /// The CPU must support AVX2 and AVX-512 F and VL ([`Isa::Avx512`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,avx512f,avx512vl")]
-unsafe fn lanes_avx512<D: SobolDraw>(
+unsafe fn lanes_avx512<D: SobolDraw, P: Points>(
+    points: P,
     base: &[u32; LANES],
-    reversed_index: &[u32; LANES],
+    index_word: &[u32; LANES],
     dimension: &[u32; LANES],
     out: &mut [D::Number; LANES],
 ) {
-    lanes_of::<D>(base, reversed_index, dimension, out)
+    lanes_of::<D, P>(points, base, index_word, dimension, out)
 }
 
 /// [`lanes_of`] compiled for AVX2.
@@ -311,13 +422,14 @@ unsafe fn lanes_avx512<D: SobolDraw>(
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn lanes_avx2<D: SobolDraw>(
+unsafe fn lanes_avx2<D: SobolDraw, P: Points>(
+    points: P,
     base: &[u32; LANES],
-    reversed_index: &[u32; LANES],
+    index_word: &[u32; LANES],
     dimension: &[u32; LANES],
     out: &mut [D::Number; LANES],
 ) {
-    lanes_of::<D>(base, reversed_index, dimension, out)
+    lanes_of::<D, P>(points, base, index_word, dimension, out)
 }
 
 /// The scrambling seeds of a dimension, for a pixel whose folded seed is `base`: three
@@ -358,6 +470,11 @@ impl Sampler {
                 self.dimension += 1;
                 number
             }
+            SamplerKind::MultiJitter => {
+                let seeds = dimension_seeds(self.seed_base(), self.dimension);
+                self.dimension += 1;
+                multijitter::point_1d(self.index, &self.grid, seeds)
+            }
             _ => {
                 self.dimension += 1;
                 self.rng().next_f32()
@@ -373,6 +490,11 @@ impl Sampler {
                 let point = sobol_2d(self.seed_base(), self.reversed_index, self.dimension);
                 self.dimension += 2;
                 point
+            }
+            SamplerKind::MultiJitter => {
+                let seeds = dimension_seeds(self.seed_base(), self.dimension);
+                self.dimension += 2;
+                multijitter::point_2d(self.index, &self.grid, seeds)
             }
             _ => {
                 self.dimension += 2;
@@ -400,7 +522,7 @@ mod tests {
     /// Draws of `D` by `each_with` on `isa` against one by one, bit for bit: 37 samplers of
     /// `kind` at different dimensions and indices, every other one drawn, in a shuffled order,
     /// three times; then the samplers go on as if drawn one by one.
-    fn check_each<D: SobolDraw>(isa: Isa, kind: SamplerKind)
+    fn check_each<D: SobolDraw>(isa: Isa, kind: SamplerKind, grid: Grid)
     where
         D::Number: PartialEq + std::fmt::Debug,
     {
@@ -408,7 +530,12 @@ mod tests {
             (0..37u32)
                 .map(|i| {
                     let seed = u64::MAX - u64::from(i).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-                    let mut s = Sampler::new(kind, seed, (i * 7, i * 3), i * 1_000_003);
+                    // `multijitter`'s samples within its count (beyond it, it is `sobol`).
+                    let index = match kind {
+                        SamplerKind::MultiJitter => i * 5 % grid.count(),
+                        _ => i * 1_000_003,
+                    };
+                    let mut s = Sampler::counted(kind, seed, (i * 7, i * 3), index, grid);
                     for _ in 0..i % 5 {
                         s.next_1d();
                     }
@@ -437,19 +564,29 @@ mod tests {
         // Every set this CPU supports (on this machine: AVX-512, AVX2, SSE2 and scalar; SSE2
         // runs the scalar loop).
         for isa in Isa::ALL.into_iter().filter(|isa| isa.is_supported()) {
-            for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
-                check_each::<OneD>(isa, kind);
-                check_each::<TwoD>(isa, kind);
-                check_each::<VertexDraw>(isa, kind);
+            // `multijitter` in lanes where its grid's sides are powers of two (64, 32), one by
+            // one where they are not (49).
+            let kinds = [
+                (SamplerKind::Sobol, 64),
+                (SamplerKind::Independent, 64),
+                (SamplerKind::MultiJitter, 64),
+                (SamplerKind::MultiJitter, 32),
+                (SamplerKind::MultiJitter, 49),
+            ];
+            for (kind, count) in kinds {
+                let grid = Grid::new(count);
+                check_each::<OneD>(isa, kind, grid);
+                check_each::<TwoD>(isa, kind, grid);
+                check_each::<VertexDraw>(isa, kind, grid);
             }
         }
     }
 
     #[test]
     fn samplers_depend_on_seed_pixel_and_index_alone() {
-        for kind in [SamplerKind::Lab, SamplerKind::Independent, SamplerKind::Sobol] {
+        for (_, kind) in SamplerKind::ALL {
             let draw = |seed, pixel, index| {
-                let mut s = Sampler::new(kind, seed, pixel, index);
+                let mut s = Sampler::counted(kind, seed, pixel, index, Grid::new(16));
                 let p = s.pixel_2d();
                 [p.x, p.y, s.next_1d(), s.next_2d().x, s.next_2d().y]
             };

@@ -164,6 +164,8 @@ impl ResolvedSettings {
                 seed: options.seed.or(file.seed).unwrap_or(0),
                 sampler: options.sampler.or(file.sampler),
                 filter: options.filter.or(file.filter).unwrap_or_default(),
+                // A time limit without `--spp` has no known end.
+                count: if spp == MAX_SPP { 0 } else { spp },
                 ..SampleSettings::default()
             },
             time_limit: options.time_limit,
