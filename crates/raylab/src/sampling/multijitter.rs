@@ -30,7 +30,7 @@
 
 use glam::Vec2;
 
-use super::pcg::u32_to_unit;
+use super::pcg::{hash32, u32_to_unit};
 
 /// The `m × n` grid of a sample count: `m` the largest divisor of `count` not above its square
 /// root, so `m · n = count` exactly (a prime count is a `1 × count` grid: N-rooks alone), with
@@ -124,17 +124,7 @@ fn permute_round(mut x: u32, mask: u32, seed: u32) -> u32 {
 /// A number in `[0, 1)` from sample `s` and `seed`: the jitter.
 #[inline(always)]
 fn jitter(s: u32, seed: u32) -> f32 {
-    u32_to_unit(hash(s ^ seed))
-}
-
-/// A 32-bit hash with full avalanche (Wellons' `lowbias32`, as the sampler's seeds use).
-#[inline(always)]
-fn hash(mut x: u32) -> u32 {
-    x ^= x >> 16;
-    x = x.wrapping_mul(0x7feb_352d);
-    x ^= x >> 15;
-    x = x.wrapping_mul(0x846c_a68b);
-    x ^ (x >> 16)
+    u32_to_unit(hash32(s ^ seed))
 }
 
 /// Point `index` (`< grid.count()`) of a pair of dimensions whose seeds are `seeds` (three
@@ -240,14 +230,14 @@ mod tests {
             for seed in [0u32, 1, 0xdead_beef, 12345] {
                 let mut seen = vec![false; len as usize];
                 for i in 0..len {
-                    let p = permute(i, len, mask_of(len), hash(seed)) as usize;
+                    let p = permute(i, len, mask_of(len), hash32(seed)) as usize;
                     assert!(!seen[p], "len {len} seed {seed}: {p} twice");
                     seen[p] = true;
                 }
             }
         }
         // Different seeds, different orders.
-        let order = |seed| (0..64).map(|i| permute(i, 64, 63, hash(seed))).collect::<Vec<_>>();
+        let order = |seed| (0..64).map(|i| permute(i, 64, 63, hash32(seed))).collect::<Vec<_>>();
         assert_ne!(order(1), order(2));
     }
 
@@ -259,7 +249,7 @@ mod tests {
         for count in [64u32, 32, 49] {
             let grid = Grid::new(count);
             for seed in 0..200u32 {
-                let seeds = [seed * 3 + 1, seed * 7 + 2, seed * 11 + 3].map(hash);
+                let seeds = [seed * 3 + 1, seed * 7 + 2, seed * 11 + 3].map(hash32);
                 let points: Vec<Vec2> = (0..count).map(|i| point_2d(i, &grid, seeds)).collect();
                 let mut cells = vec![0; count as usize];
                 let (mut columns, mut rows) = (vec![0; count as usize], vec![0; count as usize]);
@@ -293,7 +283,7 @@ mod tests {
         let mut bins = vec![0f64; 256];
         let mut bins_1d = vec![0f64; 64];
         for t in 0..trials {
-            let seeds = [hash(t), hash(t ^ 0x1234_5678), hash(t.wrapping_mul(0x9e37_79b9))];
+            let seeds = [hash32(t), hash32(t ^ 0x1234_5678), hash32(t.wrapping_mul(0x9e37_79b9))];
             let p = point_2d(5, &grid, seeds);
             bins[(p.x * 16.0) as usize + 16 * (p.y * 16.0) as usize] += 1.0;
             bins_1d[(point_1d(5, &grid, seeds) * 64.0) as usize] += 1.0;

@@ -9,6 +9,17 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// A 32-bit integer hash with full avalanche (Wellons' `lowbias32`): the samplers' seeds per
+/// dimension and `multijitter`'s jitter.
+#[inline(always)]
+pub(super) fn hash32(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^ (x >> 16)
+}
+
 /// O'Neill's PCG32 (XSH-RR 64/32), as `pcg32_srandom_r` / `pcg32_random_r`; the same sequence as
 /// `rand_pcg::Pcg32::new(initstate, initseq)`.
 #[derive(Clone, Debug)]

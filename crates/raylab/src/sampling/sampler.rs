@@ -25,7 +25,7 @@
 use glam::Vec2;
 
 use super::multijitter::{self, Grid};
-use super::pcg::{Pcg32, mix64, u32_to_unit};
+use super::pcg::{Pcg32, hash32, mix64, u32_to_unit};
 use super::sobol::{laine_karras_permutation, shuffled_scrambled_sobol_2d};
 use super::{pixel_hash, sample_offset};
 use crate::cpu::Isa;
@@ -503,16 +503,6 @@ impl Sampler {
             }
         }
     }
-}
-
-/// A 32-bit integer hash with full avalanche (Wellons' `lowbias32`).
-#[inline]
-fn hash32(mut x: u32) -> u32 {
-    x ^= x >> 16;
-    x = x.wrapping_mul(0x7feb_352d);
-    x ^= x >> 15;
-    x = x.wrapping_mul(0x846c_a68b);
-    x ^ (x >> 16)
 }
 
 #[cfg(test)]

@@ -555,3 +555,11 @@ fn grown(bounds: &Bounds, pad: f32) -> Bounds {
 
 /// Entries of a traversal stack: at most one per level of the tree, plus one.
 const STACK: usize = build::SAH_DEPTH as usize + 34;
+
+/// A small deterministic generator for the top level's tests: SplitMix64's step, its top 24 bits
+/// as a number in `[0, 1)`.
+#[cfg(test)]
+fn tests_uniform(state: &mut u64) -> f32 {
+    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    (crate::sampling::mix64(*state) >> 40) as f32 / (1u64 << 24) as f32
+}

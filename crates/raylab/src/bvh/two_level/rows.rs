@@ -261,20 +261,12 @@ unsafe fn enter_avx2(
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests_uniform as uniform;
     use glam::Vec3;
 
     use super::*;
     use crate::bvh::Bounds;
     use crate::ray::Ray;
-
-    /// A small deterministic generator (SplitMix64).
-    fn uniform(state: &mut u64) -> f32 {
-        *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
 
     /// The tree's leaf test of `placed` for the ray of `test` within `t_max`.
     fn tree_enters(test: &RayBoxTest, placed: &Placed, t_max: f32) -> bool {
