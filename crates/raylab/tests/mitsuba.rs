@@ -51,7 +51,8 @@ fn render_with(
     let path_settings = PathSettings { max_depth, light_sampling, ..PathSettings::default() };
     let path = PathWavefront::new(scene, &bvh, path_settings);
     let mut accumulator = Accumulator::new(64, 64).unwrap();
-    accumulator.settings = settings;
+    // A render of `spp` samples: the count `multijitter` lays out.
+    accumulator.settings = SampleSettings { count: spp, ..settings };
     for _ in 0..spp {
         accumulator.add_sample(&camera, &path);
     }
@@ -120,7 +121,7 @@ fn solid_angle_light_sampling_converges_to_the_same_image() {
 fn error_falls_as_one_over_the_square_root_of_the_samples() {
     let scene = scene();
     let reference = reference();
-    for kind in [SamplerKind::Independent, SamplerKind::Sobol] {
+    for kind in [SamplerKind::Independent, SamplerKind::Sobol, SamplerKind::MultiJitter] {
         let samples = [4u32, 16, 64, 256];
         let errors: Vec<f64> = samples
             .into_iter()
@@ -143,9 +144,10 @@ fn error_falls_as_one_over_the_square_root_of_the_samples() {
             / points.iter().map(|p| (p.0 - mean_x).powi(2)).sum::<f64>();
         eprintln!("{kind:?}: RMSE at {samples:?} spp: {errors:?}, slope {slope:.3}");
         // Every step lowers the error: independent samples at the rate of 1/√spp, scrambled
-        // Sobol' points at that rate or faster (Owen scrambling reaches spp^−¾ on smooth parts).
+        // Sobol' and multi-jittered points at that rate or faster (stratified points reach
+        // spp^−¾ on smooth parts).
         assert!(errors.windows(2).all(|pair| pair[1] < pair[0]), "{kind:?}: {errors:?}");
-        let expected = if kind == SamplerKind::Sobol { -1.0..=-0.42 } else { -0.6..=-0.42 };
+        let expected = if kind == SamplerKind::Independent { -0.6..=-0.42 } else { -1.0..=-0.42 };
         assert!(expected.contains(&slope), "{kind:?}: slope {slope}, errors {errors:?}");
     }
 }
@@ -159,29 +161,42 @@ fn sobol_samples_beat_independent_ones() {
         rmse(&render(&scene, 16, settings), &reference)
     };
     let (sobol, independent) = (error(SamplerKind::Sobol), error(SamplerKind::Independent));
-    eprintln!("16 spp: Sobol' {sobol:.5}, independent {independent:.5}");
+    let jittered = error(SamplerKind::MultiJitter);
+    eprintln!(
+        "16 spp: Sobol' {sobol:.5}, multi-jittered {jittered:.5}, independent {independent:.5}"
+    );
     assert!(sobol < 0.85 * independent, "Sobol' {sobol} vs independent {independent}");
+    assert!(jittered < 0.85 * independent, "multijitter {jittered} vs independent {independent}");
 }
 
 #[test]
 fn the_same_pixels_for_any_thread_count_and_tiling() {
     let scene = scene();
-    let films: Vec<Film> = [(1, (8, 8)), (2, (8, 8)), (2, (3, 5)), (3, (64, 1))]
-        .into_iter()
-        .map(|(threads, tile)| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let settings = SampleSettings { seed: 4, tile, ..SampleSettings::default() };
-            pool.install(|| render(&scene, 3, settings))
-        })
-        .collect();
-    for film in &films[1..] {
-        assert!(
-            film.pixels()
-                .iter()
-                .zip(films[0].pixels())
-                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits))
-        );
+    // The default sampler, and `multijitter` on a power-of-two grid (4 samples: its draws in
+    // lanes) and on another (3 samples: one by one).
+    for (sampler, spp) in
+        [(None, 3), (Some(SamplerKind::MultiJitter), 4), (Some(SamplerKind::MultiJitter), 3)]
+    {
+        let films: Vec<Film> = [(1, (8, 8)), (2, (8, 8)), (2, (3, 5)), (3, (64, 1))]
+            .into_iter()
+            .map(|(threads, tile)| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let settings =
+                    SampleSettings { seed: 4, tile, sampler, ..SampleSettings::default() };
+                pool.install(|| render(&scene, spp, settings))
+            })
+            .collect();
+        for film in &films[1..] {
+            assert!(
+                film.pixels()
+                    .iter()
+                    .zip(films[0].pixels())
+                    .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
+                "{sampler:?}"
+            );
+        }
     }
+    let films = [render(&scene, 3, SampleSettings { seed: 4, ..SampleSettings::default() })];
     // A different seed gives different pixels.
     let other = render(&scene, 3, SampleSettings { seed: 5, ..SampleSettings::default() });
     assert_ne!(other, films[0]);

@@ -8,7 +8,7 @@
 //! cell's `n × m` sub-cells, jittered inside it, where `σ` and `τ` are random permutations shared
 //! by every row (and every column): "correlated". So every cell holds one point, every one of the
 //! `N` thin columns and rows holds one point (N-rooks), and the pattern is as even as a jittered
-//! grid gets. Each pair of dimensions permutes the sample order and draws its own `σ`, `τ` and
+//! grid gets (up to rounding: a point within an ulp of its stratum's edge may land on the edge). Each pair of dimensions permutes the sample order and draws its own `σ`, `τ` and
 //! jitter from the dimension's seeds, so the pairs are independent of one another; a single
 //! dimension is `N` jittered strata in a permuted order.
 //!
@@ -20,8 +20,9 @@
 //! numbers on both sides, had 0.96× (BENCHMARKS.md).
 //!
 //! Unlike Sobol' points, the pattern depends on `N`: it needs the render's sample count up front
-//! (a progressive render with no end, `raylab view` or a time limit, falls back to `sobol`), and
-//! a render's first `k < N` samples are not stratified by themselves. It is unbiased for any `N`:
+//! (a render with no known end, `raylab view` or a time limit without `--spp`, and a render of one
+//! sample fall back to `sobol`), and a render's first `k < N` samples are not stratified by
+//! themselves. It is unbiased for any `N`:
 //! every cell is used once, and each point is uniform in its cell over the random permutations
 //! and jitter.
 //!
@@ -273,27 +274,32 @@ mod tests {
     }
 
     /// Over many seeds, a sample's point is uniform on the square: a chi-square test of the
-    /// points of sample 5 of 64 on a 16 × 16 histogram (each bin expects 125 of 32,000), and
-    /// the same for a 1D number on 64 bins. The cells alone would not show it: the test sees
-    /// every seed's single point.
+    /// points of one sample on a 16 × 16 histogram (each bin expects 125 of 32,000), and the
+    /// same for a 1D number on 64 bins, for 64 samples (one permutation round) and for 49 and 256
+    /// samples (49: the permutations walk; 256: the seeds' bits overlap in the rounds). The
+    /// cells alone would not show it: the test sees every seed's single point.
     #[test]
     fn each_sample_is_uniform_over_the_seeds() {
-        let grid = Grid::new(64);
-        let trials = 32_000u32;
-        let mut bins = vec![0f64; 256];
-        let mut bins_1d = vec![0f64; 64];
-        for t in 0..trials {
-            let seeds = [hash32(t), hash32(t ^ 0x1234_5678), hash32(t.wrapping_mul(0x9e37_79b9))];
-            let p = point_2d(5, &grid, seeds);
-            bins[(p.x * 16.0) as usize + 16 * (p.y * 16.0) as usize] += 1.0;
-            bins_1d[(point_1d(5, &grid, seeds) * 64.0) as usize] += 1.0;
-        }
-        for (bins, name) in [(&bins, "2D"), (&bins_1d, "1D")] {
-            let expected = f64::from(trials) / bins.len() as f64;
-            let chi2: f64 = bins.iter().map(|&o| (o - expected).powi(2) / expected).sum();
-            // The 99.9 % quantile of chi-square with 255 degrees of freedom is about 330; with 63, 104.
-            let limit = if bins.len() == 256 { 330.0 } else { 104.0 };
-            assert!(chi2 < limit, "{name}: chi-square {chi2:.1} over {} bins", bins.len());
+        for (count, sample) in [(64, 5), (49, 17), (256, 200)] {
+            let grid = Grid::new(count);
+            let trials = 32_000u32;
+            let mut bins = vec![0f64; 256];
+            let mut bins_1d = vec![0f64; 64];
+            for t in 0..trials {
+                let seeds =
+                    [hash32(t), hash32(t ^ 0x1234_5678), hash32(t.wrapping_mul(0x9e37_79b9))];
+                let p = point_2d(sample, &grid, seeds);
+                bins[(p.x * 16.0) as usize + 16 * (p.y * 16.0) as usize] += 1.0;
+                bins_1d[(point_1d(sample, &grid, seeds) * 64.0) as usize] += 1.0;
+            }
+            for (bins, name) in [(&bins, "2D"), (&bins_1d, "1D")] {
+                let expected = f64::from(trials) / bins.len() as f64;
+                let chi2: f64 = bins.iter().map(|&o| (o - expected).powi(2) / expected).sum();
+                // The 99.9 % quantile of chi-square with 255 degrees of freedom is about 330;
+                // with 63, 104.
+                let limit = if bins.len() == 256 { 330.0 } else { 104.0 };
+                assert!(chi2 < limit, "{count} samples, {name}: chi-square {chi2:.1}");
+            }
         }
     }
 }

@@ -554,8 +554,9 @@ mod tests {
         // Every set this CPU supports (on this machine: AVX-512, AVX2, SSE2 and scalar; SSE2
         // runs the scalar loop).
         for isa in Isa::ALL.into_iter().filter(|isa| isa.is_supported()) {
-            // `multijitter` in lanes where its grid's sides are powers of two (64, 32), one by
-            // one where they are not (49).
+            // `multijitter` in lanes where its grid's sides are powers of two (64, 32): the
+            // lanes' plumbing (seeds, dimensions, index words) against one by one; where they
+            // are not (49) the chunk goes one by one, which this checks goes on right.
             let kinds = [
                 (SamplerKind::Sobol, 64),
                 (SamplerKind::Independent, 64),

@@ -165,7 +165,7 @@ impl ResolvedSettings {
                 sampler: options.sampler.or(file.sampler),
                 filter: options.filter.or(file.filter).unwrap_or_default(),
                 // A time limit without `--spp` has no known end.
-                count: if spp == MAX_SPP { 0 } else { spp },
+                count: if options.time_limit.is_some() && options.spp.is_none() { 0 } else { spp },
                 ..SampleSettings::default()
             },
             time_limit: options.time_limit,
