@@ -34,20 +34,15 @@ use glam::Vec2;
 use super::pcg::{hash32, u32_to_unit};
 
 /// The `m × n` grid of a sample count: `m` the largest divisor of `count` not above its square
-/// root, so `m · n = count` exactly (a prime count is a `1 × count` grid: N-rooks alone), with
-/// what the draws need of it made once.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// root, so `m · n = count` exactly (a prime count is a `1 × count` grid: N-rooks alone). Every
+/// sampler carries one, so it holds the two sides alone; what the draws derive from them
+/// (inverses, masks) a loop of lanes derives once, outside the loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Grid {
     /// Columns.
     pub m: u32,
     /// Rows.
     pub n: u32,
-    /// `1/m`, `1/n` and `1/(m·n)`.
-    inverse: [f32; 3],
-    /// The permutations' masks for `m`, `n` and `m·n` (see [`permute`]).
-    masks: [u32; 3],
-    /// `log₂ m`, where `m` and `n` are powers of two.
-    shift: u32,
 }
 
 impl Grid {
@@ -58,14 +53,19 @@ impl Grid {
         while !count.is_multiple_of(m) {
             m -= 1;
         }
-        let n = count / m;
-        Grid {
-            m,
-            n,
-            inverse: [m, n, count].map(|k| 1.0 / k as f32),
-            masks: [m, n, count].map(mask_of),
-            shift: m.trailing_zeros(),
-        }
+        Grid { m, n: count / m }
+    }
+
+    /// `1/m`, `1/n` and `1/(m·n)`.
+    #[inline(always)]
+    fn inverse(self) -> [f32; 3] {
+        [self.m, self.n, self.count()].map(|k| 1.0 / k as f32)
+    }
+
+    /// The permutations' masks for `m`, `n` and `m·n` (see [`permute`]).
+    #[inline(always)]
+    fn masks(self) -> [u32; 3] {
+        [self.m, self.n, self.count()].map(mask_of)
     }
 
     /// Whether both sides are powers of two (then [`point_2d_pow2`] and [`point_1d_pow2`]
@@ -137,7 +137,7 @@ pub(super) fn point_2d(index: u32, grid: &Grid, seeds: [u32; 3]) -> Vec2 {
         return point_2d_pow2(index, grid, seeds);
     }
     let Grid { m, n, .. } = *grid;
-    let mask_count = grid.masks[2];
+    let mask_count = grid.masks()[2];
     let s = permute(index, m * n, mask_count, seeds[0]);
     place::<false>(s, s % m, s / m, grid, seeds)
 }
@@ -147,8 +147,8 @@ pub(super) fn point_2d(index: u32, grid: &Grid, seeds: [u32; 3]) -> Vec2 {
 /// sixteen lanes run it in one loop; the same numbers as the general form's arithmetic.
 #[inline(always)]
 pub(super) fn point_2d_pow2(index: u32, grid: &Grid, seeds: [u32; 3]) -> Vec2 {
-    let s = permute_round(index, grid.masks[2], seeds[0]);
-    place::<true>(s, s & grid.masks[0], s >> grid.shift, grid, seeds)
+    let s = permute_round(index, grid.masks()[2], seeds[0]);
+    place::<true>(s, s & grid.masks()[0], s >> grid.m.trailing_zeros(), grid, seeds)
 }
 
 /// The correlated multi-jittered point of sample `s` in cell `(column, row)`.
@@ -160,7 +160,8 @@ fn place<const POW2: bool>(
     grid: &Grid,
     [_, columns, rows]: [u32; 3],
 ) -> Vec2 {
-    let Grid { m, n, inverse: [inv_m, inv_n, _], masks: [mask_m, mask_n, _], .. } = *grid;
+    let Grid { m, n } = *grid;
+    let ([inv_m, inv_n, _], [mask_m, mask_n, _]) = (grid.inverse(), grid.masks());
     // The sub-column of this row's point and the sub-row of this column's point, the same
     // permutation for every row (every column).
     let (sub_column, sub_row) = if POW2 {
@@ -182,20 +183,20 @@ pub(super) fn point_1d(index: u32, grid: &Grid, seeds: [u32; 3]) -> f32 {
     if grid.is_power_of_two() {
         return point_1d_pow2(index, grid, seeds);
     }
-    let s = permute(index, grid.count(), grid.masks[2], seeds[0]);
+    let s = permute(index, grid.count(), grid.masks()[2], seeds[0]);
     stratum(s, grid, seeds[1])
 }
 
 /// [`point_1d`] on a grid whose sides are powers of two (see [`point_2d_pow2`]).
 #[inline(always)]
 pub(super) fn point_1d_pow2(index: u32, grid: &Grid, seeds: [u32; 3]) -> f32 {
-    stratum(permute_round(index, grid.masks[2], seeds[0]), grid, seeds[1])
+    stratum(permute_round(index, grid.masks()[2], seeds[0]), grid, seeds[1])
 }
 
 /// Stratum `s` of the count's, jittered.
 #[inline(always)]
 fn stratum(s: u32, grid: &Grid, jitter_seed: u32) -> f32 {
-    ((s as f32 + jitter(s, jitter_seed)) * grid.inverse[2]).min(ONE_BELOW)
+    ((s as f32 + jitter(s, jitter_seed)) * grid.inverse()[2]).min(ONE_BELOW)
 }
 
 /// The largest `f32` below 1.
@@ -209,8 +210,7 @@ mod tests {
     fn grids_factor_their_counts_exactly() {
         let cases = [(1, (1, 1)), (2, (1, 2)), (16, (4, 4)), (32, (4, 8)), (49, (7, 7))];
         for (count, (m, n)) in cases {
-            let grid = Grid::new(count);
-            assert_eq!((grid.m, grid.n), (m, n), "{count}");
+            assert_eq!(Grid::new(count), Grid { m, n }, "{count}");
         }
         let grid = |count| Grid::new(count);
         assert_eq!((grid(64).m, grid(64).n), (8, 8));
