@@ -164,10 +164,10 @@ impl Band<'_> {
                     *film = Vec2::new(x as f32, y as f32);
                 }
             }
-            // The pixel positions (and lens numbers): the Sobol' kind's in lanes, the same
-            // numbers as one by one (`pixel_2d` is its first `next_2d`).
+            // The pixel positions (and lens numbers): in lanes for the stratified kinds, the
+            // same numbers as one by one (`pixel_2d` is their first `next_2d`; the lab's is not).
             let (samplers, lanes) = (&mut samplers[..n], &all_lanes[..n]);
-            if kind == SamplerKind::Sobol {
+            if matches!(kind, SamplerKind::Sobol | SamplerKind::MultiJitter) {
                 Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
             } else {
                 for (sampler, u) in samplers.iter_mut().zip(&mut drawn) {
