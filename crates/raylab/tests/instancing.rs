@@ -608,6 +608,8 @@ fn the_top_level_as_rows_answers_as_its_tree() {
         assert!(hits > rays.len() / 4, "only {hits} of {} rays hit", rays.len());
         for isa in isas.iter().copied().chain([None]) {
             let two = TwoLevel::build(geometry, Bvh::try_new).unwrap().with_top_rows(isa);
+            // Every scene here has at most 64 instances: rows where asked for, else the tree.
+            assert_eq!(two.has_top_rows(), isa.is_some(), "{isa:?}");
             for (ray, expected) in rays.iter().zip(&expected) {
                 assert_eq!(two.closest_hit(ray), *expected, "{isa:?} {ray:?}");
                 assert_eq!(two.occluded(ray), expected.is_some(), "{isa:?} {ray:?}");

@@ -203,6 +203,13 @@ impl<A: Accelerator> TwoLevel<A> {
         self
     }
 
+    /// Whether single rays test the top level's boxes as rows (at most 64 instances) rather
+    /// than walk its tree.
+    #[doc(hidden)]
+    pub fn has_top_rows(&self) -> bool {
+        self.rows.is_some()
+    }
+
     /// The triangles the bottom levels hold: each stored mesh's once, however many instances
     /// draw it.
     pub fn bottom_triangles(&self) -> usize {

@@ -96,6 +96,13 @@ impl TopRows {
         Some(rows)
     }
 
+    /// The mask of the real rows: padding lanes never enter (their boxes are empty), but the
+    /// kernels' masks are kept to the rows there are.
+    #[inline(always)]
+    fn real(&self) -> u64 {
+        u64::MAX >> (ROWS_LIMIT - self.count.max(1))
+    }
+
     /// Tests the ray of `test` (`size` = its `|o|∞`) against every row within `t_max`: fills
     /// `entries` and returns the mask of the rows it enters.
     #[inline]
@@ -170,8 +177,7 @@ fn enter_rows(
         }
         mask |= u64::from(entered) << base;
     }
-    // Padding lanes never enter (their boxes are empty), but keep the mask to the real rows.
-    mask & (u64::MAX >> (ROWS_LIMIT - rows.count.max(1)))
+    mask & rows.real()
 }
 
 /// [`enter_rows`] in AVX-512 instructions, sixteen rows a step: the same operations in the same
@@ -240,7 +246,7 @@ unsafe fn enter_avx512(
         let entered = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(near, _mm512_add_ps(far, pad));
         mask |= u64::from(entered) << base;
     }
-    mask & (u64::MAX >> (ROWS_LIMIT - rows.count.max(1)))
+    mask & rows.real()
 }
 
 /// [`enter_rows`] compiled for AVX2.
