@@ -10,6 +10,11 @@
 //! cargo run --release --example path_rays -- scenes/cornell-mitsuba.toml 128 4  # size, passes
 //! ```
 //!
+//! `--write DIR` (after the other arguments) also writes the scene's world triangles as
+//! `DIR/scene.obj` and the rays as the ray-set protocol's files (`primary.rays` the camera's,
+//! `diffuse.rays` the bounces, `shadow.rays` the shadow rays), so that Embree traces the very
+//! same rays: `../shared/bench/embree/embree_bench DIR/scene.obj --rays DIR --out DIR/embree`.
+//!
 //! Replayed rays find the tree in the cache where the render's rays may not: the figures are
 //! the queries' own cost, a lower bound on their share of a render.
 
@@ -67,6 +72,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let file = args.next().ok_or("usage: path_rays SCENE.toml [SIZE [PASSES]]")?;
     let size: u32 = args.next().map_or(Ok(256), |s| s.parse())?;
     let passes: u32 = args.next().map_or(Ok(4), |s| s.parse())?;
+    let write = match args.next().as_deref() {
+        Some("--write") => Some(std::path::PathBuf::from(args.next().ok_or("--write DIR")?)),
+        Some(other) => return Err(format!("unknown argument {other}").into()),
+        None => None,
+    };
     let scene = Scene::open(&file, &LoadOptions::default())?.scene;
     let bvh = SceneBvh::build(&scene.geometry)?;
     let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
@@ -94,6 +104,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("bounces", recorder.bounces.into_inner()?, false),
         ("shadows", recorder.shadows.into_inner()?, true),
     ];
+    if let Some(dir) = &write {
+        std::fs::create_dir_all(dir)?;
+        let mut obj = String::new();
+        for [a, b, c] in scene.geometry.vertices() {
+            for v in [a, b, c] {
+                obj += &format!("v {:e} {:e} {:e}\n", v.x, v.y, v.z);
+            }
+        }
+        for i in 0..scene.geometry.len() {
+            obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+        }
+        std::fs::write(dir.join("scene.obj"), obj)?;
+        for ((_, batches, _), file) in kinds.iter().zip(["primary", "diffuse", "shadow"]) {
+            let rays: Vec<Ray> = batches.iter().flatten().copied().collect();
+            raylab::ray_sets::write_rays(&dir.join(format!("{file}.rays")), &rays)?;
+        }
+    }
     for (name, batches, shadow) in &kinds {
         let count: usize = batches.iter().map(Vec::len).sum();
         if count == 0 {

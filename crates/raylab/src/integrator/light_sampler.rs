@@ -43,7 +43,7 @@ pub struct LightSet {
     /// How points on triangle lights are chosen.
     triangle_sampling: TriangleSampling,
     /// The emission texture of each textured triangle light, with the texture coordinates at
-    /// its corners ([`SampledLight::Triangle::texture`] indexes it).
+    /// its corners ([`TriangleLight::texture`] indexes it).
     textures: Vec<(Texture, [Vec2; 3])>,
 }
 
@@ -77,25 +77,24 @@ const SOLID_ANGLE_SAMPLING: std::ops::Range<f32> = 3e-4..6.22;
 
 #[derive(Clone, Debug)]
 enum SampledLight {
-    Point {
-        position: Vec3,
-        intensity: Vec3,
-    },
-    /// `texture`: an index into [`LightSet::textures`], or `u32::MAX` for an even emitter;
-    /// `error`: a bound on the rounding of its points ([`Geometry::point_error_bound`]).
-    ///
-    /// [`Geometry::point_error_bound`]: crate::geometry::Geometry::point_error_bound
-    Triangle {
-        corners: [Vec3; 3],
-        normal: Vec3,
-        error: Vec3,
-        area: f32,
-        radiance: Vec3,
-        texture: u32,
-    },
-    Environment {
-        radiance: Vec3,
-    },
+    Point { position: Vec3, intensity: Vec3 },
+    Triangle(TriangleLight),
+    Environment { radiance: Vec3 },
+}
+
+/// An emitting triangle. `texture`: an index into [`LightSet::textures`], or `u32::MAX` for an
+/// even emitter; `error`: a bound on the rounding of its points
+/// ([`Geometry::point_error_bound`]).
+///
+/// [`Geometry::point_error_bound`]: crate::geometry::Geometry::point_error_bound
+#[derive(Clone, Debug)]
+pub(super) struct TriangleLight {
+    pub corners: [Vec3; 3],
+    pub normal: Vec3,
+    pub error: Vec3,
+    pub area: f32,
+    pub radiance: Vec3,
+    pub texture: u32,
 }
 
 /// A point sampled on a light, seen from a shading point.
@@ -114,28 +113,21 @@ pub struct LightSample {
     pub shadow_ray: Ray,
 }
 
-/// What [`LightSet::pick_for_lanes`] picked.
+/// What [`LightSet::pick_for_lanes`] picked (the light by reference: the lanes copy its fields
+/// straight into their rows).
 #[derive(Clone, Copy, Debug)]
-pub(super) enum LanePick {
+pub(super) enum LanePick<'a> {
     /// No light: nothing to sample.
     Nothing,
-    /// A triangle the lanes sample.
-    Triangle(LaneTriangle),
+    /// A triangle the lanes sample uniformly by area, with a constant radiance; the
+    /// probability of having picked it, and where its share of the first number starts.
+    Triangle { light: &'a TriangleLight, selection: f32, start: f32 },
+    /// The constant environment, which the lanes sample by [`square_to_uniform_sphere`]: its
+    /// radiance, the probability of having picked it, and where its share of the first number
+    /// starts.
+    Environment { radiance: Vec3, selection: f32, start: f32 },
     /// A light the lanes leave to [`LightSet::sample`].
     Other,
-}
-
-/// A triangle light sampled uniformly by area, with a constant radiance, the probability of
-/// having picked it, and where its share of the first number starts.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct LaneTriangle {
-    pub corners: [Vec3; 3],
-    pub normal: Vec3,
-    pub error: Vec3,
-    pub area: f32,
-    pub radiance: Vec3,
-    pub selection: f32,
-    pub start: f32,
 }
 
 /// The fraction of a shadow ray toward a point on a surface light that is tested: the rest
@@ -186,21 +178,21 @@ impl LightSet {
                         textures.len() as u32 - 1
                     }
                 };
-                lights.push(SampledLight::Triangle {
+                lights.push(SampledLight::Triangle(TriangleLight {
                     corners,
                     normal: scene.geometry.normal(i),
                     error: scene.geometry.point_error_bound(i),
                     area,
                     radiance: material.emission,
                     texture,
-                });
+                }));
             }
         }
         let mut powers: Vec<f32> = lights
             .iter()
             .map(|light| match light {
                 SampledLight::Point { intensity, .. } => 4.0 * PI * mean(*intensity),
-                SampledLight::Triangle { area, radiance, texture, .. } => {
+                SampledLight::Triangle(TriangleLight { area, radiance, texture, .. }) => {
                     let textured = texture_means.get(*texture as usize).copied();
                     PI * area * textured.unwrap_or_else(|| mean(*radiance))
                 }
@@ -317,7 +309,14 @@ impl LightSet {
                     shadow_ray: point.spawn_ray_to(position),
                 })
             }
-            SampledLight::Triangle { corners, normal, error, area, radiance, texture } => {
+            SampledLight::Triangle(TriangleLight {
+                corners,
+                normal,
+                error,
+                area,
+                radiance,
+                texture,
+            }) => {
                 let [v0, v1, v2] = corners;
                 let solid_angle = self.solid_angle(corners, point.p);
                 let ([b0, b1, b2], solid_angle_pdf) = match solid_angle {
@@ -369,24 +368,19 @@ impl LightSet {
     /// [`sample`](Self::sample) does (`u.x` rescaled in lanes by
     /// [`rescaled`](crate::sampling::rescaled) of the triangle's `start` and `selection`); any
     /// other light, which a lane leaves to `sample`; or nothing, without lights.
-    #[inline]
-    pub(super) fn pick_for_lanes(&self, u: Vec2) -> LanePick {
+    #[inline(always)]
+    pub(super) fn pick_for_lanes(&self, u: Vec2) -> LanePick<'_> {
         let Some(distribution) = &self.distribution else { return LanePick::Nothing };
         let (index, selection, start) = distribution.pick(u.x);
-        match self.lights[index] {
-            SampledLight::Triangle { corners, normal, error, area, radiance, texture }
+        match &self.lights[index] {
+            SampledLight::Triangle(light)
                 if self.triangle_sampling == TriangleSampling::Area
-                    && self.textures.get(texture as usize).is_none() =>
+                    && self.textures.get(light.texture as usize).is_none() =>
             {
-                LanePick::Triangle(LaneTriangle {
-                    corners,
-                    normal,
-                    error,
-                    area,
-                    radiance,
-                    selection,
-                    start,
-                })
+                LanePick::Triangle { light, selection, start }
+            }
+            SampledLight::Environment { radiance } => {
+                LanePick::Environment { radiance: *radiance, selection, start }
             }
             _ => LanePick::Other,
         }
@@ -403,8 +397,9 @@ impl LightSet {
         if light == u32::MAX {
             return (Vec3::ZERO, 0.0);
         }
-        let SampledLight::Triangle { corners, normal, area, radiance, texture, .. } =
-            self.lights[light as usize]
+        let SampledLight::Triangle(TriangleLight {
+            corners, normal, area, radiance, texture, ..
+        }) = self.lights[light as usize]
         else {
             unreachable!("triangle_light indexes triangle lights");
         };

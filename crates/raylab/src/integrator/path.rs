@@ -25,6 +25,7 @@ use super::Integrator;
 use super::light_sampler::{LightSet, TriangleSampling};
 use crate::accel::{Accelerator, Hit};
 use crate::interaction::SurfaceInteraction;
+use crate::material::lanes::{LaneBsdf, PARAMS};
 use crate::material::{Bsdf, Diffuse, Material};
 use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
@@ -185,16 +186,57 @@ impl Vertex<'_> {
     }
 }
 
-/// A diffuse vertex as the wavefront's lanes take it: its point, its shading normal (its frame is
-/// the normal's own, [`Frame::about`]), whether its material is two-sided, and its (textured)
-/// reflectance. The lanes find the frame and the direction toward the viewer themselves, by
-/// [`facing`].
+/// A vertex as the wavefront's lanes take it: its point, its shading normal, whether its
+/// material is two-sided, `dp/du` where the BSDF is anisotropic (its frame follows it, as
+/// [`shading_frame`]'s), and its BSDF, of kind `kind`, as floats ([`LaneBsdf`]). The lanes find
+/// the frame and the direction toward the viewer themselves, as [`shading_frame`] does.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct DiffuseSurface {
+pub(super) struct LaneSurface {
     pub point: SurfacePoint,
     pub normal: Vec3,
     pub two_sided: bool,
-    pub reflectance: Vec3,
+    pub tangent: Option<Vec3>,
+    pub kind: LaneKind,
+    pub params: [f32; PARAMS],
+}
+
+/// Which BSDF a [`LaneSurface`]'s floats are: one variant per [`Bsdf`] variant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum LaneKind {
+    Diffuse,
+    Conductor,
+    RoughConductor,
+    Dielectric,
+    RoughDielectric,
+    Plastic,
+    Pbr,
+}
+
+impl LaneKind {
+    /// Every kind, in the order of their indices.
+    pub(super) const ALL: [LaneKind; 7] = [
+        LaneKind::Diffuse,
+        LaneKind::Conductor,
+        LaneKind::RoughConductor,
+        LaneKind::Dielectric,
+        LaneKind::RoughDielectric,
+        LaneKind::Plastic,
+        LaneKind::Pbr,
+    ];
+
+    /// `bsdf`'s kind and floats.
+    #[inline]
+    pub(super) fn of(bsdf: &Bsdf) -> (LaneKind, [f32; PARAMS]) {
+        match bsdf {
+            Bsdf::Diffuse(b) => (LaneKind::Diffuse, b.to_params()),
+            Bsdf::Conductor(b) => (LaneKind::Conductor, b.to_params()),
+            Bsdf::RoughConductor(b) => (LaneKind::RoughConductor, b.to_params()),
+            Bsdf::Dielectric(b) => (LaneKind::Dielectric, b.to_params()),
+            Bsdf::RoughDielectric(b) => (LaneKind::RoughDielectric, b.to_params()),
+            Bsdf::Plastic(b) => (LaneKind::Plastic, b.to_params()),
+            Bsdf::Pbr(b) => (LaneKind::Pbr, b.to_params()),
+        }
+    }
 }
 
 /// A vertex's shading frame, whether its directions are mirrored into a two-sided material's
@@ -324,42 +366,35 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         Vertex { point: interaction.point, frame, flip, wi, bsdf }
     }
 
-    /// [`vertex`](Self::vertex) where the material is diffuse, as the lanes take it
-    /// ([`DiffuseSurface`]), without a copy of the BSDF; `None` for other materials.
-    #[inline]
-    pub(super) fn diffuse_vertex(
-        &self,
-        ray: &Ray,
-        interaction: &SurfaceInteraction,
-    ) -> Option<DiffuseSurface> {
+    /// [`vertex`](Self::vertex) as the lanes take it ([`LaneSurface`]): the same shading
+    /// normal, frame choice and BSDF, without making the frame.
+    #[inline(never)]
+    pub(super) fn lane_surface(&self, ray: &Ray, interaction: &SurfaceInteraction) -> LaneSurface {
         let material = self.scene.material(interaction);
-        if !matches!(material.bsdf, Bsdf::Diffuse(_)) {
-            return None;
-        }
-        // The frame `shading_frame` gives a diffuse (isotropic) BSDF: the normal's own.
-        debug_assert!(!material.bsdf.is_anisotropic());
         let normal = material.shading_normal(interaction, -ray.direction);
-        match *material.bsdf_at(&interaction.texture_query()) {
-            Bsdf::Diffuse(Diffuse { reflectance }) => Some(DiffuseSurface {
-                point: interaction.point,
-                normal,
-                two_sided: material.two_sided,
-                reflectance,
-            }),
-            _ => None,
+        // `shading_frame`'s choice of frame.
+        let tangent = material.bsdf.is_anisotropic().then_some(interaction.dp_du);
+        let (kind, params) = LaneKind::of(&material.bsdf_at(&interaction.texture_query()));
+        LaneSurface {
+            point: interaction.point,
+            normal,
+            two_sided: material.two_sided,
+            tangent,
+            kind,
+            params,
         }
     }
 
     /// The wavefront's shortcut for the commonest hit: a plain triangle
     /// ([`Geometry::plain_surface_point`](crate::geometry::Geometry::plain_surface_point)) that
     /// is no light's, of an untextured diffuse material. It gives exactly what
-    /// [`arrive`](Self::arrive) and [`diffuse_vertex`](Self::diffuse_vertex) give there: no
+    /// [`arrive`](Self::arrive) and [`lane_surface`](Self::lane_surface) give there: no
     /// light found (only lights' triangles emit), and the same point, shading normal (the
     /// geometric one), sidedness and reflectance. Without building the interaction: no texture
     /// coordinates, tangents or second lookups. `None` for any other hit, which takes the
     /// general steps.
     #[inline]
-    pub(super) fn plain_diffuse(&self, hit: &Hit) -> Option<DiffuseSurface> {
+    pub(super) fn plain_diffuse(&self, hit: &Hit) -> Option<LaneSurface> {
         let (point, material) = self.scene.geometry.plain_surface_point(hit)?;
         if self.lights.is_light_triangle(hit.triangle) {
             return None;
@@ -369,8 +404,14 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         if !material.textures.is_empty() {
             return None;
         }
-        let two_sided = material.two_sided;
-        Some(DiffuseSurface { point, normal: point.normal, two_sided, reflectance })
+        Some(LaneSurface {
+            point,
+            normal: point.normal,
+            two_sided: material.two_sided,
+            tangent: None,
+            kind: LaneKind::Diffuse,
+            params: Diffuse { reflectance }.to_params(),
+        })
     }
 
     /// Next-event estimation at `vertex`: draws a light sample, and returns the shadow ray and

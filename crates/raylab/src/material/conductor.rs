@@ -19,13 +19,13 @@ pub struct Conductor {
 
 impl Conductor {
     /// The reflectance for the incident cosine.
-    #[inline]
+    #[inline(always)]
     pub fn reflectance(&self, cos_theta_i: f32) -> Vec3 {
         self.specular_reflectance * fresnel_conductor(cos_theta_i, self.eta, self.k)
     }
 
     /// The mirror direction, weighted by the Fresnel reflectance.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, _u1: f32, _u2: Vec2) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;

@@ -19,7 +19,7 @@ pub struct Dielectric {
 
 impl Dielectric {
     /// Reflection with the probability `F`, refraction otherwise.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, u1: f32, _u2: Vec2) -> Option<BsdfSample> {
         let reflectance = fresnel_dielectric(wi.z, self.eta);
         if u1 < reflectance {

@@ -16,7 +16,7 @@ pub struct Diffuse {
 
 impl Diffuse {
     /// `ρ/π · cos θo` on the front side, zero elsewhere.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         if cos_theta(wi) <= 0.0 || cos_theta(wo) <= 0.0 {
             return Vec3::ZERO;
@@ -25,13 +25,13 @@ impl Diffuse {
     }
 
     /// The cosine-weighted hemisphere's density.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         if cos_theta(wi) <= 0.0 { 0.0 } else { cosine_hemisphere_pdf(wo) }
     }
 
     /// A cosine-weighted direction: the weight is ρ exactly.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, _u1: f32, u2: Vec2) -> Option<BsdfSample> {
         if cos_theta(wi) <= 0.0 {
             return None;

@@ -7,7 +7,7 @@ use glam::Vec3;
 /// the incident direction with the normal and the relative index of refraction `eta` (inside
 /// over outside). A negative cosine means the light arrives from inside; beyond the critical
 /// angle the reflection is total (1).
-#[inline]
+#[inline(always)]
 pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> f32 {
     let mut cos_i = cos_theta_i.clamp(-1.0, 1.0);
     let mut eta = eta;
@@ -34,28 +34,36 @@ struct Complex {
 }
 
 impl Complex {
+    #[inline(always)]
     fn new(re: f32, im: f32) -> Complex {
         Complex { re, im }
     }
+    #[inline(always)]
     fn add(self, o: Complex) -> Complex {
         Complex::new(self.re + o.re, self.im + o.im)
     }
+    #[inline(always)]
     fn sub(self, o: Complex) -> Complex {
         Complex::new(self.re - o.re, self.im - o.im)
     }
+    #[inline(always)]
     fn mul(self, o: Complex) -> Complex {
         Complex::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
     }
+    #[inline(always)]
     fn scale(self, s: f32) -> Complex {
         Complex::new(self.re * s, self.im * s)
     }
+    #[inline(always)]
     fn norm(self) -> f32 {
         self.re * self.re + self.im * self.im
     }
+    #[inline(always)]
     fn div(self, o: Complex) -> Complex {
         let d = o.norm();
         Complex::new((self.re * o.re + self.im * o.im) / d, (self.im * o.re - self.re * o.im) / d)
     }
+    #[inline(always)]
     fn sqrt(self) -> Complex {
         let n = self.norm().sqrt();
         if n == 0.0 {
@@ -73,10 +81,13 @@ impl Complex {
 
 /// The reflectance of a conductor with complex index of refraction `eta + i·k` per channel
 /// (relative to the outside medium), for an incident cosine in `[0, 1]`.
-#[inline]
+#[inline(always)]
 pub fn fresnel_conductor(cos_theta_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
     let cos_i = cos_theta_i.clamp(0.0, 1.0);
-    let channel = |eta: f32, k: f32| {
+    // A function, not a closure, so that it can be inlined by force (the path tracer's lanes
+    // need the whole BSDF inlined to become vector code).
+    #[inline(always)]
+    fn channel(cos_i: f32, eta: f32, k: f32) -> f32 {
         let eta = Complex::new(eta, k);
         let sin2_i = 1.0 - cos_i * cos_i;
         let sin2_t = Complex::new(sin2_i, 0.0).div(eta.mul(eta));
@@ -85,12 +96,12 @@ pub fn fresnel_conductor(cos_theta_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
         let parallel = eta.scale(cos_i).sub(cos_t).div(eta.scale(cos_i).add(cos_t));
         let perpendicular = ci.sub(eta.mul(cos_t)).div(ci.add(eta.mul(cos_t)));
         ((parallel.norm() + perpendicular.norm()) / 2.0).clamp(0.0, 1.0)
-    };
-    Vec3::new(channel(eta.x, k.x), channel(eta.y, k.y), channel(eta.z, k.z))
+    }
+    Vec3::new(channel(cos_i, eta.x, k.x), channel(cos_i, eta.y, k.y), channel(cos_i, eta.z, k.z))
 }
 
 /// `wi` mirrored about the unit normal `n`: `2(wi·n)n − wi`.
-#[inline]
+#[inline(always)]
 pub fn reflect(wi: Vec3, n: Vec3) -> Vec3 {
     2.0 * wi.dot(n) * n - wi
 }
@@ -99,7 +110,7 @@ pub fn reflect(wi: Vec3, n: Vec3) -> Vec3 {
 /// `eta` (the side `n` points away from, over the side it points to), with the relative index
 /// `etap` the ray then sees (transmitted side over incident side); `None` for total internal
 /// reflection.
-#[inline]
+#[inline(always)]
 pub fn refract(wi: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
     let mut cos_i = n.dot(wi);
     let (mut eta, mut n) = (eta, n);

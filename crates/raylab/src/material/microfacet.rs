@@ -7,6 +7,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
+use crate::sampling::sin_cos_turns;
+
 /// A GGX distribution of microfacet normals.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ggx {
@@ -28,7 +30,7 @@ impl Ggx {
 
     /// The density of microfacet normals `m` (upper hemisphere), per unit projected area:
     /// `D(m) = 1 / (π αu αv (mx²/αu² + my²/αv² + mz²)²)`.
-    #[inline]
+    #[inline(always)]
     pub fn d(&self, m: Vec3) -> f32 {
         if m.z <= 0.0 {
             return 0.0;
@@ -39,7 +41,7 @@ impl Ggx {
     }
 
     /// Smith's Λ for direction `w`.
-    #[inline]
+    #[inline(always)]
     fn lambda(&self, w: Vec3) -> f32 {
         let a2_tan2 = ((self.alpha_u * w.x).powi(2) + (self.alpha_v * w.y).powi(2)) / (w.z * w.z);
         if !a2_tan2.is_finite() {
@@ -50,7 +52,7 @@ impl Ggx {
 
     /// Smith's masking of direction `w` by microfacets of normal `m`: zero when `w` sees the
     /// back of `m`.
-    #[inline]
+    #[inline(always)]
     pub fn g1(&self, w: Vec3, m: Vec3) -> f32 {
         if w.dot(m) * w.z <= 0.0 {
             return 0.0;
@@ -59,14 +61,14 @@ impl Ggx {
     }
 
     /// Separable masking-shadowing `G1(wi)·G1(wo)` (Mitsuba's choice).
-    #[inline]
+    #[inline(always)]
     pub fn g(&self, wi: Vec3, wo: Vec3, m: Vec3) -> f32 {
         self.g1(wi, m) * self.g1(wo, m)
     }
 
     /// The density of visible normals seen from `wi` (upper hemisphere):
     /// `G1(wi) max(wi·m, 0) D(m) / cos θi`.
-    #[inline]
+    #[inline(always)]
     pub fn visible_pdf(&self, wi: Vec3, m: Vec3) -> f32 {
         if wi.z <= 0.0 {
             return 0.0;
@@ -76,7 +78,7 @@ impl Ggx {
 
     /// A microfacet normal visible from `wi` (upper hemisphere), distributed as
     /// [`visible_pdf`](Self::visible_pdf) (Heitz 2018's listing).
-    #[inline]
+    #[inline(always)]
     pub fn sample_visible(&self, wi: Vec3, u: Vec2) -> Vec3 {
         // The view direction in the hemisphere configuration of unit roughness.
         let vh = Vec3::new(self.alpha_u * wi.x, self.alpha_v * wi.y, wi.z).normalize();
@@ -90,8 +92,8 @@ impl Ggx {
         let t2 = vh.cross(t1);
         // A point on the projected disk, squeezed on the side the view hides.
         let r = u.x.sqrt();
-        let phi = 2.0 * PI * u.y;
-        let (sin, cos) = phi.sin_cos();
+        // The polynomial sine and cosine of 2π·u.y (the lanes' and the scalar code's bits).
+        let (sin, cos) = sin_cos_turns(u.y);
         let p1 = r * cos;
         let s = 0.5 * (1.0 + vh.z);
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * sin;

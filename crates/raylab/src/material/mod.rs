@@ -16,6 +16,7 @@ mod conductor;
 mod dielectric;
 mod diffuse;
 pub mod fresnel;
+pub(crate) mod lanes;
 pub mod microfacet;
 mod pbr;
 mod plastic;
@@ -450,7 +451,7 @@ pub enum MaterialError {
 }
 
 /// `cos θ` of a local direction.
-#[inline]
+#[inline(always)]
 pub(crate) fn cos_theta(w: Vec3) -> f32 {
     w.z
 }

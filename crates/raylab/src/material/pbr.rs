@@ -50,14 +50,14 @@ pub struct Pbr {
 
 impl Pbr {
     /// The GGX distribution of its roughness.
-    #[inline]
+    #[inline(always)]
     fn distribution(&self) -> Ggx {
         let alpha = (self.roughness * self.roughness).max(MIN_ALPHA);
         Ggx::new(alpha, alpha)
     }
 
     /// Schlick's Fresnel reflectance at `cos` between the direction and the microfacet normal.
-    #[inline]
+    #[inline(always)]
     fn fresnel(&self, cos: f32) -> Vec3 {
         let f0 = Vec3::splat(0.04).lerp(self.base_color, self.metallic);
         let x = (1.0 - cos).clamp(0.0, 1.0);
@@ -66,13 +66,13 @@ impl Pbr {
     }
 
     /// The diffuse base's colour, before the Fresnel term.
-    #[inline]
+    #[inline(always)]
     fn diffuse(&self) -> Vec3 {
         self.base_color * (1.0 - self.metallic)
     }
 
     /// The probability of sampling the specular lobe, seen from `wi`.
-    #[inline]
+    #[inline(always)]
     fn specular_probability(&self, wi: Vec3) -> f32 {
         let f = self.fresnel(wi.z);
         let specular = f.element_sum();
@@ -81,7 +81,7 @@ impl Pbr {
     }
 
     /// Both lobes, times `cos θo`, on the front side.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
@@ -97,7 +97,7 @@ impl Pbr {
 
     /// The mixture of the visible-normal density (times the reflection's Jacobian) and the
     /// cosine-weighted density.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
@@ -111,7 +111,7 @@ impl Pbr {
     }
 
     /// `u1` picks the lobe, `u2` its direction.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;

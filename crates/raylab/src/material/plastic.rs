@@ -23,9 +23,9 @@ pub struct Plastic {
     /// Mitsuba's `nonlinear`: internal scattering that saturates colours.
     pub nonlinear: bool,
     /// The diffuse Fresnel reflectance of the coating seen from inside.
-    internal_reflectance: f32,
+    pub(super) internal_reflectance: f32,
     /// The probability of sampling the specular lobe, before the Fresnel factor.
-    specular_weight: f32,
+    pub(super) specular_weight: f32,
 }
 
 impl Plastic {
@@ -43,7 +43,7 @@ impl Plastic {
     }
 
     /// The probability of sampling the specular lobe for `cos θi`.
-    #[inline]
+    #[inline(always)]
     fn specular_probability(&self, cos_theta_i: f32) -> f32 {
         let f = fresnel_dielectric(cos_theta_i, self.eta);
         let specular = f * self.specular_weight;
@@ -52,7 +52,7 @@ impl Plastic {
     }
 
     /// The diffuse lobe times `cos θo` (the specular lobe is a delta).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
@@ -68,7 +68,7 @@ impl Plastic {
     }
 
     /// The diffuse lobe's share of the cosine density.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
@@ -77,7 +77,7 @@ impl Plastic {
     }
 
     /// The coating's mirror reflection or the base's cosine-weighted scattering.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;

@@ -19,7 +19,7 @@ pub struct RoughConductor {
 
 impl RoughConductor {
     /// `F(wi·m) D(m) G(wi, wo) / (4 cos θi)` with `m` the half vector: the BSDF times `cos θo`.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
@@ -32,7 +32,7 @@ impl RoughConductor {
 
     /// The visible-normal density of the half vector, times the reflection's Jacobian
     /// `1/(4 wi·m)`.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
@@ -46,7 +46,7 @@ impl RoughConductor {
     }
 
     /// A visible normal, and the mirror direction about it.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, _u1: f32, u2: Vec2) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;

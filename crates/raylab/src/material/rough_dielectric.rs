@@ -19,7 +19,7 @@ pub struct RoughDielectric {
 
 /// The generalized half vector of `wi` and `wo`, in the upper hemisphere, and the relative
 /// index `η'` (transmitted over incident side; 1 for a reflection).
-#[inline]
+#[inline(always)]
 fn half_vector(wi: Vec3, wo: Vec3, eta: f32) -> Option<(Vec3, f32, bool)> {
     let reflection = wi.z * wo.z > 0.0;
     let etap = if reflection {
@@ -44,7 +44,7 @@ fn half_vector(wi: Vec3, wo: Vec3, eta: f32) -> Option<(Vec3, f32, bool)> {
 
 impl RoughDielectric {
     /// The BSDF times `|cos θo|`.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         let Some((m, etap, reflection)) = half_vector(wi, wo, self.eta) else {
             return Vec3::ZERO;
@@ -64,7 +64,7 @@ impl RoughDielectric {
     }
 
     /// The density of [`sample`](Self::sample).
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         let Some((m, etap, reflection)) = half_vector(wi, wo, self.eta) else {
             return 0.0;
@@ -82,7 +82,7 @@ impl RoughDielectric {
     }
 
     /// A visible normal, then reflection with probability `F(wi·m)` or refraction.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
         if wi.z == 0.0 {
             return None;

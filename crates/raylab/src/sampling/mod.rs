@@ -18,7 +18,7 @@ mod sobol;
 #[cfg(test)]
 pub(crate) mod chi2;
 
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
 use glam::{DVec3, Vec2, Vec3};
 
@@ -103,6 +103,23 @@ pub fn sin_cos_within_quarter_pi(a: f32) -> (f32, f32) {
     (sin, cos)
 }
 
+/// `(sin 2πt, cos 2πt)` for a number of turns `t`: the nearest quarter turn `q` is split off
+/// exactly (`4t − q` is exact), the polynomials of [`sin_cos_within_quarter_pi`] take the rest
+/// (within ±π/4), and the quarter turns swap and negate the pair. Within 3·10⁻⁷ of double
+/// precision over `[0, 1]` (`tests.rs`); straight-line arithmetic, so the lanes of the path
+/// tracer run it sixteen at a time with the scalar code's bits (where `f32::sin_cos`, a call
+/// into the C library, would keep a loop scalar).
+#[inline(always)]
+pub fn sin_cos_turns(t: f32) -> (f32, f32) {
+    let quarters = 4.0 * t;
+    let q = (quarters + 0.5).floor();
+    let (sin, cos) = sin_cos_within_quarter_pi((quarters - q) * FRAC_PI_2);
+    // A NaN or huge `t` gives a NaN or meaningless pair, as `sin_cos` would give a NaN.
+    let quadrant = q as i32;
+    let (sin, cos) = if quadrant & 1 != 0 { (cos, -sin) } else { (sin, cos) };
+    if quadrant & 2 != 0 { (-sin, -cos) } else { (sin, cos) }
+}
+
 /// Density of [`square_to_uniform_disk_concentric`] per unit area: `1/π` inside the disk.
 #[inline]
 pub fn uniform_disk_pdf(p: Vec2) -> f32 {
@@ -144,7 +161,8 @@ pub fn uniform_hemisphere_pdf(w: Vec3) -> f32 {
 pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
     let z = 1.0 - 2.0 * u.x;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    // The polynomial sine and cosine (the path tracer's lanes sample the environment too).
+    let (sin, cos) = sin_cos_turns(u.y);
     Vec3::new(r * cos, r * sin, z)
 }
 

@@ -1,5 +1,5 @@
 //! `path` as a wavefront: the paths of a tile advanced together, stage by stage, with their rays
-//! traced as batches and their diffuse vertices shaded sixteen lanes per instruction.
+//! traced as batches and their vertices shaded sixteen lanes per instruction, grouped by BSDF.
 //!
 //! The estimator, the random numbers and the arithmetic are those of [`Path`]: every sample is
 //! the scalar path's to the bit (`tests/wavefront.rs` compares whole renders of every scene).
@@ -11,34 +11,37 @@
 //!    ([`Accelerator::closest_hits_incoherent`]: in lanes against a small scene's flat list,
 //!    one by one through a tree);
 //! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
-//!    `max_depth` end; each vertex's material and shading frame. A diffuse vertex goes straight
-//!    into a lane (its point, shading normal and reflectance; no copy of its BSDF; the lanes
-//!    make its frame), any other becomes the scalar path's vertex. The commonest hit, a plain
-//!    triangle of an untextured diffuse material that is no light's ([`Path::plain_diffuse`]),
-//!    goes without building its interaction;
-//! 3. **draws**: every vertex's numbers (the light's choice and point, the BSDF's lobe and
-//!    direction, the roulette's), a chunk of lanes or the scalar steps' vertices in one pass
-//!    over their samplers ([`Sampler::next_vertex_each`], sixteen lanes per loop);
-//! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes
-//!    (`diffuse/`: sixteen to a chunk in structure-of-arrays form) get their lights and
-//!    numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per AVX-512
-//!    instruction; the other materials, lights other than area-sampled triangles, and the
-//!    rare lane whose offset point overflows run the scalar path's steps
+//!    `max_depth` end; each vertex's material, shading normal and BSDF. The vertex goes
+//!    straight into a lane of its BSDF's kind (its point, shading normal, tangent and the
+//!    BSDF's parameters: [`Path::lane_surface`]; the lanes make its frame). The commonest hit,
+//!    a plain triangle of an untextured diffuse material that is no light's
+//!    ([`Path::plain_diffuse`]), goes without building its interaction;
+//! 3. **draws**: a chunk's numbers (the light's choice and point, the BSDF's lobe and
+//!    direction, the roulette's) in one pass over their samplers
+//!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
+//! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes (`lanes/`:
+//!    sixteen to a chunk in structure-of-arrays form, one BSDF kind to a chunk) get their
+//!    lights and numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per
+//!    AVX-512 instruction; lights other than area-sampled triangles and the constant
+//!    environment, and the rare lane whose offset point overflows, run the scalar path's steps
 //!    ([`Path::sample_light_with`], `bounce`, `survives_roulette`) one by one;
 //! 5. **occlusion** of the shadow rays as one batch ([`Accelerator::occluded_incoherent`]: in
 //!    lanes against a small scene's flat list, one by one through a tree), and the light they
 //!    bring.
 //!
-//! Stages 2 to 4 run a chunk at a time: as soon as sixteen diffuse vertices are gathered, their
-//! numbers are drawn and they are shaded, while their rows are still in the first-level cache
-//! (a chunk and its results take 4.3 KiB, a 256-path wavefront's 69 KiB, more than the 32 KiB of
-//! this machine's first-level cache). Each path draws from its own
+//! Stages 2 to 4 run a chunk at a time: as soon as sixteen vertices of a kind are gathered,
+//! their numbers are drawn and they are shaded, while their rows are still in the first-level
+//! cache (a chunk and its results take about 5.5 KiB, a 256-path wavefront's some 88 KiB, more
+//! than the 32 KiB of this machine's first-level cache). Each path draws from its own
 //! sampler, so the order in which paths draw changes no number. Measured on Mitsuba's box
 //! (512², 16 spp, 1 thread, CPU time, min of 7, the same pixels; `/usr/bin/time -f %U raylab
 //! render scenes/cornell-mitsuba.toml --spp 16 --threads 1 -o r.pfm`): 2.12 → 2.07 s.
 //!
-//! Grouping by material is what keeps the lanes full: a chunk holds only diffuse vertices,
-//! whichever paths they belong to.
+//! Grouping by BSDF kind is what keeps the lanes full and each BSDF's code on whole vectors: a
+//! chunk holds one kind's vertices, whichever paths they belong to. Every kind shades in lanes
+//! (issue 27's seventh step: until then only diffuse vertices did, and the rest ran the scalar
+//! steps): measured on the materials scene (256², 16 spp, 1 thread, CPU time, median of 5),
+//! 0.42 → 0.36 s.
 //!
 //! Packets pay only where rays are coherent. Measured (`cargo bench -p raylab --bench path`, one
 //! thread, 128×96): packets for every bounce made `showcase.toml` 16 times slower (216 ms a
@@ -50,20 +53,24 @@
 //! Scenes with cut-out (alpha-masked) materials trace each ray through its holes one at a time,
 //! as the scalar path does.
 
-mod diffuse;
+mod lanes;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use diffuse::{DiffuseLanes, LaneDraws, LaneVertex};
+use lanes::{LaneDraws, LaneVertex, Lanes};
 
 use super::Integrator;
 use super::light_sampler::LanePick;
-use super::path::{Path, PathSettings, PathState, Vertex};
+use super::path::{LaneKind, Path, PathSettings, PathState, Vertex};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
+use crate::material::lanes::LaneBsdf;
+use crate::material::{
+    Conductor, Dielectric, Diffuse, Pbr, Plastic, RoughConductor, RoughDielectric,
+};
 use crate::ray::Ray;
 use crate::sampling::{Sampler, VertexNumbers};
 use crate::scene::Scene;
@@ -163,16 +170,12 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut alive: Vec<usize> = (0..rays.len()).collect();
         let mut batch: Vec<Ray> = Vec::with_capacity(rays.len());
         let mut hits: Vec<Option<Hit>> = Vec::with_capacity(rays.len());
-        // The vertices the scalar steps shade, with their paths.
-        let mut vertices: Vec<(usize, Vertex)> = Vec::with_capacity(rays.len());
         let mut shadows = ShadowRays::with_capacity(rays.len());
-        // The vertices' paths, and the numbers drawn for them a batch at a time.
-        let mut lanes: Vec<usize> = Vec::with_capacity(rays.len());
         let mut numbers = Numbers::with_capacity(rays.len());
-        // The diffuse vertices in lanes, and their paths. Made per tile: one reused from tile
-        // to tile (thread-local) was measured slower (BENCHMARKS.md).
-        let mut diffuse = DiffuseLanes::with_capacity(diffuse::LANES);
-        let mut diffuse_paths: Vec<usize> = Vec::with_capacity(diffuse::LANES);
+        // The vertices in lanes, a set for each BSDF kind, and their paths. Made per tile: one
+        // reused from tile to tile (thread-local) was measured slower (BENCHMARKS.md).
+        let mut sets: [(Lanes, Vec<usize>); LaneKind::ALL.len()] =
+            std::array::from_fn(|_| (Lanes::default(), Vec::new()));
         // The paths that go on after this bounce.
         let mut bounced: Vec<usize> = Vec::with_capacity(rays.len());
         let mut first = true;
@@ -197,14 +200,11 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             lap.end(|t| &t.closest_hits);
 
             // 2–4. Light found; paths that leave the scene or reach the depth limit end.
-            // Diffuse vertices go straight into lanes and are shaded sixteen at a time as
-            // soon as a chunk is full, while its rows are in the first-level cache; the
-            // others become the scalar steps' vertices, shaded after.
-            vertices.clear();
+            // Vertices go straight into the lanes of their BSDF's kind and are shaded sixteen
+            // at a time as soon as a chunk is full, while its rows are in the first-level
+            // cache; the last chunks of each kind after.
             shadows.clear();
             bounced.clear();
-            diffuse.clear();
-            diffuse_paths.clear();
             let mut chunk = Chunk {
                 states: &mut states,
                 samplers,
@@ -228,52 +228,37 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                         if last {
                             continue;
                         }
-                        match path.diffuse_vertex(&state.ray, &interaction) {
-                            Some(surface) => surface,
-                            None => {
-                                vertices.push((i, path.vertex(&state.ray, &interaction)));
-                                continue;
-                            }
-                        }
+                        path.lane_surface(&state.ray, &interaction)
                     }
                 };
-                diffuse.push(&LaneVertex {
-                    surface,
-                    arrival: state.ray.direction,
-                    throughput: state.throughput,
-                    eta: state.eta,
-                    roulette: state.depth + 1 >= rr_depth,
-                });
-                diffuse_paths.push(i);
-                if diffuse.len() == diffuse::LANES {
+                let kind = surface.kind;
+                let (set, paths) = &mut sets[kind as usize];
+                set.push(
+                    &surface,
+                    &LaneVertex {
+                        arrival: state.ray.direction,
+                        throughput: state.throughput,
+                        eta: state.eta,
+                        roulette: state.depth + 1 >= rr_depth,
+                    },
+                );
+                paths.push(i);
+                if set.len() == lanes::LANES {
                     chunk.lap.end(|t| &t.surfaces);
-                    self.shade_lanes(&mut chunk, &mut diffuse, &diffuse_paths);
-                    diffuse.clear();
-                    diffuse_paths.clear();
+                    self.shade_kind(kind, &mut chunk, set, paths);
+                    set.clear();
+                    paths.clear();
                 }
             }
             chunk.lap.end(|t| &t.surfaces);
-            if diffuse.len() > 0 {
-                self.shade_lanes(&mut chunk, &mut diffuse, &diffuse_paths);
-            }
-            // The scalar steps' vertices, one by one, with their numbers drawn a batch at a
-            // time.
-            lanes.clear();
-            lanes.extend(vertices.iter().map(|(i, _)| *i));
-            chunk.numbers.draw(chunk.samplers, &lanes);
-            chunk.lap.end(|t| &t.draws);
-            for (v, (i, vertex)) in vertices.iter().enumerate() {
-                let state = &mut chunk.states[*i];
-                chunk.shadows.add(*i, chunk.numbers.sample_light(path, state, vertex, v));
-                if chunk.numbers.bounce(path, state, vertex, v) {
-                    chunk.bounced.push(*i);
+            for (kind, (set, paths)) in LaneKind::ALL.into_iter().zip(&mut sets) {
+                if set.len() > 0 {
+                    self.shade_kind(kind, &mut chunk, set, paths);
+                    set.clear();
+                    paths.clear();
                 }
             }
             std::mem::swap(&mut alive, &mut bounced);
-            if let Some(times) = &self.times {
-                times.vertices.fetch_add(vertices.len() as u64, Ordering::Relaxed);
-            }
-            lap.end(|t| &t.shading);
 
             // 5. Occlusion of the shadow rays, and the light they bring.
             shadows.trace(scene, accel);
@@ -305,9 +290,24 @@ struct Chunk<'s, 'c> {
 }
 
 impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
-    /// Draws the numbers of `diffuse`'s lanes (the vertices of `paths`), shades them, and
-    /// takes their results: shadow rays, and the next rays of the paths that go on.
-    fn shade_lanes(&self, chunk: &mut Chunk, diffuse: &mut DiffuseLanes, paths: &[usize]) {
+    /// [`shade_lanes`](Self::shade_lanes) with the code of `kind`'s BSDF.
+    #[inline(never)]
+    fn shade_kind(&self, kind: LaneKind, chunk: &mut Chunk, lanes: &mut Lanes, paths: &[usize]) {
+        match kind {
+            LaneKind::Diffuse => self.shade_lanes::<Diffuse>(chunk, lanes, paths),
+            LaneKind::Conductor => self.shade_lanes::<Conductor>(chunk, lanes, paths),
+            LaneKind::RoughConductor => self.shade_lanes::<RoughConductor>(chunk, lanes, paths),
+            LaneKind::Dielectric => self.shade_lanes::<Dielectric>(chunk, lanes, paths),
+            LaneKind::RoughDielectric => self.shade_lanes::<RoughDielectric>(chunk, lanes, paths),
+            LaneKind::Plastic => self.shade_lanes::<Plastic>(chunk, lanes, paths),
+            LaneKind::Pbr => self.shade_lanes::<Pbr>(chunk, lanes, paths),
+        }
+    }
+
+    /// Draws the numbers of `lanes` (the vertices of `paths`, whose BSDFs are `B`s), shades
+    /// them, and takes their results: shadow rays, and the next rays of the paths that go on.
+    #[inline(never)]
+    fn shade_lanes<B: LaneBsdf>(&self, chunk: &mut Chunk, lanes: &mut Lanes, paths: &[usize]) {
         let path = &self.path;
         chunk.numbers.draw(chunk.samplers, paths);
         chunk.lap.end(|t| &t.draws);
@@ -315,28 +315,29 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
             let drawn = chunk.numbers.drawn[lane];
             let light = path.lights().pick_for_lanes(drawn.point);
             if let LanePick::Other = light {
-                let vertex = diffuse.vertex(lane);
+                let vertex = lanes.vertex::<B>(lane);
                 chunk
                     .shadows
                     .add(i, chunk.numbers.sample_light(path, &chunk.states[i], &vertex, lane));
             }
-            diffuse.set_draws(
+            lanes.set_draws(
                 lane,
                 &LaneDraws {
                     light,
                     u_point: drawn.point,
+                    u_lobe: drawn.lobe,
                     u_direction: drawn.direction,
                     u_roulette: drawn.roulette,
                 },
             );
         }
-        diffuse.shade(self.isa);
+        lanes.shade::<B>(self.isa);
         for (lane, &i) in paths.iter().enumerate() {
             let state = &mut chunk.states[i];
-            let result = diffuse.result(lane);
+            let result = lanes.result(lane);
             if !result.exact {
                 // An offset point was not finite: the scalar steps decide the lane.
-                let vertex = diffuse.vertex(lane);
+                let vertex = lanes.vertex::<B>(lane);
                 if result.light_in_lanes {
                     chunk.shadows.add(i, chunk.numbers.sample_light(path, state, &vertex, lane));
                 }
@@ -346,12 +347,13 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
                 continue;
             }
             chunk.shadows.add(i, result.shadow);
-            if let Some((ray, throughput, pdf)) = result.next {
-                state.ray = ray;
-                state.throughput = throughput;
-                state.previous_pdf = pdf;
-                state.previous_delta = false;
-                state.previous_point = diffuse.point(lane);
+            if let Some(next) = result.next {
+                state.ray = next.ray;
+                state.throughput = next.throughput;
+                state.eta = next.eta;
+                state.previous_pdf = next.pdf;
+                state.previous_delta = next.delta;
+                state.previous_point = lanes.point(lane);
                 state.depth += 1;
                 chunk.bounced.push(i);
             }
