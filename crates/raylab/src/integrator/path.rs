@@ -26,7 +26,7 @@ use super::light_sampler::{LightSet, TriangleSampling};
 use crate::accel::{Accelerator, Hit};
 use crate::interaction::SurfaceInteraction;
 use crate::material::lanes::{LaneBsdf, PARAMS};
-use crate::material::{Bsdf, Diffuse, Material};
+use crate::material::{Bsdf, Material};
 use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
 use crate::scene::Scene;
@@ -188,19 +188,19 @@ impl Vertex<'_> {
 
 /// A vertex as the wavefront's lanes take it: its point, its shading normal, whether its
 /// material is two-sided, `dp/du` where the BSDF is anisotropic (its frame follows it, as
-/// [`shading_frame`]'s), and its BSDF, of kind `kind`, as floats ([`LaneBsdf`]). The lanes find
-/// the frame and the direction toward the viewer themselves, as [`shading_frame`] does.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct LaneSurface {
+/// [`shading_frame`]'s), and its BSDF (borrowed from the material where no texture changes
+/// it). The lanes find the frame and the direction toward the viewer themselves, as
+/// [`shading_frame`] does, and keep the BSDF as floats ([`LaneBsdf`]).
+#[derive(Clone, Debug)]
+pub(super) struct LaneSurface<'s> {
     pub point: SurfacePoint,
     pub normal: Vec3,
     pub two_sided: bool,
     pub tangent: Option<Vec3>,
-    pub kind: LaneKind,
-    pub params: [f32; PARAMS],
+    pub bsdf: Cow<'s, Bsdf>,
 }
 
-/// Which BSDF a [`LaneSurface`]'s floats are: one variant per [`Bsdf`] variant.
+/// Which kind of BSDF a lane holds: one variant per [`Bsdf`] variant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum LaneKind {
     Diffuse,
@@ -225,7 +225,7 @@ impl LaneKind {
     ];
 
     /// `bsdf`'s kind and floats.
-    #[inline]
+    #[inline(always)]
     pub(super) fn of(bsdf: &Bsdf) -> (LaneKind, [f32; PARAMS]) {
         match bsdf {
             Bsdf::Diffuse(b) => (LaneKind::Diffuse, b.to_params()),
@@ -235,6 +235,20 @@ impl LaneKind {
             Bsdf::RoughDielectric(b) => (LaneKind::RoughDielectric, b.to_params()),
             Bsdf::Plastic(b) => (LaneKind::Plastic, b.to_params()),
             Bsdf::Pbr(b) => (LaneKind::Pbr, b.to_params()),
+        }
+    }
+
+    /// `bsdf`'s kind.
+    #[inline(always)]
+    pub(super) fn kind(bsdf: &Bsdf) -> LaneKind {
+        match bsdf {
+            Bsdf::Diffuse(_) => LaneKind::Diffuse,
+            Bsdf::Conductor(_) => LaneKind::Conductor,
+            Bsdf::RoughConductor(_) => LaneKind::RoughConductor,
+            Bsdf::Dielectric(_) => LaneKind::Dielectric,
+            Bsdf::RoughDielectric(_) => LaneKind::RoughDielectric,
+            Bsdf::Plastic(_) => LaneKind::Plastic,
+            Bsdf::Pbr(_) => LaneKind::Pbr,
         }
     }
 }
@@ -369,19 +383,21 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// [`vertex`](Self::vertex) as the lanes take it ([`LaneSurface`]): the same shading
     /// normal, frame choice and BSDF, without making the frame.
     #[inline(never)]
-    pub(super) fn lane_surface(&self, ray: &Ray, interaction: &SurfaceInteraction) -> LaneSurface {
+    pub(super) fn lane_surface(
+        &self,
+        ray: &Ray,
+        interaction: &SurfaceInteraction,
+    ) -> LaneSurface<'a> {
         let material = self.scene.material(interaction);
         let normal = material.shading_normal(interaction, -ray.direction);
         // `shading_frame`'s choice of frame.
         let tangent = material.bsdf.is_anisotropic().then_some(interaction.dp_du);
-        let (kind, params) = LaneKind::of(&material.bsdf_at(&interaction.texture_query()));
         LaneSurface {
             point: interaction.point,
             normal,
             two_sided: material.two_sided,
             tangent,
-            kind,
-            params,
+            bsdf: material.bsdf_at(&interaction.texture_query()),
         }
     }
 
@@ -394,14 +410,13 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// coordinates, tangents or second lookups. `None` for any other hit, which takes the
     /// general steps.
     #[inline]
-    pub(super) fn plain_diffuse(&self, hit: &Hit) -> Option<LaneSurface> {
+    pub(super) fn plain_diffuse(&self, hit: &Hit) -> Option<LaneSurface<'a>> {
         let (point, material) = self.scene.geometry.plain_surface_point(hit)?;
         if self.lights.is_light_triangle(hit.triangle) {
             return None;
         }
         let material = &self.scene.materials[material as usize];
-        let Bsdf::Diffuse(Diffuse { reflectance }) = material.bsdf else { return None };
-        if !material.textures.is_empty() {
+        if !matches!(material.bsdf, Bsdf::Diffuse(_)) || !material.textures.is_empty() {
             return None;
         }
         Some(LaneSurface {
@@ -409,8 +424,7 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
             normal: point.normal,
             two_sided: material.two_sided,
             tangent: None,
-            kind: LaneKind::Diffuse,
-            params: Diffuse { reflectance }.to_params(),
+            bsdf: Cow::Borrowed(&material.bsdf),
         })
     }
 

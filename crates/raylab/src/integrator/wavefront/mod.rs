@@ -231,7 +231,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                         path.lane_surface(&state.ray, &interaction)
                     }
                 };
-                let kind = surface.kind;
+                let kind = LaneKind::kind(&surface.bsdf);
                 let (set, paths) = &mut sets[kind as usize];
                 set.push(
                     &surface,

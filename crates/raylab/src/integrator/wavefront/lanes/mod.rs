@@ -43,7 +43,7 @@ use glam::{Vec2, Vec3};
 use std::borrow::Cow;
 
 use super::super::light_sampler::{LanePick, SHADOW_RAY_LENGTH};
-use super::super::path::{Frame, LaneSurface, Vertex, facing};
+use super::super::path::{Frame, LaneKind, LaneSurface, Vertex, facing};
 use crate::cpu::Isa;
 use crate::material::lanes::{LaneBsdf, PARAMS};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
@@ -393,7 +393,8 @@ impl Lanes {
         }
         input.two_sided[k] = surface.two_sided;
         input.arrival.set(k, v.arrival);
-        for (row, &value) in input.params.iter_mut().zip(&surface.params) {
+        let (_, params) = LaneKind::of(&surface.bsdf);
+        for (row, value) in input.params.iter_mut().zip(params) {
             row[k] = value;
         }
         input.throughput.set(k, v.throughput);

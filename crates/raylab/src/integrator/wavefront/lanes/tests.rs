@@ -172,10 +172,14 @@ fn lanes_match_the_scalar_path<B: LaneBsdf>(kind: LaneKind) {
             None => Frame::about(shading_normal),
         };
         let (frame, flip, wi) = facing(two_sided, arrival, frame);
-        let (lane_kind, params) = LaneKind::of(&bsdf);
-        assert_eq!(lane_kind, kind);
-        let surface =
-            LaneSurface { point, normal: shading_normal, two_sided, tangent, kind, params };
+        assert_eq!(LaneKind::kind(&bsdf), kind);
+        let surface = LaneSurface {
+            point,
+            normal: shading_normal,
+            two_sided,
+            tangent,
+            bsdf: Cow::Owned(bsdf.clone()),
+        };
         let vertex = Vertex { point, frame, flip, wi, bsdf: Cow::Owned(bsdf) };
         let mut state = PathState::new(&Ray::new(Vec3::ZERO, Vec3::Z));
         state.throughput = Vec3::new(hostile(&mut rng, 0.0, 1.0), rng.next_f32(), 0.7);
@@ -184,7 +188,7 @@ fn lanes_match_the_scalar_path<B: LaneBsdf>(kind: LaneKind) {
         let u = [(); 6].map(|_| number(&mut rng));
         cases.push((vertex, state, u, (surface, arrival)));
     }
-    type Case<'a> = (Vertex<'a>, PathState, [f32; 6], (LaneSurface, Vec3));
+    type Case<'a> = (Vertex<'a>, PathState, [f32; 6], (LaneSurface<'a>, Vec3));
     let lane_vertex = |(_, state, _, (_, arrival)): &Case| LaneVertex {
         arrival: *arrival,
         throughput: state.throughput,
