@@ -25,7 +25,7 @@ use super::Integrator;
 use super::light_sampler::{LightSet, TriangleSampling};
 use crate::accel::{Accelerator, Hit};
 use crate::interaction::SurfaceInteraction;
-use crate::material::lanes::{LaneBsdf, PARAMS};
+use crate::material::lanes::{PARAMS, store_params};
 use crate::material::{Bsdf, Material};
 use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
@@ -224,17 +224,17 @@ impl LaneKind {
         LaneKind::Pbr,
     ];
 
-    /// `bsdf`'s kind and floats.
+    /// Writes `bsdf`'s floats into lane `k` of `rows` ([`store_params`]).
     #[inline(always)]
-    pub(super) fn of(bsdf: &Bsdf) -> (LaneKind, [f32; PARAMS]) {
+    pub(super) fn store(bsdf: &Bsdf, rows: &mut [[f32; 16]; PARAMS], k: usize) {
         match bsdf {
-            Bsdf::Diffuse(b) => (LaneKind::Diffuse, b.to_params()),
-            Bsdf::Conductor(b) => (LaneKind::Conductor, b.to_params()),
-            Bsdf::RoughConductor(b) => (LaneKind::RoughConductor, b.to_params()),
-            Bsdf::Dielectric(b) => (LaneKind::Dielectric, b.to_params()),
-            Bsdf::RoughDielectric(b) => (LaneKind::RoughDielectric, b.to_params()),
-            Bsdf::Plastic(b) => (LaneKind::Plastic, b.to_params()),
-            Bsdf::Pbr(b) => (LaneKind::Pbr, b.to_params()),
+            Bsdf::Diffuse(b) => store_params(b, rows, k),
+            Bsdf::Conductor(b) => store_params(b, rows, k),
+            Bsdf::RoughConductor(b) => store_params(b, rows, k),
+            Bsdf::Dielectric(b) => store_params(b, rows, k),
+            Bsdf::RoughDielectric(b) => store_params(b, rows, k),
+            Bsdf::Plastic(b) => store_params(b, rows, k),
+            Bsdf::Pbr(b) => store_params(b, rows, k),
         }
     }
 

@@ -29,6 +29,8 @@ pub(crate) trait LaneBsdf: Sized {
     /// Whether it may depend on the tangent's direction ([`Bsdf::is_anisotropic`]): only
     /// then do the lanes make the frame `dp/du` orients.
     const ANISOTROPIC: bool = false;
+    /// How many floats its parameters take.
+    const LEN: usize;
     /// Its parameters (the rows past its own are left zero).
     fn to_params(&self) -> [f32; PARAMS];
     /// The BSDF `to_params` took apart, exactly.
@@ -93,6 +95,7 @@ macro_rules! forward_smooth {
 
 impl LaneBsdf for Diffuse {
     const SMOOTH: bool = true;
+    const LEN: usize = 3;
     #[inline(always)]
     fn to_params(&self) -> [f32; PARAMS] {
         let mut p = [0.0; PARAMS];
@@ -111,6 +114,7 @@ impl LaneBsdf for Diffuse {
 
 impl LaneBsdf for Conductor {
     const SMOOTH: bool = false;
+    const LEN: usize = 9;
     #[inline(always)]
     fn to_params(&self) -> [f32; PARAMS] {
         let mut p = [0.0; PARAMS];
@@ -132,6 +136,7 @@ impl LaneBsdf for Conductor {
 
 impl LaneBsdf for RoughConductor {
     const SMOOTH: bool = true;
+    const LEN: usize = 11;
     const ANISOTROPIC: bool = true;
     #[inline(always)]
     fn to_params(&self) -> [f32; PARAMS] {
@@ -155,6 +160,7 @@ impl LaneBsdf for RoughConductor {
 
 impl LaneBsdf for Dielectric {
     const SMOOTH: bool = false;
+    const LEN: usize = 1;
     #[inline(always)]
     fn to_params(&self) -> [f32; PARAMS] {
         let mut p = [0.0; PARAMS];
@@ -176,6 +182,7 @@ impl LaneBsdf for Dielectric {
 
 impl LaneBsdf for RoughDielectric {
     const SMOOTH: bool = true;
+    const LEN: usize = 3;
     const ANISOTROPIC: bool = true;
     #[inline(always)]
     fn to_params(&self) -> [f32; PARAMS] {
@@ -195,6 +202,7 @@ impl LaneBsdf for RoughDielectric {
 
 impl LaneBsdf for Plastic {
     const SMOOTH: bool = true;
+    const LEN: usize = 10;
     #[inline(always)]
     fn to_params(&self) -> [f32; PARAMS] {
         let mut p = [0.0; PARAMS];
@@ -223,6 +231,7 @@ impl LaneBsdf for Plastic {
 
 impl LaneBsdf for Pbr {
     const SMOOTH: bool = true;
+    const LEN: usize = 5;
     #[inline(always)]
     fn to_params(&self) -> [f32; PARAMS] {
         let mut p = [0.0; PARAMS];
@@ -240,6 +249,15 @@ impl LaneBsdf for Pbr {
     forward_smooth!();
 }
 
+/// Writes `bsdf`'s parameters into lane `k` of `rows` (its own rows only).
+#[inline(always)]
+pub(crate) fn store_params<B: LaneBsdf>(bsdf: &B, rows: &mut [[f32; 16]; PARAMS], k: usize) {
+    let params = bsdf.to_params();
+    for (row, value) in rows[..B::LEN].iter_mut().zip(params) {
+        row[k] = value;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -248,7 +266,12 @@ mod tests {
     #[test]
     fn params_rebuild_each_bsdf_exactly() {
         fn round_trip<B: LaneBsdf + Clone>(bsdf: B) {
-            let back = B::from_params(&bsdf.to_params()).into_bsdf();
+            let params = bsdf.to_params();
+            // Only the first `LEN` rows are its own.
+            assert!(params[B::LEN..].iter().all(|&p| p == 0.0));
+            let mut rows = [[0.0; 16]; PARAMS];
+            store_params(&bsdf, &mut rows, 3);
+            let back = B::from_params(&std::array::from_fn(|j| rows[j][3])).into_bsdf();
             assert_eq!(back, bsdf.into_bsdf());
         }
         let (eta, k) = (Vec3::new(0.2, 0.4, 1.4), Vec3::new(3.4, 2.3, 1.8));

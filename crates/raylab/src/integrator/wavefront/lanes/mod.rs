@@ -393,10 +393,7 @@ impl Lanes {
         }
         input.two_sided[k] = surface.two_sided;
         input.arrival.set(k, v.arrival);
-        let (_, params) = LaneKind::of(&surface.bsdf);
-        for (row, value) in input.params.iter_mut().zip(params) {
-            row[k] = value;
-        }
+        LaneKind::store(&surface.bsdf, &mut input.params, k);
         input.throughput.set(k, v.throughput);
         input.eta[k] = v.eta;
         input.roulette[k] = v.roulette;
