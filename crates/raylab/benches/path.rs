@@ -52,7 +52,9 @@ fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrato
 
 /// Prints nanoseconds per sample by stage: the wavefront's stages as it measures them, and the
 /// rest of the pass (camera rays, filter, accumulation) as the pass's time less the
-/// integrator's; then the share of vertices shaded in lanes.
+/// integrator's; then the share of vertices shaded wholly in lanes (the rest left their light
+/// sample or bounce to the scalar steps: a point light, a textured emitter, an overflowing
+/// offset).
 fn stage_table(_: &mut Criterion) {
     const PASSES: u32 = 16;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");

@@ -66,7 +66,7 @@ impl FromStr for AovKind {
 pub enum IntegratorKind {
     /// The lab's light model, at the stage the render settings give.
     Lab,
-    /// The path tracer: the wavefront, whose diffuse vertices run sixteen to an instruction
+    /// The path tracer: the wavefront, whose vertices run sixteen to an instruction
     /// (`PathWavefront`).
     Path,
     /// The path tracer one path at a time (`Path`): the reference twin of `path`, with the

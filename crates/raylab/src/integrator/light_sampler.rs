@@ -364,9 +364,9 @@ impl LightSet {
     }
 
     /// The light that `u.x` picks ([`pick`](Self::pick)), as the wavefront's lanes take it: a
-    /// triangle sampled uniformly by area with a constant radiance, which the lanes sample as
-    /// [`sample`](Self::sample) does (`u.x` rescaled in lanes by
-    /// [`rescaled`](crate::sampling::rescaled) of the triangle's `start` and `selection`); any
+    /// triangle sampled uniformly by area with a constant radiance, or the constant environment,
+    /// which the lanes sample as [`sample`](Self::sample) does (`u.x` rescaled in lanes by
+    /// [`rescaled`](crate::sampling::rescaled) of the light's `start` and `selection`); any
     /// other light, which a lane leaves to `sample`; or nothing, without lights.
     #[inline(always)]
     pub(super) fn pick_for_lanes(&self, u: Vec2) -> LanePick<'_> {

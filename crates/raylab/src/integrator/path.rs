@@ -25,7 +25,7 @@ use super::Integrator;
 use super::light_sampler::{LightSet, TriangleSampling};
 use crate::accel::{Accelerator, Hit};
 use crate::interaction::SurfaceInteraction;
-use crate::material::lanes::{PARAMS, store_params};
+use crate::material::lanes::{ParamRows, store_params};
 use crate::material::{Bsdf, Material};
 use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
@@ -226,7 +226,7 @@ impl LaneKind {
 
     /// Writes `bsdf`'s floats into lane `k` of `rows` ([`store_params`]).
     #[inline(always)]
-    pub(super) fn store(bsdf: &Bsdf, rows: &mut [[f32; 16]; PARAMS], k: usize) {
+    pub(super) fn store(bsdf: &Bsdf, rows: &mut ParamRows, k: usize) {
         match bsdf {
             Bsdf::Diffuse(b) => store_params(b, rows, k),
             Bsdf::Conductor(b) => store_params(b, rows, k),
@@ -274,7 +274,7 @@ fn shading_frame(
 
 /// [`shading_frame`]'s second half: the direction toward the viewer of a ray along `direction`
 /// in `frame`, mirrored into the front for a `two_sided` material, and whether it was (the
-/// wavefront's diffuse lanes run it too).
+/// wavefront's lanes run it too).
 #[inline(always)]
 pub(super) fn facing(two_sided: bool, direction: Vec3, frame: Frame) -> (Frame, bool, Vec3) {
     let mut wi = frame.to_local(-direction.normalize());

@@ -18,6 +18,12 @@ use super::{
     RoughDielectric,
 };
 
+/// Lanes per chunk: one AVX-512 register of floats.
+pub(crate) const LANES: usize = 16;
+
+/// A chunk's parameter rows: row `j` holds parameter `j` of every lane.
+pub(crate) type ParamRows = [[f32; LANES]; PARAMS];
+
 /// The most floats any kind's parameters take (a rough conductor's: η, k and the tint, and
 /// two roughnesses).
 pub(crate) const PARAMS: usize = 11;
@@ -251,7 +257,7 @@ impl LaneBsdf for Pbr {
 
 /// Writes `bsdf`'s parameters into lane `k` of `rows` (its own rows only).
 #[inline(always)]
-pub(crate) fn store_params<B: LaneBsdf>(bsdf: &B, rows: &mut [[f32; 16]; PARAMS], k: usize) {
+pub(crate) fn store_params<B: LaneBsdf>(bsdf: &B, rows: &mut ParamRows, k: usize) {
     let params = bsdf.to_params();
     for (row, value) in rows[..B::LEN].iter_mut().zip(params) {
         row[k] = value;
@@ -269,7 +275,7 @@ mod tests {
             let params = bsdf.to_params();
             // Only the first `LEN` rows are its own.
             assert!(params[B::LEN..].iter().all(|&p| p == 0.0));
-            let mut rows = [[0.0; 16]; PARAMS];
+            let mut rows = [[0.0; LANES]; PARAMS];
             store_params(&bsdf, &mut rows, 3);
             let back = B::from_params(&std::array::from_fn(|j| rows[j][3])).into_bsdf();
             assert_eq!(back, bsdf.into_bsdf());

@@ -103,19 +103,22 @@ pub fn sin_cos_within_quarter_pi(a: f32) -> (f32, f32) {
     (sin, cos)
 }
 
-/// `(sin 2πt, cos 2πt)` for a number of turns `t`: the nearest quarter turn `q` is split off
-/// exactly (`4t − q` is exact), the polynomials of [`sin_cos_within_quarter_pi`] take the rest
-/// (within ±π/4), and the quarter turns swap and negate the pair. Within 3·10⁻⁷ of double
+/// `(sin 2πt, cos 2πt)` for a number of turns `t` in `[0, 1]` (the samplers' numbers): the
+/// nearest quarter turn `q` is split off exactly (`4t − q` is exact), the polynomials of
+/// [`sin_cos_within_quarter_pi`] take the rest (within ±π/4, give or take an ulp at the
+/// eighths), and the quarter turns swap and negate the pair. Within 3·10⁻⁷ of double
 /// precision over `[0, 1]` (`tests.rs`); straight-line arithmetic, so the lanes of the path
 /// tracer run it sixteen at a time with the scalar code's bits (where `f32::sin_cos`, a call
-/// into the C library, would keep a loop scalar).
+/// into the C library, would keep a loop scalar). Negative, huge or NaN `t` give a pair that
+/// is not the sine and cosine (the integer conversion truncates toward zero and saturates).
 #[inline(always)]
 pub fn sin_cos_turns(t: f32) -> (f32, f32) {
     let quarters = 4.0 * t;
-    let q = (quarters + 0.5).floor();
+    // `floor` by truncation (the same for `t ≥ −1/8`): a plain conversion even on the
+    // baseline instruction set, where `floor` is a call into the C library.
+    let quadrant = (quarters + 0.5) as i32;
+    let q = quadrant as f32;
     let (sin, cos) = sin_cos_within_quarter_pi((quarters - q) * FRAC_PI_2);
-    // A NaN or huge `t` gives a NaN or meaningless pair, as `sin_cos` would give a NaN.
-    let quadrant = q as i32;
     let (sin, cos) = if quadrant & 1 != 0 { (cos, -sin) } else { (sin, cos) };
     if quadrant & 2 != 0 { (-sin, -cos) } else { (sin, cos) }
 }

@@ -39,7 +39,7 @@
 //!
 //! Grouping by BSDF kind is what keeps the lanes full and each BSDF's code on whole vectors: a
 //! chunk holds one kind's vertices, whichever paths they belong to. Every kind shades in lanes
-//! (issue 27's seventh step: until then only diffuse vertices did, and the rest ran the scalar
+//! (issue 27's eighth step: until then only diffuse vertices did, and the rest ran the scalar
 //! steps): measured on the materials scene (256², 16 spp, 1 thread, CPU time, median of 5),
 //! 0.42 → 0.36 s.
 //!
@@ -116,7 +116,7 @@ impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
 
     /// The same, measuring the time each stage takes (summed over threads): for the stage
     /// table of the benchmarks. Costs a clock reading per stage and tile, and three per chunk
-    /// of diffuse lanes.
+    /// of lanes.
     pub fn with_stage_times(mut self) -> Self {
         self.times = Some(StageClock::default());
         self
@@ -311,10 +311,14 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
         let path = &self.path;
         chunk.numbers.draw(chunk.samplers, paths);
         chunk.lap.end(|t| &t.draws);
+        // The lanes the scalar steps decide in part or whole (for the stage table).
+        debug_assert!(paths.len() <= lanes::LANES, "a chunk at a time");
+        let mut scalar = 0u32;
         for (lane, &i) in paths.iter().enumerate() {
             let drawn = chunk.numbers.drawn[lane];
             let light = path.lights().pick_for_lanes(drawn.point);
             if let LanePick::Other = light {
+                scalar |= 1 << lane;
                 let vertex = lanes.vertex::<B>(lane);
                 chunk
                     .shadows
@@ -337,6 +341,7 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
             let result = lanes.result(lane);
             if !result.exact {
                 // An offset point was not finite: the scalar steps decide the lane.
+                scalar |= 1 << lane;
                 let vertex = lanes.vertex::<B>(lane);
                 if result.light_in_lanes {
                     chunk.shadows.add(i, chunk.numbers.sample_light(path, state, &vertex, lane));
@@ -359,9 +364,9 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
             }
         }
         if let Some(times) = &self.times {
-            let lanes = paths.len() as u64;
-            times.vertices.fetch_add(lanes, Ordering::Relaxed);
-            times.lanes.fetch_add(lanes, Ordering::Relaxed);
+            let vertices = paths.len() as u64;
+            times.vertices.fetch_add(vertices, Ordering::Relaxed);
+            times.lanes.fetch_add(vertices - u64::from(scalar.count_ones()), Ordering::Relaxed);
         }
         chunk.lap.end(|t| &t.shading);
     }
@@ -481,7 +486,9 @@ pub struct StageTimes {
     pub paths: u64,
     /// Vertices scattered from.
     pub vertices: u64,
-    /// Of those, the diffuse vertices shaded in lanes.
+    /// Of those, the vertices whose light sample and bounce the lanes made whole: not left to
+    /// the scalar steps for their light (a point light, a textured emitter) or an offset that
+    /// overflowed.
     pub lanes: u64,
 }
 

@@ -1,8 +1,8 @@
 //! The wavefront's vertices, sixteen lanes per instruction, grouped by BSDF: the shading frame
 //! and the direction toward the viewer (from the shading normal, the tangent where the BSDF is
-//! anisotropic, and the arriving ray), light sampling (a triangle light's point, the shadow
-//! ray, the BSDF's value and the MIS weight), BSDF sampling (the direction and the next ray) and
-//! Russian roulette.
+//! anisotropic, and the arriving ray), light sampling (a triangle light's point or a direction
+//! toward the constant environment, the shadow ray, the BSDF's value and the MIS weight), BSDF
+//! sampling (the direction and the next ray) and Russian roulette.
 //!
 //! ## Lanes
 //! The vertices of one BSDF kind are gathered sixteen to a chunk (`Input`): every quantity a
@@ -31,7 +31,8 @@
 //! instruction set).
 //!
 //! What the lanes cannot do they leave to the scalar code, lane by lane: a light other than a
-//! triangle sampled by area with a constant radiance ([`LanePick::Other`]), and the rare point
+//! triangle sampled by area with a constant radiance or the constant environment
+//! ([`LanePick::Other`]: point lights, textured emitters, solid-angle sampling), and the rare point
 //! whose offset is not finite (`exact` is false: the scalar offset's fallback decides it).
 //!
 //! [`Path::sample_light_with`]: super::super::Path
@@ -52,8 +53,8 @@ use crate::sampling::{
     uniform_sphere_pdf,
 };
 
-/// Lanes per chunk: one AVX-512 register of floats.
-pub(super) const LANES: usize = 16;
+/// Lanes per chunk: one AVX-512 register of floats (the BSDFs' parameter rows have as many).
+pub(super) const LANES: usize = crate::material::lanes::LANES;
 
 /// One float per lane.
 type Row = [f32; LANES];
@@ -149,13 +150,11 @@ struct Output {
     exact: [bool; LANES],
 }
 
-/// One lane's shading: light sampling, BSDF sampling and roulette, as the scalar path does them
-/// (see the module documentation).
+/// Lane `k`'s frame, whether it is mirrored and the direction toward the viewer, as
+/// `Path::vertex` makes them (`shading_frame`: the tangent's frame only for an anisotropic
+/// BSDF, then [`facing`]), and its BSDF rebuilt from its rows.
 #[inline(always)]
-fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, k: usize) {
-    let point =
-        SurfacePoint { p: input.p.get(k), error: input.error.get(k), normal: input.normal.get(k) };
-    // Path::vertex's frame (`shading_frame`), mirroring and direction toward the viewer.
+fn vertex_of<B: LaneBsdf>(input: &Input, k: usize) -> (Frame, bool, Vec3, B) {
     let normal = input.shading_normal.get(k);
     let frame = if B::ANISOTROPIC && input.anisotropic[k] {
         Frame::new(normal, input.dp_du.get(k))
@@ -163,7 +162,16 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
         Frame::about(normal)
     };
     let (frame, flip, wi) = facing(input.two_sided[k], input.arrival.get(k), frame);
-    let bsdf = B::from_params(&std::array::from_fn(|j| input.params[j][k]));
+    (frame, flip, wi, B::from_params(&std::array::from_fn(|j| input.params[j][k])))
+}
+
+/// One lane's shading: light sampling, BSDF sampling and roulette, as the scalar path does them
+/// (see the module documentation).
+#[inline(always)]
+fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, k: usize) {
+    let point =
+        SurfacePoint { p: input.p.get(k), error: input.error.get(k), normal: input.normal.get(k) };
+    let (frame, flip, wi, bsdf) = vertex_of::<B>(input, k);
     let throughput = input.throughput.get(k);
 
     // LightSet::sample's triangle, sampled by area.
@@ -441,13 +449,7 @@ impl Lanes {
     /// exact); `B` is the lanes' kind.
     pub(super) fn vertex<B: LaneBsdf>(&self, i: usize) -> Vertex<'static> {
         let (input, k) = (&self.inputs[i / LANES], i % LANES);
-        let normal = input.shading_normal.get(k);
-        let frame = match input.anisotropic[k] {
-            true => Frame::new(normal, input.dp_du.get(k)),
-            false => Frame::about(normal),
-        };
-        let (frame, flip, wi) = facing(input.two_sided[k], input.arrival.get(k), frame);
-        let bsdf = B::from_params(&std::array::from_fn(|j| input.params[j][k])).into_bsdf();
+        let (frame, flip, wi, bsdf) = vertex_of::<B>(input, k);
         Vertex {
             point: SurfacePoint {
                 p: input.p.get(k),
@@ -457,7 +459,7 @@ impl Lanes {
             frame,
             flip,
             wi,
-            bsdf: Cow::Owned(bsdf),
+            bsdf: Cow::Owned(bsdf.into_bsdf()),
         }
     }
 
@@ -472,9 +474,11 @@ impl Lanes {
     pub(super) fn shade<B: LaneBsdf>(&mut self, isa: Isa) {
         let n = self.len.div_ceil(LANES);
         assert!(isa.is_supported(), "{} is not supported by this CPU", isa.name());
-        for (input, output) in self.inputs[..n].iter().zip(&mut self.outputs[..n]) {
-            // The environment's code only where a lane samples it.
-            match input.environment.contains(&true) {
+        for (c, (input, output)) in self.inputs[..n].iter().zip(&mut self.outputs[..n]).enumerate()
+        {
+            // The environment's code only where a lane in use samples it.
+            let used = (self.len - c * LANES).min(LANES);
+            match input.environment[..used].contains(&true) {
                 // SAFETY: the CPU supports the instruction set (asserted above).
                 true => unsafe { shade_chunk_on::<B, true>(isa, input, output) },
                 // SAFETY: as above.
