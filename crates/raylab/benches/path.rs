@@ -54,13 +54,13 @@ fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrato
 /// rest of the pass (camera rays, filter, accumulation) as the pass's time less the
 /// integrator's; then the share of vertices shaded wholly in lanes (the rest left their light
 /// sample or bounce to the scalar steps: a point light, a textured emitter, an overflowing
-/// offset).
+/// offset), and how full the chunks of lanes ran (vertices per sixteen lanes shaded).
 fn stage_table(_: &mut Criterion) {
     const PASSES: u32 = 16;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     println!("ns per sample by stage, a quarter of the scene's size, {PASSES} passes, one thread");
     println!(
-        "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>9}",
+        "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>6} {:>9}",
         "scene",
         "scalar",
         "wavefr.",
@@ -71,6 +71,7 @@ fn stage_table(_: &mut Criterion) {
         "shading",
         "occl.",
         "lanes",
+        "fill",
         "vertices"
     );
     for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes"] {
@@ -106,9 +107,11 @@ fn stage_table(_: &mut Criterion) {
             after.occlusion - before.occlusion,
         ];
         let in_stages: Duration = stages.iter().sum();
-        let lanes = (after.lanes - before.lanes) as f64 / (after.vertices - before.vertices) as f64;
+        let vertices = (after.vertices - before.vertices) as f64;
+        let lanes = (after.lanes - before.lanes) as f64 / vertices;
+        let fill = vertices / (16.0 * (after.chunks - before.chunks) as f64);
         println!(
-            "{:16} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:6.0}% {:9.2}",
+            "{:16} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:8.0} {:6.0}% {:5.0}% {:9.2}",
             name,
             ns(scalar_time),
             ns(wavefront_time),
@@ -119,7 +122,8 @@ fn stage_table(_: &mut Criterion) {
             ns(stages[3]),
             ns(stages[4]),
             100.0 * lanes,
-            (after.vertices - before.vertices) as f64 / samples,
+            100.0 * fill,
+            vertices / samples,
         );
     }
 }

@@ -367,6 +367,7 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
             let vertices = paths.len() as u64;
             times.vertices.fetch_add(vertices, Ordering::Relaxed);
             times.lanes.fetch_add(vertices - u64::from(scalar.count_ones()), Ordering::Relaxed);
+            times.chunks.fetch_add(1, Ordering::Relaxed);
         }
         chunk.lap.end(|t| &t.shading);
     }
@@ -490,6 +491,9 @@ pub struct StageTimes {
     /// the scalar steps for their light (a point light, a textured emitter) or an offset that
     /// overflowed.
     pub lanes: u64,
+    /// Chunks of lanes shaded (each up to sixteen vertices of one BSDF kind): how full the
+    /// vectors ran is `vertices / (16 · chunks)`.
+    pub chunks: u64,
 }
 
 /// [`StageTimes`] as the threads add to it: nanoseconds.
@@ -503,6 +507,7 @@ struct StageClock {
     paths: AtomicU64,
     vertices: AtomicU64,
     lanes: AtomicU64,
+    chunks: AtomicU64,
 }
 
 impl StageClock {
@@ -517,6 +522,7 @@ impl StageClock {
             paths: self.paths.load(Ordering::Relaxed),
             vertices: self.vertices.load(Ordering::Relaxed),
             lanes: self.lanes.load(Ordering::Relaxed),
+            chunks: self.chunks.load(Ordering::Relaxed),
         }
     }
 }
