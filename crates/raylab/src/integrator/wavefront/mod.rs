@@ -68,9 +68,6 @@ use super::path::{LaneKind, Path, PathSettings, PathState, Vertex};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
 use crate::material::lanes::LaneBsdf;
-use crate::material::{
-    Conductor, Dielectric, Diffuse, Pbr, Plastic, RoughConductor, RoughDielectric,
-};
 use crate::ray::Ray;
 use crate::sampling::{Sampler, VertexNumbers};
 use crate::scene::Scene;
@@ -293,15 +290,7 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
     /// [`shade_lanes`](Self::shade_lanes) with the code of `kind`'s BSDF.
     #[inline(never)]
     fn shade_kind(&self, kind: LaneKind, chunk: &mut Chunk, lanes: &mut Lanes, paths: &[usize]) {
-        match kind {
-            LaneKind::Diffuse => self.shade_lanes::<Diffuse>(chunk, lanes, paths),
-            LaneKind::Conductor => self.shade_lanes::<Conductor>(chunk, lanes, paths),
-            LaneKind::RoughConductor => self.shade_lanes::<RoughConductor>(chunk, lanes, paths),
-            LaneKind::Dielectric => self.shade_lanes::<Dielectric>(chunk, lanes, paths),
-            LaneKind::RoughDielectric => self.shade_lanes::<RoughDielectric>(chunk, lanes, paths),
-            LaneKind::Plastic => self.shade_lanes::<Plastic>(chunk, lanes, paths),
-            LaneKind::Pbr => self.shade_lanes::<Pbr>(chunk, lanes, paths),
-        }
+        lanes::with_lane_bsdf!(kind, B => self.shade_lanes::<B>(chunk, lanes, paths))
     }
 
     /// Draws the numbers of `lanes` (the vertices of `paths`, whose BSDFs are `B`s), shades

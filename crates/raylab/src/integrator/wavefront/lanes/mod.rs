@@ -53,6 +53,46 @@ use crate::sampling::{
     uniform_sphere_pdf,
 };
 
+/// Runs `$body` with `$B` the BSDF type of the kind `$kind` (a [`LaneKind`]): the one place
+/// that maps kinds to the types whose code the lanes compile.
+macro_rules! with_lane_bsdf {
+    ($kind:expr, $B:ident => $body:expr) => {{
+        use $crate::integrator::path::LaneKind as Kind;
+        use $crate::material as m;
+        match $kind {
+            Kind::Diffuse => {
+                type $B = m::Diffuse;
+                $body
+            }
+            Kind::Conductor => {
+                type $B = m::Conductor;
+                $body
+            }
+            Kind::RoughConductor => {
+                type $B = m::RoughConductor;
+                $body
+            }
+            Kind::Dielectric => {
+                type $B = m::Dielectric;
+                $body
+            }
+            Kind::RoughDielectric => {
+                type $B = m::RoughDielectric;
+                $body
+            }
+            Kind::Plastic => {
+                type $B = m::Plastic;
+                $body
+            }
+            Kind::Pbr => {
+                type $B = m::Pbr;
+                $body
+            }
+        }
+    }};
+}
+pub(super) use with_lane_bsdf;
+
 /// Lanes per chunk: one AVX-512 register of floats (the BSDFs' parameter rows have as many).
 pub(super) const LANES: usize = crate::material::lanes::LANES;
 

@@ -122,15 +122,7 @@ fn hostile_bsdf(rng: &mut Pcg32, kind: LaneKind) -> Bsdf {
 #[test]
 fn lanes_are_the_scalar_paths_bits_on_every_instruction_set() {
     for kind in LaneKind::ALL {
-        match kind {
-            LaneKind::Diffuse => lanes_match_the_scalar_path::<Diffuse>(kind),
-            LaneKind::Conductor => lanes_match_the_scalar_path::<Conductor>(kind),
-            LaneKind::RoughConductor => lanes_match_the_scalar_path::<RoughConductor>(kind),
-            LaneKind::Dielectric => lanes_match_the_scalar_path::<Dielectric>(kind),
-            LaneKind::RoughDielectric => lanes_match_the_scalar_path::<RoughDielectric>(kind),
-            LaneKind::Plastic => lanes_match_the_scalar_path::<Plastic>(kind),
-            LaneKind::Pbr => lanes_match_the_scalar_path::<Pbr>(kind),
-        }
+        with_lane_bsdf!(kind, B => lanes_match_the_scalar_path::<B>(kind));
     }
 }
 
