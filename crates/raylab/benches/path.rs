@@ -13,28 +13,30 @@ use std::time::{Duration, Instant};
 
 use raylab::integrator::{Integrator, Path, PathWavefront};
 use raylab::sampling::Sampler;
-use raylab::scene::LoadOptions;
+use raylab::scene::{Instancing, LoadOptions};
 use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
 use raylab::{Accumulator, Camera, SamplerKind, Scene, SceneBvh};
 
-/// A scene file of `scenes/` (or `materials`, `gltf-boxes` of `tests/data`) with its BVH,
-/// settings and its camera at a quarter of its size (128×128 for the Cornell box, 160×120 for
-/// the showcase, 64×64 for the comparison scenes): the same view as a full render.
+/// A scene file of `scenes/` (or `materials`, `gltf-boxes` of `tests/data`; `gltf-boxes-kept`
+/// the boxes kept instanced, under a two-level BVH, where by default they are copied) with its
+/// BVH, settings and its camera at a quarter of its size (128×128 for the Cornell box, 160×120
+/// for the showcase, 64×64 for the comparison scenes): the same view as a full render.
 fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let file = match name {
         "materials" => root.join("tests/data/mitsuba-materials/materials.toml"),
-        "gltf-boxes" => root.join("tests/data/mitsuba-gltf/boxes.toml"),
+        "gltf-boxes" | "gltf-boxes-kept" => root.join("tests/data/mitsuba-gltf/boxes.toml"),
         _ => root.join(format!("../../scenes/{name}.toml")),
     };
-    let opened =
-        Scene::open(&file.display().to_string(), &LoadOptions::default()).expect("the scene file");
+    let instancing = if name == "gltf-boxes-kept" { Instancing::Keep } else { Instancing::Auto };
+    let opened = Scene::open(&file.display().to_string(), &LoadOptions { instancing })
+        .expect("the scene file");
     let scene = opened.scene;
     let accel = SceneBvh::build(&scene.geometry).expect("a BVH");
     let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
     // The Mitsuba comparison scenes are timed at 256×256 (BENCHMARKS.md).
     let (width, height) = match name {
-        "materials" | "gltf-boxes" => (256, 256),
+        "materials" | "gltf-boxes" | "gltf-boxes-kept" => (256, 256),
         _ => scene.settings.size.expect("the scene file's size"),
     };
     let cameras = CameraOptions { size: Some((width / 4, height / 4)), ..CameraOptions::default() };
@@ -74,7 +76,7 @@ fn stage_table(_: &mut Criterion) {
         "fill",
         "vertices"
     );
-    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes"] {
+    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes", "gltf-boxes-kept"] {
         let (scene, accel, settings, camera) = load(name);
         let scalar = Path::new(&scene, &accel, settings.path_settings());
         let wavefront =
@@ -171,7 +173,7 @@ fn path(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     let mut group = c.benchmark_group("path_quarter_size_1spp_1_thread");
     group.sample_size(20);
-    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes"] {
+    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes", "gltf-boxes-kept"] {
         let (scene, accel, settings, camera) = load(name);
         let scalar = Path::new(&scene, &accel, settings.path_settings());
         let wavefront = PathWavefront::new(&scene, &accel, settings.path_settings());

@@ -14,6 +14,7 @@ use glam::DVec3;
 use raylab::film::Display;
 use raylab::image_compare::save_failure_images;
 use raylab::integrator::PathWavefront;
+use raylab::scene::{Instancing, LoadOptions};
 use raylab::{
     Accumulator, Bvh, Camera, Film, PathSettings, SampleSettings, SamplerKind, Scene, SceneBvh,
     TriangleSampling, image_io,
@@ -205,11 +206,17 @@ fn the_same_pixels_for_any_thread_count_and_tiling() {
 
 /// A scene file under `tests/data` rendered by the wavefront path tracer at the size of the
 /// Mitsuba reference beside it (`reference.pfm`), `spp` samples with `seed`, through the scene's
-/// own accelerator (two levels where it draws a mesh in several places): the accelerator, the
-/// camera, the render and the reference.
-fn render_beside_its_reference(file: &str, spp: u32, seed: u64) -> (SceneBvh, Camera, Film, Film) {
+/// own accelerator (two levels where it keeps a mesh drawn in several places, as `instancing`
+/// says): the accelerator, the camera, the render and the reference.
+fn render_beside_its_reference(
+    file: &str,
+    spp: u32,
+    seed: u64,
+    instancing: Instancing,
+) -> (SceneBvh, Camera, Film, Film) {
     let scene_file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file);
-    let scene = raylab::scene::load_scene_file(&scene_file).unwrap();
+    let options = LoadOptions { instancing };
+    let scene = raylab::scene::load_scene_file_with(&scene_file, &options).unwrap();
     let reference = image_io::load_film(&scene_file.with_file_name("reference.pfm")).unwrap();
     let (width, height) = (reference.width(), reference.height());
     let camera = scene.camera.unwrap().camera(width, height);
@@ -237,7 +244,7 @@ fn render_beside_its_reference(file: &str, spp: u32, seed: u64) -> (SceneBvh, Ca
 #[test]
 fn every_material_matches_mitsuba() {
     let (_, camera, film, reference) =
-        render_beside_its_reference("mitsuba-materials/materials.toml", 128, 11);
+        render_beside_its_reference("mitsuba-materials/materials.toml", 128, 11, Instancing::Auto);
     // A 5×5 patch at the middle of each sphere (the file's centres, y-up, in the lab's frame).
     let patch = |film: &Film, centre: glam::Vec3| {
         let p = camera.project(raylab::scene::model_to_lab(centre)).expect("in view");
@@ -278,13 +285,21 @@ fn every_material_matches_mitsuba() {
 /// within 0.5 % and each 8×8 block's within 4 % (measured: 0.02 % and 0.77 %). The boxes' logo
 /// is read through the glTF's texture coordinates, as a scene file's image texture reads any
 /// mesh's (`v` up from the bottom row, as OBJ's and Mitsuba's): with the coordinates turned
-/// upside down the worst block is 38 % off.
+/// upside down the worst block is 38 % off. Both ways of drawing the boxes are compared: kept
+/// instanced (a two-level BVH) and copied into world space, as `Instancing::Auto` does with so
+/// small a mesh.
 #[test]
 fn a_textured_instanced_gltf_scene_matches_mitsuba() {
+    gltf_scene_matches_mitsuba(Instancing::Keep, "mitsuba-gltf");
+    gltf_scene_matches_mitsuba(Instancing::Auto, "mitsuba-gltf-flat");
+}
+
+fn gltf_scene_matches_mitsuba(instancing: Instancing, name: &str) {
     let (accel, _, film, reference) =
-        render_beside_its_reference("mitsuba-gltf/boxes.toml", 256, 12);
+        render_beside_its_reference("mitsuba-gltf/boxes.toml", 256, 12, instancing);
     let (width, height) = (reference.width(), reference.height());
-    assert!(matches!(accel, SceneBvh::Instanced(_)), "the boxes are instances");
+    let instanced = matches!(accel, SceneBvh::Instanced(_));
+    assert_eq!(instanced, instancing == Instancing::Keep, "the boxes are instances if kept");
     let block = |film: &Film, bx: u32, by: u32| {
         let mut sum = DVec3::ZERO;
         for y in by * 8..by * 8 + 8 {
@@ -313,8 +328,8 @@ fn a_textured_instanced_gltf_scene_matches_mitsuba() {
         100.0 * worst.0,
         100.0 * whole
     );
-    eprintln!("{report}");
+    eprintln!("{instancing:?}: {report}");
     if worst.0 > 0.04 || whole > 0.005 {
-        fail("mitsuba-gltf", &film, &reference, report);
+        fail(name, &film, &reference, report);
     }
 }

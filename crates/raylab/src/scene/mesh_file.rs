@@ -78,6 +78,40 @@ impl LoadedMesh {
         mesh
     }
 
+    /// Copies instanced meshes into [`mesh`](Self::mesh), each copy placed (as
+    /// [`flattened`](Self::flattened) does), the meshes whose copies beyond their first add the
+    /// fewest triangles first, while those extra triangles total at most `budget`; the rest
+    /// stay instanced. Returns how many meshes it copied. The triangles drawn are the same.
+    pub fn flatten_within(&mut self, budget: usize) -> usize {
+        let extra = |part: &InstancedMesh| {
+            part.mesh.triangles.len().saturating_mul(part.transforms.len().saturating_sub(1))
+        };
+        let mut order: Vec<usize> = (0..self.instanced.len()).collect();
+        order.sort_by_key(|&k| extra(&self.instanced[k]));
+        let (mut spent, mut copy) = (0usize, vec![false; self.instanced.len()]);
+        for k in order {
+            let cost = extra(&self.instanced[k]);
+            if cost > budget - spent {
+                break;
+            }
+            spent += cost;
+            copy[k] = true;
+        }
+        let parts = std::mem::take(&mut self.instanced);
+        let mut copied = 0;
+        for (part, copy) in parts.into_iter().zip(copy) {
+            if copy {
+                for transform in &part.transforms {
+                    self.mesh.append_transformed(&part.mesh, transform);
+                }
+                copied += 1;
+            } else {
+                self.instanced.push(part);
+            }
+        }
+        copied
+    }
+
     /// The bounding box of every triangle drawn, or `None` without triangles.
     pub fn bounds(&self) -> Option<(glam::Vec3, glam::Vec3)> {
         let placed = self.instanced.iter().flat_map(|part| {
@@ -257,6 +291,62 @@ mod tests {
         assert_eq!(format_of(Path::new("x.stl")), None);
         assert_eq!(format_of(Path::new("obj")), None);
         assert_eq!(format_of(Path::new("")), None);
+    }
+
+    /// A mesh of `n` triangles (all in one plane, each its own corners).
+    fn strip(n: usize) -> Mesh {
+        let positions = (0..3 * n).map(|k| glam::Vec3::new(k as f32, (k % 3) as f32, 0.0));
+        let triangles = (0..n as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        Mesh { positions: positions.collect(), triangles, ..Mesh::default() }
+    }
+
+    /// Copies' extra triangles, the cheapest first, within the budget: parts of 1, 2 and 3
+    /// triangles drawn 11, 6 and 4 times add 10, 10 and 9 triangles beyond their first copies, one
+    /// of 7 drawn once none.
+    #[test]
+    fn the_cheapest_instanced_meshes_are_copied_within_the_budget() {
+        let shift = |k: usize| glam::Affine3A::from_translation(glam::Vec3::Z * k as f32);
+        let part = |n, copies| InstancedMesh {
+            mesh: strip(n),
+            transforms: (1..=copies).map(shift).collect(),
+        };
+        let loaded = LoadedMesh {
+            mesh: strip(5),
+            instanced: vec![part(1, 11), part(2, 6), part(3, 4), part(7, 1)],
+            ..LoadedMesh::default()
+        };
+        let everything = loaded.flattened();
+        let drawn =
+            |l: &LoadedMesh| (l.triangle_count(), l.instanced.len(), l.mesh.triangles.len());
+        for (budget, copied, kept, own) in [
+            (0, 1, 3, 5 + 7),
+            (8, 1, 3, 5 + 7),
+            (9, 2, 2, 5 + 7 + 12),
+            (18, 2, 2, 5 + 7 + 12),
+            (19, 3, 1, 5 + 7 + 12 + 11),
+            (28, 3, 1, 5 + 7 + 12 + 11),
+            (29, 4, 0, 47),
+            (usize::MAX, 4, 0, 47),
+        ] {
+            let mut l = loaded.clone();
+            assert_eq!(l.flatten_within(budget), copied, "budget {budget}");
+            assert_eq!(drawn(&l), (47, kept, own), "budget {budget}");
+            if kept == 0 {
+                // Every copy placed, as `flattened` places them (in another order).
+                let corners = |m: &Mesh| {
+                    let mut c: Vec<[u32; 9]> = m.triangle_vertices().map(bits).collect();
+                    c.sort();
+                    c
+                };
+                assert_eq!(corners(&l.mesh), corners(&everything));
+            }
+        }
+    }
+
+    /// A triangle's corners, as bits.
+    fn bits(t: [glam::Vec3; 3]) -> [u32; 9] {
+        let f = t.map(|v| v.to_array()).concat();
+        std::array::from_fn(|k| f[k].to_bits())
     }
 
     #[test]

@@ -43,9 +43,11 @@ pub use mesh_file::{
 };
 pub use model::model_to_lab;
 #[cfg(feature = "io")]
-pub use open::{LoadOptions, OpenError, OpenedScene};
+pub use open::{AUTO_FLATTEN_TRIANGLES, Instancing, LoadOptions, OpenError, OpenedScene};
 #[cfg(feature = "io")]
-pub use scene_file::{SceneFileError, load_scene_file, parse_scene};
+pub use scene_file::{
+    SceneFileError, load_scene_file, load_scene_file_with, parse_scene, parse_scene_with,
+};
 
 use crate::accel::Hit;
 use crate::geometry::Geometry;

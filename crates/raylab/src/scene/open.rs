@@ -4,13 +4,71 @@ use std::path::Path;
 
 use super::{LoadError, Scene, SceneError, SceneFileError};
 
-/// How [`Scene::open`] loads a model.
+/// How [`Scene::open`] loads a model or a scene file's meshes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LoadOptions {
-    /// Draw every copy of a mesh that a model uses in several places (glTF nodes sharing a
-    /// mesh) as triangles of its own, instead of storing the mesh once under a two-level BVH:
-    /// more memory, the same picture.
-    pub flatten: bool,
+    /// What becomes of a mesh that a model draws in several places (glTF nodes sharing a mesh).
+    pub instancing: Instancing,
+}
+
+/// What becomes of a mesh that a model draws in several places: stored once and drawn through
+/// each copy's transform (a two-level BVH, see [`TwoLevel`](crate::bvh::TwoLevel)), or copied
+/// into world space as triangles of its own (one BVH over them all). The picture is the same
+/// either way (`tests/instancing.rs` and `tests/mitsuba.rs` compare); what differs is memory
+/// and time:
+///
+/// - two levels store each mesh once, but every ray that reaches a copy's box walks that copy's
+///   tree too, with its ray set-up in the mesh's space: the copies' boxes overlap where a flat
+///   tree's nodes would not. Measured: 2CylinderEngine's paths take 1.3 times as long
+///   instanced (BENCHMARKS.md, "Models"); the glTF boxes of `tests/data/mitsuba-gltf` (one
+///   12-triangle box drawn 18 times) 1.6 times (BENCHMARKS.md, "Small instances flattened");
+/// - flat copies cost memory: about 100 bytes per copied triangle for the geometry and its
+///   tree.
+///
+/// So [`Auto`](Self::Auto), the default, copies the meshes that cost least to copy and keeps the
+/// rest instanced: what a forest of a million trees needs, without making a model of a few
+/// copies slow.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Instancing {
+    /// Copy a model's instanced meshes, the fewest extra triangles first, while the copies
+    /// beyond each mesh's first add at most [`AUTO_FLATTEN_TRIANGLES`] triangles in all; keep
+    /// the rest instanced.
+    #[default]
+    Auto,
+    /// Keep every mesh drawn in several places stored once: the least memory.
+    Keep,
+    /// Copy every instance: the fastest to trace, the most memory.
+    Flatten,
+}
+
+impl std::str::FromStr for Instancing {
+    type Err = String;
+
+    fn from_str(name: &str) -> Result<Instancing, String> {
+        match name {
+            "auto" => Ok(Instancing::Auto),
+            "keep" => Ok(Instancing::Keep),
+            "flatten" => Ok(Instancing::Flatten),
+            other => Err(format!("unknown instancing '{other}': expected auto, keep or flatten")),
+        }
+    }
+}
+
+/// The most triangles that [`Instancing::Auto`] adds to a model by copying its instanced meshes
+/// (each mesh's copies beyond its first): 2¹⁸, some 25 MiB of geometry and tree.
+pub const AUTO_FLATTEN_TRIANGLES: usize = 1 << 18;
+
+impl Instancing {
+    /// Applies this choice to a loaded model: copies its instanced meshes into
+    /// [`LoadedMesh::mesh`](super::LoadedMesh::mesh) as it says. Returns how many meshes it
+    /// copied.
+    pub fn apply(self, loaded: &mut super::LoadedMesh) -> usize {
+        match self {
+            Instancing::Auto => loaded.flatten_within(AUTO_FLATTEN_TRIANGLES),
+            Instancing::Keep => 0,
+            Instancing::Flatten => loaded.flatten_within(usize::MAX),
+        }
+    }
 }
 
 /// A scene as [`Scene::open`] found it.
@@ -52,14 +110,11 @@ impl Scene {
             Err(_) => {}
         }
         if name.to_ascii_lowercase().ends_with(".toml") {
-            let scene = super::load_scene_file(path)?;
+            let scene = super::load_scene_file_with(path, options)?;
             return Ok(OpenedScene { scene, is_model: false });
         }
         let mut loaded = super::load_mesh(path)?;
-        if options.flatten {
-            loaded.mesh = loaded.flattened();
-            loaded.instanced.clear();
-        }
+        options.instancing.apply(&mut loaded);
         let mut scene = Scene::from_loaded(&loaded);
         scene.warnings.extend(loaded.warnings.iter().cloned());
         // A file with its own camera (glTF) is seen through it; other models are framed.
@@ -87,5 +142,27 @@ mod tests {
         assert!(!toml.is_model && toml.scene.has_area_lights());
         let missing = Scene::open("missing.obj", &options).unwrap_err().to_string();
         assert!(missing.starts_with("missing.obj: cannot read"), "{missing}");
+    }
+
+    /// The glTF boxes (one 12-triangle box drawn 18 times), as a model and through a scene
+    /// file: `auto` copies so small a mesh, `keep` keeps it instanced, `flatten` copies it; the
+    /// same 216 triangles drawn every way.
+    #[test]
+    fn instancing_is_chosen_for_models_and_scene_files() {
+        let folder = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mitsuba-gltf");
+        for (name, others) in [("boxes.gltf", 0), ("boxes.toml", 4)] {
+            for (instancing, instanced) in
+                [(Instancing::Auto, false), (Instancing::Keep, true), (Instancing::Flatten, false)]
+            {
+                let opened =
+                    Scene::open(&format!("{folder}/{name}"), &LoadOptions { instancing }).unwrap();
+                let geometry = &opened.scene.geometry;
+                assert_eq!(geometry.is_instanced(), instanced, "{name} {instancing:?}");
+                assert_eq!(geometry.len(), 216 + others, "{name} {instancing:?}");
+            }
+        }
+        assert_eq!("keep".parse(), Ok(Instancing::Keep));
+        let error = "some".parse::<Instancing>().unwrap_err();
+        assert_eq!(error, "unknown instancing 'some': expected auto, keep or flatten");
     }
 }

@@ -14,7 +14,7 @@ use glam::{Affine3A, Mat4, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::{CameraSettings, FovAxis, Keyframe, RenderSettings, Scene};
+use super::{CameraSettings, FovAxis, Keyframe, LoadOptions, RenderSettings, Scene};
 use crate::camera::Camera;
 use crate::filter::Filter;
 use crate::geometry::Geometry;
@@ -41,19 +41,39 @@ pub struct SceneFileError {
 /// The most bytes a scene file may have (it holds no geometry, only references to it).
 const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 
-/// Loads a scene file; meshes it names are read relative to its folder.
+/// Loads a scene file; meshes it names are read relative to its folder, with the default
+/// [`LoadOptions`].
 pub fn load_scene_file(path: &Path) -> std::result::Result<Scene, SceneFileError> {
+    load_scene_file_with(path, &LoadOptions::default())
+}
+
+/// Loads a scene file; meshes it names are read relative to its folder, as `options` say.
+pub fn load_scene_file_with(
+    path: &Path,
+    options: &LoadOptions,
+) -> std::result::Result<Scene, SceneFileError> {
     let whole = |message: String| SceneFileError { path: path.into(), line: 1, column: 1, message };
     let metadata = std::fs::metadata(path).map_err(|e| whole(format!("cannot read: {e}")))?;
     if metadata.len() > MAX_SCENE_FILE_BYTES {
         return Err(whole(format!("{} bytes is too large for a scene file", metadata.len())));
     }
     let text = std::fs::read_to_string(path).map_err(|e| whole(format!("cannot read: {e}")))?;
-    parse_scene(&text, path)
+    parse_scene_with(&text, path, options)
 }
 
-/// Parses a scene file's text; `path` names it in messages and meshes are found beside it.
+/// Parses a scene file's text; `path` names it in messages and meshes are found beside it,
+/// loaded with the default [`LoadOptions`].
 pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneFileError> {
+    parse_scene_with(text, path, &LoadOptions::default())
+}
+
+/// Parses a scene file's text; `path` names it in messages and meshes are found beside it,
+/// loaded as `options` say.
+pub fn parse_scene_with(
+    text: &str,
+    path: &Path,
+    options: &LoadOptions,
+) -> std::result::Result<Scene, SceneFileError> {
     let at = |span: Option<Range<usize>>, message: String| {
         let offset = span.map_or(0, |s| s.start).min(text.len());
         let before = &text[..offset];
@@ -67,7 +87,7 @@ pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneF
     let document: Document =
         toml::from_str(text).map_err(|e| at(e.span(), e.message().trim().replace('\n', " ")))?;
     let folder = path.parent().unwrap_or(Path::new("."));
-    Builder { at: &at, folder, warnings: Default::default() }.build(document, path)
+    Builder { at: &at, folder, options, warnings: Default::default() }.build(document, path)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -157,6 +177,8 @@ enum LightDoc {
 struct Builder<'a, F> {
     at: &'a F,
     folder: &'a Path,
+    /// How the meshes are loaded.
+    options: &'a LoadOptions,
     /// The meshes' loaders' warnings, for [`Scene::warnings`].
     warnings: std::cell::RefCell<Vec<String>>,
 }
@@ -297,8 +319,9 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                     );
                 };
                 let mesh_path = self.folder.join(file.get_ref());
-                let loaded = super::load_mesh(&mesh_path)
+                let mut loaded = super::load_mesh(&mesh_path)
                     .map_err(|e| (self.at)(Some(file.span()), e.to_string()))?;
+                self.options.instancing.apply(&mut loaded);
                 self.warnings.borrow_mut().extend(loaded.warnings.iter().cloned());
                 if material.is_none() {
                     // The file's own materials, as diffuse with their Kd and Ke.
