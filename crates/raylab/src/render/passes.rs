@@ -18,7 +18,7 @@ use crate::region::Region;
 use crate::sampling::{Grid, Sampler, SamplerKind};
 
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
-const MAX_TILE_PIXELS: usize = 256;
+const MAX_TILE_PIXELS: usize = 1024;
 
 /// Which pass: sample `sample` of the pixels of `region` (of the camera's image), drawn as
 /// `settings` say.
@@ -232,7 +232,7 @@ fn tile_or_default(
     (if width == 0 { integrator.tile_width() } else { width }, height)
 }
 
-/// A tile shape that fits the tile arrays: both sides at least 1, at most 256 pixels.
+/// A tile shape that fits the tile arrays: both sides at least 1, at most 1,024 pixels.
 pub(super) fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
     let height = (height as usize).clamp(1, MAX_TILE_PIXELS);
     let width = (width as usize).clamp(1, MAX_TILE_PIXELS / height);

@@ -31,7 +31,7 @@
 //!
 //! Stages 2 to 4 run a chunk at a time: as soon as sixteen vertices of a kind are gathered,
 //! their numbers are drawn and they are shaded, while their rows are still in the first-level
-//! cache (a chunk and its results take about 5.5 KiB, a 256-path wavefront's some 88 KiB, more
+//! cache (a chunk and its results take about 5.5 KiB, a 1,024-path wavefront's some 350 KiB, more
 //! than the 32 KiB of this machine's first-level cache). Each path draws from its own
 //! sampler, so the order in which paths draw changes no number. Measured on Mitsuba's box
 //! (512², 16 spp, 1 thread, CPU time, min of 7, the same pixels; `/usr/bin/time -f %U raylab
@@ -139,14 +139,17 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         self.path.discarded_samples()
     }
 
-    /// 32×8 tiles: 256 paths advance together, which fills the lanes of the later bounces
+    /// 128×8 tiles: 1,024 paths advance together, which fills the lanes of the later bounces
     /// better. Measured on Mitsuba's Cornell box (`/usr/bin/time -f %U raylab render
     /// scenes/cornell-mitsuba.toml --spp 8 --threads 1 -o r.pfm`, CPU time, median of 5): 8×8
     /// tiles 1.63 s, 32×8 1.52 s, 64×8 1.52 s; the showcase, the materials scene and the engine
     /// within 3 %. (The lab's integrator keeps 8×8: its frame was 2–5 % slower in 32×8 tiles,
     /// `raylab view --headless --frames 300`.) BENCHMARKS.md, "Paths in lanes", has the table.
+    /// Once every BSDF shaded in lanes, wider tiles paid again (median of 7, the same pixels):
+    /// the Cornell box 1.03 s in 32×8 tiles, 0.99 s in 64×8 and 128×8; the materials scene
+    /// (`--size 256x256 --spp 16`) 0.38, 0.37 and 0.37 s (BENCHMARKS.md, "Wider tiles").
     fn tile_width(&self) -> u32 {
-        32
+        128
     }
 
     fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
