@@ -41,7 +41,7 @@ pub struct SampleSettings {
     pub sampler: Option<SamplerKind>,
     /// The pixel filter.
     pub filter: Filter,
-    /// Tile width and height in pixels (their product at most 256); width 0 for the
+    /// Tile width and height in pixels (their product at most 1,024); width 0 for the
     /// integrator's choice ([`Integrator::tile_width`]).
     pub tile: (u32, u32),
     /// The samples per pixel the render is to reach, which the `multijitter` sampler lays out
@@ -61,6 +61,10 @@ impl Default for SampleSettings {
         }
     }
 }
+
+/// The most passes traced together ([`Accumulator::add_samples_with_progress`]): a pixel's
+/// sixteen samples fill a packet of sixteen rays, or a quarter of a packet of 64.
+pub const PASS_GROUP: u32 = 16;
 
 /// Renders the camera's whole image with one sample per pixel (with the lab's integrator, one
 /// ray through each pixel's centre).
@@ -86,8 +90,12 @@ pub fn render_samples(
     progress: &(dyn Fn(u32) + Sync),
 ) -> Result<Film, FilmError> {
     let mut accumulator = Accumulator::new(camera.width, camera.height)?;
-    for _ in 0..samples.max(1) {
-        accumulator.add_sample_with_progress(camera, integrator, progress);
+    // In groups of sixteen passes, each pixel's samples side by side: the same pixels.
+    let mut left = samples.max(1);
+    while left > 0 {
+        let group = left.min(PASS_GROUP);
+        accumulator.add_samples_with_progress(camera, integrator, group, progress);
+        left -= group;
     }
     accumulator.mean()
 }
@@ -135,6 +143,63 @@ mod tests {
                     }
                 }
                 assert!(mean.pixels().iter().any(|p| *p != Vec3::ZERO), "{region}");
+            }
+        }
+    }
+
+    /// Passes in groups give the pixels, layers and discarded counts of the same passes one by
+    /// one, to the bit: the lab's integrator, the wavefront path tracer with an albedo and a
+    /// depth layer, both samplers that stratify, tiles of odd shapes, a region at an odd place,
+    /// and groups of every size from 1 to 16 (the last group short).
+    #[test]
+    fn groups_of_passes_give_the_passes_pixels() {
+        use crate::bvh::Bvh;
+        use crate::integrator::{Lab, PathSettings, PathWavefront, Stage, WithAovs};
+        use crate::sampling::SamplerKind;
+        use crate::scene::Scene;
+        use crate::settings::AovKind;
+        let scene = Scene::built_in("cornell").expect("the lab scene");
+        let bvh = Bvh::new(&scene.vertices());
+        let lab = Lab::new(&scene, &bvh, Stage::Ambient);
+        let path = PathWavefront::new(&scene, &bvh, PathSettings::default());
+        let aovs = [AovKind::Albedo, AovKind::Depth];
+        let with_layers = WithAovs::new(&path, &scene, &bvh, &aovs);
+        let (width, height) = (23, 13);
+        let camera = crate::Camera::lab(width, height);
+        let region = Region::new([2, 1, 21, 12], width, height).unwrap();
+        const SPP: u32 = 21;
+        let integrators: [(&dyn Integrator, usize); 2] = [(&lab, 0), (&with_layers, 2)];
+        for ((integrator, layers), kind) in
+            integrators.into_iter().zip([SamplerKind::Sobol, SamplerKind::MultiJitter])
+        {
+            for tile in [(0, 8), (5, 3), (64, 1)] {
+                let accumulator = || {
+                    let mut a = Accumulator::for_region(width, height, region).unwrap();
+                    a.settings.sampler = Some(kind);
+                    a.settings.count = SPP;
+                    a.settings.tile = tile;
+                    a.settings.seed = 3;
+                    a.with_layers(layers, None).unwrap()
+                };
+                let mut single = accumulator();
+                for _ in 0..SPP {
+                    single.add_sample(&camera, integrator);
+                }
+                let bits = |a: &Accumulator| {
+                    let films = std::iter::once(a.sums()).chain(a.layer_sums());
+                    let pixels = films.flat_map(|f| f.pixels().iter().flat_map(|p| p.to_array()));
+                    pixels.map(f32::to_bits).collect::<Vec<_>>()
+                };
+                for group in 1..=PASS_GROUP {
+                    let mut grouped = accumulator();
+                    while grouped.samples() < SPP {
+                        let count = group.min(SPP - grouped.samples());
+                        grouped.add_samples_with_progress(&camera, integrator, count, &|_| {});
+                    }
+                    assert_eq!(grouped.samples(), SPP);
+                    assert_eq!(grouped.discarded_samples(), single.discarded_samples());
+                    assert!(bits(&grouped) == bits(&single), "{kind:?} {tile:?} groups of {group}");
+                }
             }
         }
     }

@@ -1,10 +1,13 @@
-//! One pass of samples over an image: the scheduler.
+//! Passes of samples over an image: the scheduler.
 //!
-//! A pass adds sample `n` of every pixel of a region. The region is cut into bands of whole
-//! rows that rayon's threads take in any order, and each band into tiles whose camera rays are
-//! traced together (the accelerator traces them as packets). Every sample draws its numbers from
-//! a [`Sampler`] made from (seed, pixel, sample index) alone, so the order of the work never
-//! changes a pixel. The pixels go into an [`Accumulator`](super::Accumulator)'s sums.
+//! A pass adds sample `n` of every pixel of a region; a group of passes adds samples `n` to
+//! `n + count − 1`, each pixel's samples traced side by side. The region is cut into bands of
+//! whole rows that rayon's threads take in any order, and each band into tiles whose camera
+//! rays are traced together (the accelerator traces them as packets: a pixel's samples make
+//! the most coherent ones). Every sample draws its numbers from a [`Sampler`] made from (seed,
+//! pixel, sample index) alone, so the order of the work never changes a pixel, and each
+//! pixel's samples are added to its sum in their order: a group gives the pixels of its passes
+//! one by one, to the bit. The pixels go into an [`Accumulator`](super::Accumulator)'s sums.
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -20,20 +23,46 @@ use crate::sampling::{Grid, Sampler, SamplerKind};
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
 const MAX_TILE_PIXELS: usize = 1024;
 
-/// Which pass: sample `sample` of the pixels of `region` (of the camera's image), drawn as
-/// `settings` say.
+/// Which passes: samples `sample` to `sample + count − 1` of the pixels of `region` (of the
+/// camera's image), drawn as `settings` say.
 pub(super) struct Pass<'a> {
     pub settings: &'a SampleSettings,
     pub sample: u32,
+    /// How many passes, from `sample` on (at least 1).
+    pub count: u32,
     pub region: Region,
 }
 
-/// Adds `pass`'s sample of every pixel of its region to `pixels` (the region's pixels row by
-/// row) and of each layer to `layers` (one film of the region each).
+/// Adds `pass`'s samples of every pixel of its region to `pixels` (the region's pixels row by
+/// row) and of each layer to `layers` (one film of the region each), each pixel's in the order
+/// of their indices. `progress` gets the rows finished, a row once per sample.
 pub(super) fn add_pass(
     camera: &Camera,
     integrator: &(impl Integrator + ?Sized),
-    Pass { settings, sample, region }: Pass,
+    Pass { settings, sample, count, region }: Pass,
+    pixels: &mut [Vec3],
+    layers: &mut [Film],
+    progress: &(dyn Fn(u32) + Sync),
+) -> u64 {
+    let (_, band_rows) = tile_shape(settings.tile);
+    // As many of a pixel's samples at once as a tile's arrays hold for a column of a band.
+    let most = (MAX_TILE_PIXELS / band_rows).max(1) as u32;
+    let mut discarded = 0;
+    let mut first = sample;
+    while first < sample + count.max(1) {
+        let group = most.min(sample + count.max(1) - first);
+        let pass = Pass { settings, sample: first, count: group, region };
+        discarded += add_group(camera, integrator, pass, pixels, layers, progress);
+        first += group;
+    }
+    discarded
+}
+
+/// [`add_pass`] for a group whose samples of a column of a band fit a tile.
+fn add_group(
+    camera: &Camera,
+    integrator: &(impl Integrator + ?Sized),
+    Pass { settings, sample, count, region }: Pass,
     pixels: &mut [Vec3],
     layers: &mut [Film],
     progress: &(dyn Fn(u32) + Sync),
@@ -43,10 +72,11 @@ pub(super) fn add_pass(
     let rays = camera.rays();
     let kind = settings.sampler.unwrap_or_else(|| integrator.sampler_kind());
     let (_, band_rows) = tile_shape(settings.tile);
+    debug_assert!(count >= 1 && band_rows * count as usize <= MAX_TILE_PIXELS);
     #[cfg(target_arch = "x86_64")]
     let avx2 = std::arch::is_x86_feature_detected!("avx2");
     let discarded = std::sync::atomic::AtomicU64::new(0);
-    let count = |n: u64| {
+    let tally = |n: u64| {
         if n > 0 {
             discarded.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
         }
@@ -70,30 +100,34 @@ pub(super) fn add_pass(
             kind,
             settings,
             sample,
+            count: count as usize,
             width,
             first_row: region.y0 as usize + band * band_rows,
             first_column: region.x0 as usize,
         };
+        let rows = (pixels.len() / width) as u32 * band.count as u32;
         #[cfg(target_arch = "x86_64")]
         if avx2 {
             // SAFETY: AVX2 was detected above.
-            count(unsafe { band.add_avx2(integrator, pixels, &mut layers) });
-            progress((pixels.len() / width) as u32);
+            tally(unsafe { band.add_avx2(integrator, pixels, &mut layers) });
+            progress(rows);
             return;
         }
-        count(band.add(integrator, pixels, &mut layers));
-        progress((pixels.len() / width) as u32);
+        tally(band.add(integrator, pixels, &mut layers));
+        progress(rows);
     });
     discarded.into_inner()
 }
 
-/// A band of whole rows of one pass ([`add_pass`]).
+/// A band of whole rows of a group of passes ([`add_group`]).
 struct Band<'a> {
     camera: &'a RayGenerator,
     has_lens: bool,
     kind: SamplerKind,
     settings: &'a SampleSettings,
+    /// The first sample, and how many of each pixel (side by side in a tile).
     sample: u32,
+    count: usize,
     /// Pixels per row.
     width: usize,
     /// The band's first row and column in the camera's image.
@@ -119,10 +153,12 @@ impl Band<'_> {
         self.add(integrator, pixels, layers)
     }
 
-    /// Adds this pass's sample of every pixel of the band (`pixels`, its rows) tile by tile,
-    /// and of each of the integrator's layers (`layers[k]`, the same rows of layer `k`).
-    /// Returns how many samples were not finite (NaN or infinite in a channel): they count as
-    /// black, so that one bad sample cannot spoil its pixel for good.
+    /// Adds the group's samples of every pixel of the band (`pixels`, its rows) tile by tile,
+    /// and of each of the integrator's layers (`layers[k]`, the same rows of layer `k`): a
+    /// tile's rays are its pixels' in row order, each pixel's samples side by side, and each
+    /// pixel's are added in the order of their indices. Returns how many samples were not
+    /// finite (NaN or infinite in a channel): they count as black, so that one bad sample cannot
+    /// spoil its pixel for good.
     #[inline(always)]
     fn add(
         &self,
@@ -135,7 +171,10 @@ impl Band<'_> {
         let (width, first_row, has_lens) = (self.width, self.first_row, self.has_lens);
         let first_column = self.first_column;
         let rows = pixels.len() / width;
+        let count = self.count;
+        // The tile's columns shrink so that its pixels' samples fit the arrays.
         let (tile_width, _) = tile_shape(tile_or_default(settings.tile, integrator));
+        let tile_width = (tile_width / count).max(1);
         // A tile's rays, samplers and colours, on the stack.
         let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_TILE_PIXELS];
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
@@ -153,15 +192,17 @@ impl Band<'_> {
         let mut layer_values = vec![Vec3::ZERO; MAX_TILE_PIXELS * layer_count];
         for tile_x in (0..width).step_by(tile_width) {
             let columns = tile_x..(tile_x + tile_width).min(width);
-            let n = columns.len() * rows;
+            let n = columns.len() * rows * count;
             let mut slot = samplers.iter_mut().zip(&mut film);
             for y in first_row..first_row + rows {
                 for x in columns.clone() {
-                    let (sampler, film) = slot.next().expect("a tile's rays fit");
                     let x = first_column + x;
                     let pixel = (x as u32, y as u32);
-                    *sampler = Sampler::counted(kind, settings.seed, pixel, sample, grid);
-                    *film = Vec2::new(x as f32, y as f32);
+                    for s in sample..sample + count as u32 {
+                        let (sampler, film) = slot.next().expect("a tile's rays fit");
+                        *sampler = Sampler::counted(kind, settings.seed, pixel, s, grid);
+                        *film = Vec2::new(x as f32, y as f32);
+                    }
                 }
             }
             // The pixel positions (and lens numbers): in lanes for the stratified kinds, the
@@ -199,10 +240,12 @@ impl Band<'_> {
                 let mut values = layer_values.chunks_exact(layer_count);
                 for y in 0..rows {
                     for x in columns.clone() {
-                        let values = values.next().expect("the layers of each ray");
-                        for (layer, &value) in layers.iter_mut().zip(values) {
-                            if value.is_finite() {
-                                layer[y * width + x] += value;
+                        for _ in 0..count {
+                            let values = values.next().expect("the layers of each ray");
+                            for (layer, &value) in layers.iter_mut().zip(values) {
+                                if value.is_finite() {
+                                    layer[y * width + x] += value;
+                                }
                             }
                         }
                     }
@@ -211,11 +254,13 @@ impl Band<'_> {
             let mut colour = colours.iter();
             for y in 0..rows {
                 for x in columns.clone() {
-                    let colour = *colour.next().expect("one colour per ray");
-                    if colour.is_finite() {
-                        pixels[y * width + x] += colour;
-                    } else {
-                        discarded += 1;
+                    for _ in 0..count {
+                        let colour = *colour.next().expect("one colour per ray");
+                        if colour.is_finite() {
+                            pixels[y * width + x] += colour;
+                        } else {
+                            discarded += 1;
+                        }
                     }
                 }
             }
@@ -255,7 +300,18 @@ mod tests {
     ) -> Band<'a> {
         let (_, band_rows) = tile_shape(settings.tile);
         let (width, first_row) = (width as usize, b * band_rows);
-        Band { camera: rays, has_lens, kind, settings, sample, width, first_row, first_column: 0 }
+        let (count, first_column) = (1, 0);
+        Band {
+            camera: rays,
+            has_lens,
+            kind,
+            settings,
+            sample,
+            count,
+            width,
+            first_row,
+            first_column,
+        }
     }
 
     /// A band makes each pixel's sampler and camera ray as they are made one at a time

@@ -359,16 +359,25 @@ impl<'s> RenderJob<'s> {
             start.elapsed()
         };
         let mut interrupted = false;
+        // Passes go in groups, each pixel's samples side by side (the same pixels, faster:
+        // `Accumulator::add_samples_with_progress`): as many as take about a second, so that a
+        // stop or a checkpoint waits no longer than that, and no more than the time limit
+        // leaves room for. The first group is one pass, which times them.
+        let mut group = 1;
         self.pool.install(|| {
             while accumulator.samples() < settings.spp {
                 if self.stopped() {
                     interrupted = true;
                     break;
                 }
-                accumulator.add_sample_with_progress(camera, integrator, &|rows| {
+                let count = group.min(settings.spp - accumulator.samples());
+                let pass_start = Instant::now();
+                accumulator.add_samples_with_progress(camera, integrator, count, &|rows| {
                     events(Event::Rows(rows))
                 });
-                if settings.time_limit.is_some_and(|limit| start.elapsed() >= limit) {
+                let left = settings.time_limit.map(|limit| limit.saturating_sub(start.elapsed()));
+                group = passes_per_group(pass_start.elapsed() / count, left);
+                if left == Some(Duration::ZERO) {
                     break;
                 }
                 if let Some((path, every)) = &checkpoint
@@ -508,6 +517,19 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf, SessionError> {
     Ok(pattern.with_file_name(file))
 }
 
+/// About how long a group of passes may take: a stop, a checkpoint or a frame waits for the
+/// group in flight.
+const GROUP_TIME: Duration = Duration::from_secs(1);
+
+/// How many passes the next group takes, each taking `per_pass`: as many as fit in about
+/// [`GROUP_TIME`], and in the time `left` under a limit; at least one, at most
+/// [`PASS_GROUP`](crate::render::PASS_GROUP).
+fn passes_per_group(per_pass: Duration, left: Option<Duration>) -> u32 {
+    let budget = left.map_or(GROUP_TIME, |left| left.min(GROUP_TIME));
+    let fits = budget.as_secs_f64() / per_pass.as_secs_f64().max(1e-9);
+    (fits as u32).clamp(1, crate::render::PASS_GROUP)
+}
+
 /// The number of threads the machine runs at once.
 fn cores() -> usize {
     std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
@@ -556,6 +578,20 @@ mod tests {
         assert!(!message.contains('\n'), "{message}");
         assert!(check_bvh_memory("small.obj", 1000, Some(8 << 30)).is_ok());
         assert!(check_bvh_memory("unknown.obj", 200_000_000, None).is_ok());
+    }
+
+    /// As many passes as take about a second, within a time limit's room, from 1 to 16.
+    #[test]
+    fn groups_take_about_a_second_and_fit_the_time_left() {
+        let ms = Duration::from_millis;
+        assert_eq!(passes_per_group(ms(10), None), 16);
+        assert_eq!(passes_per_group(ms(70), None), 14);
+        assert_eq!(passes_per_group(ms(400), None), 2);
+        assert_eq!(passes_per_group(ms(3000), None), 1);
+        assert_eq!(passes_per_group(Duration::ZERO, None), 16);
+        assert_eq!(passes_per_group(ms(70), Some(ms(300))), 4);
+        assert_eq!(passes_per_group(ms(70), Some(ms(5000))), 14);
+        assert_eq!(passes_per_group(ms(70), Some(ms(10))), 1);
     }
 
     #[test]
