@@ -5,7 +5,7 @@
 //! instanced glTF boxes, at a quarter of the 256×256 they are compared at).
 //!
 //! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
-//! stage (`PathWavefront::with_stage_times`, 16 passes, one thread), then times the sampler's
+//! stage (`PathWavefront::with_stage_times`, 16 passes in one group, one thread), then times the sampler's
 //! draws for a tile's paths one by one and in batches.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -46,9 +46,20 @@ fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
 
 /// One pass of `integrator` over the camera's pixels, on the current thread pool.
 fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrator) -> Accumulator {
+    passes(camera, settings, integrator, 1)
+}
+
+/// `count` passes as one group (each pixel's samples side by side, as `raylab render` traces
+/// them), on the current thread pool.
+fn passes(
+    camera: &Camera,
+    settings: &ResolvedSettings,
+    integrator: &dyn Integrator,
+    count: u32,
+) -> Accumulator {
     let mut accumulator = Accumulator::new(camera.width, camera.height).expect("an accumulator");
     accumulator.settings = settings.samples;
-    accumulator.add_sample(camera, integrator);
+    accumulator.add_samples_with_progress(camera, integrator, count, &|_| {});
     accumulator
 }
 
@@ -60,7 +71,9 @@ fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrato
 fn stage_table(_: &mut Criterion) {
     const PASSES: u32 = 16;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
-    println!("ns per sample by stage, a quarter of the scene's size, {PASSES} passes, one thread");
+    println!(
+        "ns per sample by stage, a quarter of the scene's size, {PASSES} passes in a group, one thread"
+    );
     println!(
         "{:16} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>6} {:>9}",
         "scene",
@@ -84,9 +97,7 @@ fn stage_table(_: &mut Criterion) {
         let time = |integrator: &dyn Integrator| {
             pool.install(|| {
                 let start = Instant::now();
-                for _ in 0..PASSES {
-                    pass(&camera, &settings, integrator);
-                }
+                passes(&camera, &settings, integrator, PASSES);
                 start.elapsed()
             })
         };
