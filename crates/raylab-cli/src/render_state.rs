@@ -2,7 +2,7 @@
 //! written as it goes, and resuming from one.
 //!
 //! - The first SIGINT or SIGTERM lets the passes in flight finish (a group of up to sixteen that
-//!   takes about a second; every pixel gets the same number of samples), then the image so far is written, atomically, with the samples per pixel it
+//!   takes about a quarter of a second; every pixel gets the same number of samples), then the image so far is written, atomically, with the samples per pixel it
 //!   reached in its header, and `raylab` exits with status 130. A second signal exits at once;
 //!   every file is written to a temporary name and renamed, so even then no file is left half
 //!   written.

@@ -360,9 +360,9 @@ impl<'s> RenderJob<'s> {
         };
         let mut interrupted = false;
         // Passes go in groups, each pixel's samples side by side (the same pixels, faster:
-        // `Accumulator::add_samples_with_progress`): as many as take about a second, so that a
-        // stop or a checkpoint waits no longer than that, and no more than the time limit
-        // leaves room for. The first group is one pass, which times them.
+        // `Accumulator::add_samples_with_progress`): as many as take about a quarter of a
+        // second, so that a stop or a checkpoint waits no longer than that, and no more than the
+        // time limit leaves room for. The first group is one pass, which times them.
         let mut group = 1;
         self.pool.install(|| {
             while accumulator.samples() < settings.spp {
@@ -517,9 +517,10 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf, SessionError> {
     Ok(pattern.with_file_name(file))
 }
 
-/// About how long a group of passes may take: a stop, a checkpoint or a frame waits for the
-/// group in flight.
-const GROUP_TIME: Duration = Duration::from_secs(1);
+/// About how long a group of passes may take: a stop or a checkpoint waits for the group in
+/// flight. A quarter of a second: a 256×256 render's passes of a few milliseconds go sixteen
+/// together, where grouping pays most; a pass that takes longer than this goes alone.
+const GROUP_TIME: Duration = Duration::from_millis(250);
 
 /// How many passes the next group takes, each taking `per_pass`: as many as fit in about
 /// [`GROUP_TIME`], and in the time `left` under a limit; at least one, at most
@@ -580,17 +581,18 @@ mod tests {
         assert!(check_bvh_memory("unknown.obj", 200_000_000, None).is_ok());
     }
 
-    /// As many passes as take about a second, within a time limit's room, from 1 to 16.
+    /// As many passes as take about a quarter of a second, within a time limit's room, from 1
+    /// to 16.
     #[test]
-    fn groups_take_about_a_second_and_fit_the_time_left() {
+    fn groups_take_a_quarter_of_a_second_and_fit_the_time_left() {
         let ms = Duration::from_millis;
         assert_eq!(passes_per_group(ms(10), None), 16);
-        assert_eq!(passes_per_group(ms(70), None), 14);
-        assert_eq!(passes_per_group(ms(400), None), 2);
-        assert_eq!(passes_per_group(ms(3000), None), 1);
+        assert_eq!(passes_per_group(ms(20), None), 12);
+        assert_eq!(passes_per_group(ms(70), None), 3);
+        assert_eq!(passes_per_group(ms(400), None), 1);
         assert_eq!(passes_per_group(Duration::ZERO, None), 16);
-        assert_eq!(passes_per_group(ms(70), Some(ms(300))), 4);
-        assert_eq!(passes_per_group(ms(70), Some(ms(5000))), 14);
+        assert_eq!(passes_per_group(ms(10), Some(ms(55))), 5);
+        assert_eq!(passes_per_group(ms(10), Some(ms(5000))), 16);
         assert_eq!(passes_per_group(ms(70), Some(ms(10))), 1);
     }
 
