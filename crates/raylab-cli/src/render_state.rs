@@ -2,10 +2,10 @@
 //! written as it goes, and resuming from one.
 //!
 //! - The first SIGINT or SIGTERM lets the passes in flight finish (a group of up to sixteen that
-//!   takes about a quarter of a second; every pixel gets the same number of samples), then the image so far is written, atomically, with the samples per pixel it
-//!   reached in its header, and `raylab` exits with status 130. A second signal exits at once;
-//!   every file is written to a temporary name and renamed, so even then no file is left half
-//!   written.
+//!   takes about a quarter of a second; every pixel gets the same number of samples), then the
+//!   image so far is written, atomically, with the samples per pixel it reached in its header,
+//!   and `raylab` exits with status 130. A second signal exits at once; every file is written to
+//!   a temporary name and renamed, so even then no file is left half written.
 //! - `--checkpoint SECONDS` writes the sums of the samples beside the output
 //!   (`NAME.checkpoint.exr`, see `raylab::parts`) at most every SECONDS, between passes, and on
 //!   an interrupt. The same command run again finds it and goes on from it (a Slurm job requeued

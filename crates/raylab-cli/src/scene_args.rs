@@ -47,10 +47,10 @@ pub struct SceneArgs {
     pub fov: Option<f32>,
 
     /// Meshes that a model draws in several places (glTF nodes sharing a mesh): auto copies
-    /// those whose copies add the fewest triangles (at most 262,144 in all, some 25 MiB) and
-    /// stores the rest once, under a two-level BVH; keep stores every one once (the least
-    /// memory); flatten copies every instance (the fastest to trace, the most memory). The
-    /// picture is the same.
+    /// those whose copies add the fewest triangles (at most 262,144 per model file, some 25
+    /// MiB) and stores the rest once, under a two-level BVH; keep stores every one once (the
+    /// least memory); flatten copies every instance (the fastest to trace, the most memory).
+    /// The picture is the same.
     #[arg(long, value_name = "HOW", default_value = "auto")]
     pub instancing: Instancing,
 

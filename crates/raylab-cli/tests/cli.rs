@@ -139,6 +139,8 @@ fn bad_input_is_a_one_line_error_and_leaves_no_file() {
         (&["--threads", "100000"], "more than 1024"),
         (&["sponza"], "unknown scene 'sponza'"),
         (&["--stage", "7"], "unknown stage '7'"),
+        (&["--instancing", "some"], "expected auto, keep or flatten"),
+        (&["--flatten", "--instancing", "keep"], "cannot be used with"),
     ];
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("folder.png")).unwrap();

@@ -5,8 +5,8 @@
 //! instanced glTF boxes, at a quarter of the 256×256 they are compared at).
 //!
 //! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
-//! stage (`PathWavefront::with_stage_times`, 16 passes in one group, one thread), then times the sampler's
-//! draws for a tile's paths one by one and in batches.
+//! stage (`PathWavefront::with_stage_times`, 16 passes in one group, one thread), then times
+//! the sampler's draws for a tile's paths one by one and in batches.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::time::{Duration, Instant};

@@ -1,7 +1,7 @@
 //! The wavefront path tracer ([`PathWavefront`]) gives the scalar path tracer's samples, bit for
 //! bit: every scene in `scenes/`, the lab's box, models (OBJ with textures, glTF) and a scene
 //! with alpha-masked holes, at several depth limits. Accumulated sums are compared, so every
-//! pixel's every sample must agree; the wavefront traces tiles of 32×8 camera rays together
+//! pixel's every sample must agree; the wavefront traces tiles of 128×8 camera rays together
 //! (`radiance_each`), the scalar path one ray at a time.
 
 mod common;

@@ -79,9 +79,10 @@ pub trait Integrator: Sync {
         }
     }
 
-    /// How many pixels wide the tiles are whose camera rays it is handed at once
+    /// How many rays wide the tiles are whose camera rays it is handed at once
     /// ([`radiance_each`](Self::radiance_each)), by default: eight, for 8×8 tiles of coherent
-    /// camera rays. The tiling never changes the pixels.
+    /// camera rays (a pixel's each in a single pass; in a group of `n` passes each pixel's `n`
+    /// samples side by side, `8 / n` pixels, at least one). The tiling never changes the pixels.
     fn tile_width(&self) -> u32 {
         8
     }

@@ -201,7 +201,11 @@ impl Accumulator {
         count: u32,
         progress: &(dyn Fn(u32) + Sync),
     ) {
-        let count = count.max(1);
+        // At least one; no more than the sample indices hold.
+        let count = count.max(1).min(u32::MAX - self.samples);
+        if count == 0 {
+            return;
+        }
         assert_eq!(
             (camera.width, camera.height),
             self.image,

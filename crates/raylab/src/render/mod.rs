@@ -2,15 +2,17 @@
 //!
 //! The image is cut into bands of rows that rayon's threads take in any order, and each band
 //! into tiles whose camera rays are traced together. Every sample of a pixel draws its numbers
-//! from a [`Sampler`](crate::sampling::Sampler) made from (seed, pixel, sample index) alone, so the picture is the same for
-//! any thread count or tiling.
+//! from a [`Sampler`](crate::sampling::Sampler) made from (seed, pixel, sample index) alone, so
+//! the picture is the same for any thread count or tiling.
 //!
 //! The first two numbers place the sample in the pixel (with the [`Filter`]), the next two on
 //! the lens when the camera has an aperture, and the integrator takes the rest. With the lab's
 //! sampler, sample 0 of a pixel goes through its centre, which is the lab's one ray per pixel.
-//! An [`Accumulator`] adds samples one pass at a time, which is how `raylab view` refines a still
-//! picture; a render of `N` samples at once ([`render_samples`]) is the same passes in the same
-//! order, so it gives the same pixels bit for bit.
+//! An [`Accumulator`] adds samples a pass at a time, which is how `raylab view` refines a still
+//! picture, or a group of passes at a time, each pixel's samples traced side by side
+//! ([`Accumulator::add_samples_with_progress`], as `raylab render` and [`render_samples`] do):
+//! each pixel's samples are added in the order of their indices either way, so the pixels are
+//! the same bit for bit.
 
 use crate::camera::Camera;
 use crate::film::{Film, FilmError};
@@ -25,8 +27,9 @@ mod window;
 pub use accumulator::Accumulator;
 
 /// Rows per unit of parallel work by default: small enough to balance two cores; a band is
-/// traced in tiles of `tile`×`band` pixels, whose rays are coherent (the accelerator traces them
-/// as packets).
+/// traced in tiles of `tile`×`band` rays (a group of `n` passes makes a tile `tile / n` pixels
+/// wide, each pixel's `n` samples side by side), whose rays are coherent (the accelerator
+/// traces camera rays as packets).
 const BAND_ROWS: u32 = 8;
 /// Tile width by default: the integrator's ([`Integrator::tile_width`]).
 const TILE: u32 = 0;
@@ -41,8 +44,9 @@ pub struct SampleSettings {
     pub sampler: Option<SamplerKind>,
     /// The pixel filter.
     pub filter: Filter,
-    /// Tile width and height in pixels (their product at most 1,024); width 0 for the
-    /// integrator's choice ([`Integrator::tile_width`]).
+    /// Tile width (in rays: a group of `n` passes makes the tile `width / n` pixels wide) and
+    /// height in pixels (their product at most 1,024); width 0 for the integrator's choice
+    /// ([`Integrator::tile_width`]).
     pub tile: (u32, u32),
     /// The samples per pixel the render is to reach, which the `multijitter` sampler lays out
     /// as one pattern ([`Sampler::counted`](crate::sampling::Sampler::counted)); 0 where no end
@@ -62,8 +66,9 @@ impl Default for SampleSettings {
     }
 }
 
-/// The most passes traced together ([`Accumulator::add_samples_with_progress`]): a pixel's
-/// sixteen samples fill a packet of sixteen rays, or a quarter of a packet of 64.
+/// The most passes traced together ([`Accumulator::add_samples_with_progress`] splits larger
+/// counts into groups of this many): a pixel's sixteen samples fill a quarter of a packet of
+/// 64 rays.
 pub const PASS_GROUP: u32 = 16;
 
 /// Renders the camera's whole image with one sample per pixel (with the lab's integrator, one
@@ -90,13 +95,8 @@ pub fn render_samples(
     progress: &(dyn Fn(u32) + Sync),
 ) -> Result<Film, FilmError> {
     let mut accumulator = Accumulator::new(camera.width, camera.height)?;
-    // In groups of sixteen passes, each pixel's samples side by side: the same pixels.
-    let mut left = samples.max(1);
-    while left > 0 {
-        let group = left.min(PASS_GROUP);
-        accumulator.add_samples_with_progress(camera, integrator, group, progress);
-        left -= group;
-    }
+    // In groups of up to sixteen passes, each pixel's samples side by side: the same pixels.
+    accumulator.add_samples_with_progress(camera, integrator, samples.max(1), progress);
     accumulator.mean()
 }
 
@@ -149,15 +149,28 @@ mod tests {
 
     /// Passes in groups give the pixels, layers and discarded counts of the same passes one by
     /// one, to the bit: the lab's integrator, the wavefront path tracer with an albedo and a
-    /// depth layer, both samplers that stratify, tiles of odd shapes, a region at an odd place,
-    /// and groups of every size from 1 to 16 (the last group short).
+    /// depth layer, and an integrator that returns NaN and infinities; every sampler kind; a
+    /// pinhole and a thin-lens camera; tiles of odd shapes, and bands so tall (200 rows) that a
+    /// group of more than five passes is split; a region at an odd place; groups of every size
+    /// from 1 to 16 (the last group short).
     #[test]
     fn groups_of_passes_give_the_passes_pixels() {
         use crate::bvh::Bvh;
         use crate::integrator::{Lab, PathSettings, PathWavefront, Stage, WithAovs};
-        use crate::sampling::SamplerKind;
         use crate::scene::Scene;
         use crate::settings::AovKind;
+        /// Radiance from the ray's direction, NaN or infinite where it points up and left.
+        struct Spoiled;
+        impl Integrator for Spoiled {
+            fn radiance(&self, ray: &Ray, _: &mut Sampler) -> Vec3 {
+                let d = ray.direction;
+                match (d.x < 0.0, d.y) {
+                    (true, y) if y < -0.2 => Vec3::NAN,
+                    (true, y) if y < -0.1 => Vec3::new(1.0, f32::INFINITY, 1.0),
+                    _ => d.abs(),
+                }
+            }
+        }
         let scene = Scene::built_in("cornell").expect("the lab scene");
         let bvh = Bvh::new(&scene.vertices());
         let lab = Lab::new(&scene, &bvh, Stage::Ambient);
@@ -165,14 +178,19 @@ mod tests {
         let aovs = [AovKind::Albedo, AovKind::Depth];
         let with_layers = WithAovs::new(&path, &scene, &bvh, &aovs);
         let (width, height) = (23, 13);
-        let camera = crate::Camera::lab(width, height);
+        let pinhole = crate::Camera::lab(width, height);
+        let lens = crate::Camera { aperture_radius: 0.05, focus_distance: 3.0, ..pinhole };
         let region = Region::new([2, 1, 21, 12], width, height).unwrap();
         const SPP: u32 = 21;
-        let integrators: [(&dyn Integrator, usize); 2] = [(&lab, 0), (&with_layers, 2)];
-        for ((integrator, layers), kind) in
-            integrators.into_iter().zip([SamplerKind::Sobol, SamplerKind::MultiJitter])
-        {
-            for tile in [(0, 8), (5, 3), (64, 1)] {
+        let cases: [(&dyn Integrator, usize, SamplerKind, &crate::Camera); 5] = [
+            (&lab, 0, SamplerKind::Lab, &pinhole),
+            (&with_layers, 2, SamplerKind::Sobol, &pinhole),
+            (&with_layers, 2, SamplerKind::MultiJitter, &lens),
+            (&path, 0, SamplerKind::Independent, &lens),
+            (&Spoiled, 0, SamplerKind::Sobol, &pinhole),
+        ];
+        for (integrator, layers, kind, camera) in cases {
+            for tile in [(0, 8), (5, 3), (64, 1), (0, 200)] {
                 let accumulator = || {
                     let mut a = Accumulator::for_region(width, height, region).unwrap();
                     a.settings.sampler = Some(kind);
@@ -183,25 +201,30 @@ mod tests {
                 };
                 let mut single = accumulator();
                 for _ in 0..SPP {
-                    single.add_sample(&camera, integrator);
+                    single.add_sample(camera, integrator);
                 }
                 let bits = |a: &Accumulator| {
                     let films = std::iter::once(a.sums()).chain(a.layer_sums());
                     let pixels = films.flat_map(|f| f.pixels().iter().flat_map(|p| p.to_array()));
                     pixels.map(f32::to_bits).collect::<Vec<_>>()
                 };
-                for group in 1..=PASS_GROUP {
+                for group in 1..=PASS_GROUP + 1 {
                     let mut grouped = accumulator();
                     while grouped.samples() < SPP {
                         let count = group.min(SPP - grouped.samples());
-                        grouped.add_samples_with_progress(&camera, integrator, count, &|_| {});
+                        grouped.add_samples_with_progress(camera, integrator, count, &|_| {});
                     }
-                    assert_eq!(grouped.samples(), SPP);
-                    assert_eq!(grouped.discarded_samples(), single.discarded_samples());
-                    assert!(bits(&grouped) == bits(&single), "{kind:?} {tile:?} groups of {group}");
+                    let case = format!("{kind:?} {tile:?} groups of {group}");
+                    assert_eq!(grouped.samples(), SPP, "{case}");
+                    assert_eq!(grouped.discarded_samples(), single.discarded_samples(), "{case}");
+                    assert!(bits(&grouped) == bits(&single), "{case}");
                 }
             }
         }
+        // The spoiled integrator's samples were discarded, in groups as one by one.
+        let mut spoiled = Accumulator::new(width, height).unwrap();
+        spoiled.add_samples_with_progress(&pinhole, &Spoiled, SPP, &|_| {});
+        assert!(spoiled.discarded_samples() >= u64::from(SPP), "{}", spoiled.discarded_samples());
     }
 
     /// Samples that are NaN or infinite never reach the picture: they are counted and count as

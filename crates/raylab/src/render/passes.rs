@@ -45,12 +45,14 @@ pub(super) fn add_pass(
     progress: &(dyn Fn(u32) + Sync),
 ) -> u64 {
     let (_, band_rows) = tile_shape(settings.tile);
-    // As many of a pixel's samples at once as a tile's arrays hold for a column of a band.
-    let most = (MAX_TILE_PIXELS / band_rows).max(1) as u32;
+    // As many of a pixel's samples at once as a tile's arrays hold for a column of a band, and
+    // at most `PASS_GROUP` (more fill no packet better).
+    let most = ((MAX_TILE_PIXELS / band_rows).max(1) as u32).min(super::PASS_GROUP);
     let mut discarded = 0;
+    let end = sample.saturating_add(count.max(1));
     let mut first = sample;
-    while first < sample + count.max(1) {
-        let group = most.min(sample + count.max(1) - first);
+    while first < end {
+        let group = most.min(end - first);
         let pass = Pass { settings, sample: first, count: group, region };
         discarded += add_group(camera, integrator, pass, pixels, layers, progress);
         first += group;
@@ -175,7 +177,8 @@ impl Band<'_> {
         // The tile's columns shrink so that its pixels' samples fit the arrays.
         let (tile_width, _) = tile_shape(tile_or_default(settings.tile, integrator));
         let tile_width = (tile_width / count).max(1);
-        // A tile's rays, samplers and colours, on the stack.
+        // A tile's rays, samplers and colours, on the stack (some 130 KiB in all: rayon's
+        // threads have 2 MiB).
         let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_TILE_PIXELS];
         let mut samplers: [Sampler; MAX_TILE_PIXELS] =
             std::array::from_fn(|_| Sampler::new(kind, 0, (0, 0), 0));

@@ -31,8 +31,9 @@ pub struct LoadOptions {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Instancing {
     /// Copy a model's instanced meshes, the fewest extra triangles first, while the copies
-    /// beyond each mesh's first add at most [`AUTO_FLATTEN_TRIANGLES`] triangles in all; keep
-    /// the rest instanced.
+    /// beyond each mesh's first add at most [`AUTO_FLATTEN_TRIANGLES`] triangles to the model;
+    /// keep the rest instanced. The budget is a model file's: each mesh file that a scene file
+    /// names has its own.
     #[default]
     Auto,
     /// Keep every mesh drawn in several places stored once: the least memory.
@@ -54,8 +55,9 @@ impl std::str::FromStr for Instancing {
     }
 }
 
-/// The most triangles that [`Instancing::Auto`] adds to a model by copying its instanced meshes
-/// (each mesh's copies beyond its first): 2¹⁸, some 25 MiB of geometry and tree.
+/// The most triangles that [`Instancing::Auto`] adds to a model (a mesh file) by copying its
+/// instanced meshes (each mesh's copies beyond its first): 2¹⁸, some 25 MiB of geometry and
+/// tree.
 pub const AUTO_FLATTEN_TRIANGLES: usize = 1 << 18;
 
 impl Instancing {
@@ -100,7 +102,8 @@ impl Scene {
     /// (`.toml`, see `docs/scene-format.md`) or a model file (`.obj`, `.ply`, either optionally
     /// `.gz`, `.gltf`, `.glb`). A name that is neither a built-in scene nor looks like a file
     /// (it exists, or has a `/` or a `.`) is an unknown scene, and the error lists the built-in
-    /// ones.
+    /// ones. A model's instanced meshes, and those of a scene file's mesh files, are copied or
+    /// kept as `options.instancing` says.
     pub fn open(name: &str, options: &LoadOptions) -> Result<OpenedScene, OpenError> {
         let path = Path::new(name);
         let looks_like_a_file = path.exists() || name.contains('/') || name.contains('.');

@@ -42,7 +42,8 @@ pub struct SceneFileError {
 const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 
 /// Loads a scene file; meshes it names are read relative to its folder, with the default
-/// [`LoadOptions`].
+/// [`LoadOptions`] (so the small instanced meshes of a glTF file are copied into their places:
+/// [`Instancing::Auto`](super::Instancing::Auto)).
 pub fn load_scene_file(path: &Path) -> std::result::Result<Scene, SceneFileError> {
     load_scene_file_with(path, &LoadOptions::default())
 }
@@ -62,7 +63,7 @@ pub fn load_scene_file_with(
 }
 
 /// Parses a scene file's text; `path` names it in messages and meshes are found beside it,
-/// loaded with the default [`LoadOptions`].
+/// loaded with the default [`LoadOptions`] ([`Instancing::Auto`](super::Instancing::Auto)).
 pub fn parse_scene(text: &str, path: &Path) -> std::result::Result<Scene, SceneFileError> {
     parse_scene_with(text, path, &LoadOptions::default())
 }
