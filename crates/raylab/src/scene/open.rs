@@ -12,8 +12,8 @@ pub struct LoadOptions {
 }
 
 /// What becomes of a mesh that a model draws in several places: stored once and drawn through
-/// each copy's transform (a two-level BVH, see [`TwoLevel`](crate::bvh::TwoLevel)), or copied
-/// into world space as triangles of its own (one BVH over them all). The picture is the same
+/// each copy's transform (a two-level BVH: `bvh::TwoLevel`), or copied into world space as
+/// triangles of its own (one BVH over them all). The picture is the same
 /// either way (`tests/instancing.rs` and `tests/mitsuba.rs` compare); what differs is memory
 /// and time:
 ///
