@@ -1,0 +1,60 @@
+#!/bin/bash
+# One sitting of raylab against Mitsuba 3 on the three comparison scenes (BENCHMARKS.md, "A
+# multi-jittered sampler" and later sections): for each scene, three alternating rounds of
+# Mitsuba `multijitter` (its `mi.render` after a warm-up render) and raylab `sobol` and
+# `multijitter` (the whole process), 64 spp, the machine's threads; then the RMSE of each
+# render against a long Mitsuba reference, and raylab's at seeds 2 and 3.
+#
+# usage: tools/mitsuba/sitting.sh PYTHON REFS
+#   PYTHON  a Python with mitsuba and numpy (e.g. mi/bin/python; export DRJIT_LIBLLVM_PATH
+#           for the llvm variant, e.g. /usr/lib/x86_64-linux-gnu/libLLVM-19.so)
+#   REFS    a folder holding the references, made once (2,048 spp each, a few minutes):
+#             PYTHON tools/mitsuba/cbox_reference.py --sampler multijitter --spp 256 \
+#                 --passes 8 --seed 100 --out REFS/cbox.exr --npy          # -> REFS/cbox.npy
+#             PYTHON tools/mitsuba/materials_reference.py SCENE --size 256 256 --spp 256 \
+#                 --passes 8 --sampler multijitter --seed 100 --out REFS/NAME.npy
+#           for SCENE = crates/raylab/tests/data/mitsuba-materials/materials.toml (materials)
+#           and crates/raylab/tests/data/mitsuba-gltf/boxes.toml (gltf)
+# Build raylab first (cargo build --release -p raylab-cli) and keep the machine otherwise idle.
+set -eu
+PY=$1
+REFS=$2
+cd "$(dirname "$0")/../.."
+R=target/release/raylab
+OUT=$(mktemp -d)
+trap 'rm -rf "$OUT"' EXIT
+date
+for name in gltf materials cbox; do
+  case $name in
+    gltf) S=crates/raylab/tests/data/mitsuba-gltf/boxes.toml; SIZE="--size 256x256";;
+    materials) S=crates/raylab/tests/data/mitsuba-materials/materials.toml; SIZE="--size 256x256";;
+    cbox) S=scenes/cornell-mitsuba.toml; SIZE="";;
+  esac
+  echo "== $S, 64 spp"
+  for r in 1 2 3; do
+    echo -n "round $r mitsuba multijitter: "
+    if [ $name = cbox ]; then
+      "$PY" tools/mitsuba/cbox_reference.py --sampler multijitter --warmup --seed 1 \
+        --out "$OUT/m_$name.exr" --npy 2>&1 | grep "wall time"
+    else
+      "$PY" tools/mitsuba/materials_reference.py "$S" --size 256 256 --spp 64 \
+        --sampler multijitter --warmup --seed 1 --out "$OUT/m_$name.npy" 2>&1 | grep -i "wall time"
+    fi
+    for sampler in sobol multijitter; do
+      /usr/bin/time -f "round $r raylab $sampler: %e s (user %U)" \
+        $R render "$S" $SIZE --spp 64 --sampler $sampler -o "$OUT/${sampler}_$name.exr" 2>&1 | tail -1
+    done
+  done
+  for f in "$OUT/m_$name.npy" "$OUT/sobol_$name.exr" "$OUT/multijitter_$name.exr"; do
+    echo -n "$(basename "$f"): "
+    "$PY" tools/mitsuba/cbox_compare.py "$f" "$REFS/$name.npy" | grep -E "RMSE \(all"
+  done
+  for seed in 2 3; do
+    for sampler in sobol multijitter; do
+      $R render "$S" $SIZE --spp 64 --seed $seed --sampler $sampler -o "$OUT/x.exr" >/dev/null 2>&1
+      echo -n "seed $seed $sampler: "
+      "$PY" tools/mitsuba/cbox_compare.py "$OUT/x.exr" "$REFS/$name.npy" | grep -E "RMSE \(all"
+    done
+  done
+done
+date
