@@ -1,5 +1,5 @@
 //! The error of every option parsed from its name (integrators, AOVs, filters, tone maps, light
-//! sampling): which kind of option, the name given, and the names there are.
+//! sampling, instancing): which kind of option, the name given, and the names there are.
 
 /// A name that no option of its kind has.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]

@@ -3,6 +3,7 @@
 use std::path::Path;
 
 use super::{LoadError, Scene, SceneError, SceneFileError};
+use crate::unknown_name::UnknownName;
 
 /// How [`Scene::open`] loads a model or a scene file's meshes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -43,14 +44,14 @@ pub enum Instancing {
 }
 
 impl std::str::FromStr for Instancing {
-    type Err = String;
+    type Err = UnknownName;
 
-    fn from_str(name: &str) -> Result<Instancing, String> {
+    fn from_str(name: &str) -> Result<Instancing, UnknownName> {
         match name {
             "auto" => Ok(Instancing::Auto),
             "keep" => Ok(Instancing::Keep),
             "flatten" => Ok(Instancing::Flatten),
-            other => Err(format!("unknown instancing '{other}': expected auto, keep or flatten")),
+            _ => Err(UnknownName::new("instancing", name, "auto, keep or flatten")),
         }
     }
 }
@@ -165,7 +166,7 @@ mod tests {
             }
         }
         assert_eq!("keep".parse(), Ok(Instancing::Keep));
-        let error = "some".parse::<Instancing>().unwrap_err();
+        let error = "some".parse::<Instancing>().unwrap_err().to_string();
         assert_eq!(error, "unknown instancing 'some': expected auto, keep or flatten");
     }
 }
