@@ -1,7 +1,7 @@
 //! The wavefront path tracer ([`PathWavefront`]) gives the scalar path tracer's samples, bit for
-//! bit: every scene in `scenes/`, the lab's box, models (OBJ with textures, glTF) and a scene
-//! with alpha-masked holes, at several depth limits. Accumulated sums are compared, so every
-//! pixel's every sample must agree; the wavefront traces tiles of 128×8 camera rays together
+//! bit: every scene in `scenes/`, the lab's box, models (OBJ with textures, glTF), the materials
+//! scene of the Mitsuba comparison and a scene with alpha-masked holes, at several depth
+//! limits. Accumulated sums are compared, so every pixel's every sample must agree; the wavefront traces tiles of 128×8 camera rays together
 //! (`radiance_each`), the scalar path one ray at a time.
 
 mod common;
@@ -13,9 +13,15 @@ use raylab::{Accumulator, Camera, Film, SampleSettings, SamplerKind, Scene, Scen
 
 const SIZE: (u32, u32) = (32, 24);
 
-/// The scenes: every `scenes/*.toml`, the built-in box, three model files.
+/// The scenes: every `scenes/*.toml`, the built-in box, three model files, and the Mitsuba
+/// comparison's materials scene (smooth spheres of every BSDF kind, one anisotropic).
 fn scene_names() -> Vec<String> {
-    common::scene_names(&["bunny_lowres.obj", "spider/spider.obj", "BoxTextured/BoxTextured.gltf"])
+    common::scene_names(&[
+        "bunny_lowres.obj",
+        "spider/spider.obj",
+        "BoxTextured/BoxTextured.gltf",
+        "../mitsuba-materials/materials.toml",
+    ])
 }
 
 fn bits(film: &Film) -> Vec<[u32; 3]> {

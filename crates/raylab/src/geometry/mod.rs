@@ -448,23 +448,20 @@ impl Geometry {
         }
     }
 
-    /// [`surface_point`](Self::surface_point) and the material of a hit on a plain triangle: one
-    /// that no instance places and that has no shading normals, so that its interaction's
-    /// shading normal is the geometric one. `None` for any other triangle. The path tracer's
-    /// shortcut for the commonest vertex, which needs neither texture coordinates nor tangents.
+    /// [`surface_point`](Self::surface_point), the shading normal and the material of a hit on
+    /// a triangle that no instance places: exactly what [`interaction`](Self::interaction)
+    /// gives there, without the texture coordinates, `dp/du` and tangent. `None` for a placed
+    /// triangle. The path tracer's shortcut for vertices whose material reads no textures.
     #[inline]
-    pub fn plain_surface_point(&self, hit: &Hit) -> Option<(SurfacePoint, u32)> {
+    pub fn shaded_surface_point(&self, hit: &Hit) -> Option<(SurfacePoint, Vec3, u32)> {
         if self.placed {
             return None;
         }
         let s = hit.triangle as usize;
-        if let Some(normals) = self.shading_normals.get(s)
-            && normals[0] != Vec3::ZERO
-        {
-            return None;
-        }
         let (p, error) = interpolate_point(self.stored_triangle(s), hit);
-        Some((SurfacePoint { p, error, normal: self.normals[s] }, self.material_ids[s]))
+        let point = SurfacePoint { p, error, normal: self.normals[s] };
+        let normal = self.shading_normals.get(s).and_then(|c| interpolated_normal(c, None, hit));
+        Some((point, normal.unwrap_or(point.normal), self.material_ids[s]))
     }
 
     /// A per-axis bound on the rounding error of [`surface_point`](Self::surface_point) for any
@@ -486,20 +483,9 @@ impl Geometry {
         let (s, placement) = self.locate(hit.triangle as usize);
         let (point, [v0, v1, v2]) = self.surface_point_at(s, placement, hit);
         let (b0, b1, b2) = (hit.b0(), hit.b1, hit.b2);
-        let mut shading_normal = point.normal;
-        if let Some(mut corners) = Self::corner_values(&self.shading_normals, s, placement)
-            && corners[0] != Vec3::ZERO
-        {
-            if let Some(p) = placement {
-                corners = corners.map(|n| p.normal(n));
-            }
-            let n = (b0 * corners[0] + b1 * corners[1] + b2 * corners[2]).normalize_or_zero();
-            if n != Vec3::ZERO {
-                // As the mesh gives it (as Mitsuba keeps it), even against the winding: the
-                // side a one-sided material shows is the normals' side.
-                shading_normal = n;
-            }
-        }
+        let shading_normal = Self::corner_values(&self.shading_normals, s, placement)
+            .and_then(|corners| interpolated_normal(corners, placement, hit))
+            .unwrap_or(point.normal);
         // Without UVs, the barycentric parametrization: uv = (b1, b2) and dp/du = v1 − v0.
         let (uv, dp_du) = match Self::corner_values(&self.uvs, s, placement) {
             Some(t) => (b0 * t[0] + b1 * t[1] + b2 * t[2], dp_du([v0, v1, v2], t)),
@@ -523,6 +509,26 @@ impl Geometry {
             t: hit.t,
         }
     }
+}
+
+/// The shading normal at `hit` interpolated from a triangle's corner normals (turned by
+/// `placement`), as the mesh gives it (as Mitsuba keeps it), even against the winding: the side
+/// a one-sided material shows is the normals' side. `None` where the corners are unset (zero: a
+/// mesh with normals on some triangles only) or the interpolation has no direction.
+#[inline(always)]
+fn interpolated_normal(
+    mut corners: [Vec3; 3],
+    placement: Option<&Placement>,
+    hit: &Hit,
+) -> Option<Vec3> {
+    if corners[0] == Vec3::ZERO {
+        return None;
+    }
+    if let Some(p) = placement {
+        corners = corners.map(|n| p.normal(n));
+    }
+    let n = (hit.b0() * corners[0] + hit.b1 * corners[1] + hit.b2 * corners[2]).normalize_or_zero();
+    (n != Vec3::ZERO).then_some(n)
 }
 
 /// The point at `hit`'s barycentrics on a triangle's `corners`, and its rounding-error bound

@@ -66,30 +66,56 @@ fn interactions_interpolate_normals_and_uvs() {
     assert!(si.point.error.max_element() < 1e-6);
 }
 
-/// The path tracer's shortcut gives the interaction's point and material exactly, for plain
-/// triangles only: not where the mesh has shading normals, nor through an instance.
+/// The path tracer's shortcut gives the interaction's point, shading normal and material
+/// exactly (bit for bit), with and without shading normals (interpolated, unset and
+/// cancelling), and nothing through an instance.
 #[test]
-fn plain_surface_points_are_the_interactions_on_plain_triangles_only() {
-    let normals = CornerAttribute { values: vec![-Vec3::Z], triangles: vec![[0, 0, 0]; 2] };
+fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
+    let smooth = CornerAttribute {
+        values: vec![
+            Vec3::new(0.3, -0.2, 0.9).normalize(),
+            Vec3::new(-0.5, 0.1, 0.8).normalize(),
+            -Vec3::Z,
+        ],
+        triangles: vec![[0, 1, 2], [2, 1, 0]],
+    };
+    // Unset corners (zero) on the first triangle; normals that cancel at the second's centre.
+    let partial = CornerAttribute {
+        values: vec![Vec3::ZERO, Vec3::X, -Vec3::X, Vec3::Y],
+        triangles: vec![[0, 0, 0], [1, 2, 3]],
+    };
     let mut geometry = Geometry::new();
     geometry.add_mesh(&quad("plain"), &Affine3A::from_rotation_x(0.3), |i| 4 + i as u32);
     geometry.add_mesh(
-        &Mesh { normals: Some(normals), ..quad("smooth") },
+        &Mesh { normals: Some(smooth), ..quad("smooth") },
         &Affine3A::IDENTITY,
         |_| 0,
     );
+    geometry.add_mesh(
+        &Mesh { normals: Some(partial), ..quad("partial") },
+        &Affine3A::IDENTITY,
+        |_| 1,
+    );
     let ray = Ray::new(Vec3::new(0.3, 0.2, 5.0), -Vec3::Z);
-    for (triangle, b1, b2) in [(0, 0.1f32, 0.7f32), (1, 1.0, 0.0), (1, 0.3, 0.3)] {
-        let hit = Hit { t: 4.9, triangle, b1, b2 };
-        let si = geometry.interaction(&ray, &hit);
-        assert_eq!(geometry.plain_surface_point(&hit), Some((si.point, si.material)));
-        assert_eq!(si.shading_normal, si.point.normal, "the shortcut's frame is the normal's");
+    let mut interpolated = 0;
+    for triangle in 0..6 {
+        for (b1, b2) in
+            [(0.1f32, 0.7f32), (1.0, 0.0), (0.3, 0.3), (0.0, 0.5), (0.5, 0.5), (0.5, 0.0)]
+        {
+            let hit = Hit { t: 4.9, triangle, b1, b2 };
+            let si = geometry.interaction(&ray, &hit);
+            let expected = (si.point, si.shading_normal, si.material);
+            assert_eq!(geometry.shaded_surface_point(&hit), Some(expected), "{hit:?}");
+            interpolated += usize::from(si.shading_normal != si.point.normal);
+        }
     }
-    // Shading normals (triangles 2 and 3), then an instance: no shortcut.
-    assert_eq!(geometry.plain_surface_point(&Hit { t: 1.0, triangle: 2, b1: 0.2, b2: 0.2 }), None);
+    assert!(interpolated >= 10, "the smooth quad's normals are interpolated: {interpolated}");
     let mut instanced = Geometry::new();
     instanced.add_instanced_mesh(&quad("q"), &[Affine3A::IDENTITY], |_| 0);
-    assert_eq!(instanced.plain_surface_point(&Hit { t: 1.0, triangle: 0, b1: 0.2, b2: 0.2 }), None);
+    assert_eq!(
+        instanced.shaded_surface_point(&Hit { t: 1.0, triangle: 0, b1: 0.2, b2: 0.2 }),
+        None
+    );
 }
 
 #[test]

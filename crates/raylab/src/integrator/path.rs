@@ -401,27 +401,27 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         }
     }
 
-    /// The wavefront's shortcut for the commonest hit: a plain triangle
-    /// ([`Geometry::plain_surface_point`](crate::geometry::Geometry::plain_surface_point)) that
-    /// is no light's, of an untextured diffuse material. It gives exactly what
-    /// [`arrive`](Self::arrive) and [`lane_surface`](Self::lane_surface) give there: no
-    /// light found (only lights' triangles emit), and the same point, shading normal (the
-    /// geometric one), sidedness and reflectance. Without building the interaction: no texture
-    /// coordinates, tangents or second lookups. `None` for any other hit, which takes the
-    /// general steps.
+    /// The wavefront's shortcut for the commonest hits: a triangle that no instance places
+    /// ([`Geometry::shaded_surface_point`](crate::geometry::Geometry::shaded_surface_point))
+    /// and that is no light's, of a material without textures and with an isotropic BSDF. It
+    /// gives exactly what [`arrive`](Self::arrive) and [`lane_surface`](Self::lane_surface)
+    /// give there: no light found (only lights' triangles emit), and the same point, shading
+    /// normal (the interpolated one, or the geometric one), sidedness and BSDF. Without building
+    /// the interaction: no texture coordinates, `dp/du` or tangent, and no texture lookups.
+    /// `None` for any other hit, which takes the general steps.
     #[inline]
-    pub(super) fn plain_diffuse(&self, hit: &Hit) -> Option<LaneSurface<'a>> {
-        let (point, material) = self.scene.geometry.plain_surface_point(hit)?;
+    pub(super) fn plain_surface(&self, hit: &Hit) -> Option<LaneSurface<'a>> {
+        let (point, normal, material) = self.scene.geometry.shaded_surface_point(hit)?;
         if self.lights.is_light_triangle(hit.triangle) {
             return None;
         }
         let material = &self.scene.materials[material as usize];
-        if !matches!(material.bsdf, Bsdf::Diffuse(_)) || !material.textures.is_empty() {
+        if !material.textures.is_empty() || material.bsdf.is_anisotropic() {
             return None;
         }
         Some(LaneSurface {
             point,
-            normal: point.normal,
+            normal,
             two_sided: material.two_sided,
             tangent: None,
             bsdf: Cow::Borrowed(&material.bsdf),

@@ -13,9 +13,9 @@
 //! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
 //!    `max_depth` end; each vertex's material, shading normal and BSDF. The vertex goes
 //!    straight into a lane of its BSDF's kind (its point, shading normal, tangent and the
-//!    BSDF's parameters: [`Path::lane_surface`]; the lanes make its frame). The commonest hit,
-//!    a plain triangle of an untextured diffuse material that is no light's
-//!    ([`Path::plain_diffuse`]), goes without building its interaction;
+//!    BSDF's parameters: [`Path::lane_surface`]; the lanes make its frame). The commonest hits,
+//!    on an unplaced triangle that is no light's, of an untextured material with an isotropic
+//!    BSDF ([`Path::plain_surface`]), go without building their interaction;
 //! 3. **draws**: a chunk's numbers (the light's choice and point, the BSDF's lobe and
 //!    direction, the roulette's) in one pass over their samplers
 //!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
@@ -216,11 +216,11 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             for (&i, hit) in alive.iter().zip(&hits) {
                 let state = &mut chunk.states[i];
                 let last = state.depth + 1 >= max_depth;
-                // The commonest hit, a plain triangle of a diffuse material, by the shortcut:
+                // The commonest hits, a triangle of an untextured material, by the shortcut:
                 // nothing is emitted there, so at the depth limit it needs nothing at all. Any
                 // other hit by the general steps.
                 let plain =
-                    if last { None } else { hit.as_ref().and_then(|hit| path.plain_diffuse(hit)) };
+                    if last { None } else { hit.as_ref().and_then(|hit| path.plain_surface(hit)) };
                 let surface = match plain {
                     Some(plain) => plain,
                     None => {
