@@ -42,6 +42,10 @@ impl Wrap {
     #[inline]
     pub fn index(self, i: i64, n: u32) -> u32 {
         let n = i64::from(n);
+        // Inside the row every mode reads `i` itself: no division (the common case).
+        if (0..n).contains(&i) {
+            return i as u32;
+        }
         let wrapped = match self {
             Wrap::Repeat => i.rem_euclid(n),
             Wrap::Clamp => i.clamp(0, n - 1),
@@ -186,20 +190,30 @@ impl TextureImage {
     /// Texel `(x, y)` of `level`, in linear light, RGBA.
     #[inline]
     pub fn texel(&self, level: usize, x: u32, y: u32) -> Vec4 {
+        let [texel] = self.texels(level, [(x, y)]);
+        texel
+    }
+
+    /// The texels at `(x, y)` in `level`, decoded as [`texel`](Self::texel) decodes them (the
+    /// level's storage and the sRGB table looked up once for all of them).
+    #[inline(always)]
+    fn texels<const N: usize>(&self, level: usize, at: [(u32, u32); N]) -> [Vec4; N] {
         let l = &self.levels[level];
-        let i = y as usize * l.width as usize + x as usize;
+        let index = |(x, y): (u32, u32)| y as usize * l.width as usize + x as usize;
         match &l.texels {
-            Texels::Rgba8(t) => {
-                let [r, g, b, a] = t[i];
-                if self.srgb {
-                    let table = &*SRGB_TO_LINEAR;
+            Texels::Rgba8(t) if self.srgb => {
+                let table = &*SRGB_TO_LINEAR;
+                at.map(|xy| {
+                    let [r, g, b, a] = t[index(xy)];
                     let a = f32::from(a) / 255.0;
                     Vec4::new(table[r as usize], table[g as usize], table[b as usize], a)
-                } else {
-                    Vec4::new(f32::from(r), f32::from(g), f32::from(b), f32::from(a)) / 255.0
-                }
+                })
             }
-            Texels::RgbaF32(t) => Vec4::from_array(t[i]),
+            Texels::Rgba8(t) => at.map(|xy| {
+                let [r, g, b, a] = t[index(xy)];
+                Vec4::new(f32::from(r), f32::from(g), f32::from(b), f32::from(a)) / 255.0
+            }),
+            Texels::RgbaF32(t) => at.map(|xy| Vec4::from_array(t[index(xy)])),
         }
     }
 
@@ -211,15 +225,16 @@ impl TextureImage {
         // Texel centres at (i + ½)/n: texel space shifted by half a texel.
         let x = st.x * w as f32 - 0.5;
         let y = st.y * h as f32 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
+        let (x0, y0) = (crate::float::floor(x), crate::float::floor(y));
         let (fx, fy) = (x - x0, y - y0);
         // `as` saturates (and maps NaN to 0), so absurd coordinates stay in range.
         let (ix, iy) = (x0 as i64, y0 as i64);
         let (xa, xb) = (wrap[0].index(ix, w), wrap[0].index(ix.saturating_add(1), w));
         let (ya, yb) = (wrap[1].index(iy, h), wrap[1].index(iy.saturating_add(1), h));
         let (fx, fy) = if fx.is_finite() && fy.is_finite() { (fx, fy) } else { (0.0, 0.0) };
-        let top = self.texel(level, xa, ya) * (1.0 - fx) + self.texel(level, xb, ya) * fx;
-        let bottom = self.texel(level, xa, yb) * (1.0 - fx) + self.texel(level, xb, yb) * fx;
+        let [a, b, c, d] = self.texels(level, [(xa, ya), (xb, ya), (xa, yb), (xb, yb)]);
+        let top = a * (1.0 - fx) + b * fx;
+        let bottom = c * (1.0 - fx) + d * fx;
         top * (1.0 - fy) + bottom * fy
     }
 

@@ -81,7 +81,13 @@ impl ImageTexture {
         let st = self.transform.transform_point2(query.uv);
         // The transform stretches the footprint by up to its larger column.
         let m = self.transform.matrix2;
-        let footprint = query.footprint * m.x_axis.length().max(m.y_axis.length());
+        // (A point lookup, the path tracer's, skips the square roots: 0 times any length is 0
+        // or NaN, and `filtered` reads level 0 bilinearly for both.)
+        let footprint = if query.footprint == 0.0 {
+            0.0
+        } else {
+            query.footprint * m.x_axis.length().max(m.y_axis.length())
+        };
         self.image.filtered(st, footprint, self.wrap) * self.factor
     }
 }
