@@ -464,6 +464,13 @@ impl Geometry {
         Some((point, normal.unwrap_or(point.normal), self.material_ids[s]))
     }
 
+    /// The texture coordinates of a hit, as [`interaction`](Self::interaction) gives them.
+    #[inline]
+    pub fn uv(&self, hit: &Hit) -> Vec2 {
+        let (s, placement) = self.locate(hit.triangle as usize);
+        interpolated_uv(Self::corner_values(&self.uvs, s, placement), hit)
+    }
+
     /// A per-axis bound on the rounding error of [`surface_point`](Self::surface_point) for any
     /// point of scene triangle `i` (the largest at its corners: the bound grows with the
     /// coordinates' size).
@@ -487,10 +494,9 @@ impl Geometry {
             .and_then(|corners| interpolated_normal(corners, placement, hit))
             .unwrap_or(point.normal);
         // Without UVs, the barycentric parametrization: uv = (b1, b2) and dp/du = v1 − v0.
-        let (uv, dp_du) = match Self::corner_values(&self.uvs, s, placement) {
-            Some(t) => (b0 * t[0] + b1 * t[1] + b2 * t[2], dp_du([v0, v1, v2], t)),
-            None => (Vec2::new(b1, b2), v1 - v0),
-        };
+        let uvs = Self::corner_values(&self.uvs, s, placement);
+        let uv = interpolated_uv(uvs, hit);
+        let dp_du = uvs.map_or(v1 - v0, |t| dp_du([v0, v1, v2], t));
         let tangent = match Self::corner_values(&self.tangents, s, placement) {
             Some(t) => {
                 let t = placement.map_or(t, |p| t.map(|t| p.tangent(t)));
@@ -508,6 +514,16 @@ impl Geometry {
             triangle: hit.triangle,
             t: hit.t,
         }
+    }
+}
+
+/// The texture coordinates at `hit` from a triangle's corner UVs, or without them the
+/// barycentric parametrization `(b1, b2)`.
+#[inline(always)]
+fn interpolated_uv(corners: Option<[Vec2; 3]>, hit: &Hit) -> Vec2 {
+    match corners {
+        Some(t) => hit.b0() * t[0] + hit.b1 * t[1] + hit.b2 * t[2],
+        None => Vec2::new(hit.b1, hit.b2),
     }
 }
 
@@ -568,11 +584,8 @@ impl Geometry {
         let i = hit.triangle as usize;
         let [v0, v1, v2] = self.triangle(i);
         let (s, placement) = self.locate(i);
+        let uv = interpolated_uv(Self::corner_values(&self.uvs, s, placement), hit);
         let (b0, b1, b2) = (hit.b0(), hit.b1, hit.b2);
-        let uv = match Self::corner_values(&self.uvs, s, placement) {
-            Some(t) => b0 * t[0] + b1 * t[1] + b2 * t[2],
-            None => Vec2::new(b1, b2),
-        };
         let p = b0 * v0 + b1 * v1 + b2 * v2;
         let footprint = if spread > 0.0 {
             let length = ray.direction.length();

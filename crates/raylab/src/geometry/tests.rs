@@ -66,9 +66,9 @@ fn interactions_interpolate_normals_and_uvs() {
     assert!(si.point.error.max_element() < 1e-6);
 }
 
-/// The path tracer's shortcut gives the interaction's point, shading normal and material
-/// exactly (bit for bit), with and without shading normals (interpolated, unset and
-/// cancelling), and nothing through an instance.
+/// The path tracer's shortcut gives the interaction's point, shading normal, material and
+/// texture coordinates exactly (bit for bit), with and without shading normals (interpolated,
+/// unset and cancelling) and UVs, and no point through an instance.
 #[test]
 fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
     let smooth = CornerAttribute {
@@ -86,11 +86,12 @@ fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
     };
     let mut geometry = Geometry::new();
     geometry.add_mesh(&quad("plain"), &Affine3A::from_rotation_x(0.3), |i| 4 + i as u32);
-    geometry.add_mesh(
-        &Mesh { normals: Some(smooth), ..quad("smooth") },
-        &Affine3A::IDENTITY,
-        |_| 0,
-    );
+    let uvs = CornerAttribute {
+        values: vec![Vec2::new(0.1, 0.9), Vec2::new(3.7, -0.2), Vec2::new(0.4, 0.45), Vec2::ONE],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let smooth = Mesh { normals: Some(smooth), uvs: Some(uvs), ..quad("smooth") };
+    geometry.add_mesh(&smooth, &Affine3A::IDENTITY, |_| 0);
     geometry.add_mesh(
         &Mesh { normals: Some(partial), ..quad("partial") },
         &Affine3A::IDENTITY,
@@ -106,16 +107,17 @@ fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
             let si = geometry.interaction(&ray, &hit);
             let expected = (si.point, si.shading_normal, si.material);
             assert_eq!(geometry.shaded_surface_point(&hit), Some(expected), "{hit:?}");
+            let bits = |uv: Vec2| uv.to_array().map(f32::to_bits);
+            assert_eq!(bits(geometry.uv(&hit)), bits(si.uv), "{hit:?}");
             interpolated += usize::from(si.shading_normal != si.point.normal);
         }
     }
     assert!(interpolated >= 10, "the smooth quad's normals are interpolated: {interpolated}");
     let mut instanced = Geometry::new();
     instanced.add_instanced_mesh(&quad("q"), &[Affine3A::IDENTITY], |_| 0);
-    assert_eq!(
-        instanced.shaded_surface_point(&Hit { t: 1.0, triangle: 0, b1: 0.2, b2: 0.2 }),
-        None
-    );
+    let hit = Hit { t: 1.0, triangle: 0, b1: 0.2, b2: 0.3 };
+    assert_eq!(instanced.shaded_surface_point(&hit), None);
+    assert_eq!(instanced.uv(&hit), instanced.interaction(&ray, &hit).uv);
 }
 
 #[test]

@@ -30,6 +30,7 @@ use crate::material::{Bsdf, Material};
 use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, orthonormal_basis, power_heuristic};
 use crate::scene::Scene;
+use crate::texture::TextureQuery;
 
 /// The path tracer's settings, with Mitsuba's names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -403,12 +404,14 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
 
     /// The wavefront's shortcut for the commonest hits: a triangle that no instance places
     /// ([`Geometry::shaded_surface_point`](crate::geometry::Geometry::shaded_surface_point))
-    /// and that is no light's, of a material without textures and with an isotropic BSDF. It
-    /// gives exactly what [`arrive`](Self::arrive) and [`lane_surface`](Self::lane_surface)
+    /// and that is no light's, of a material without a normal map and with an isotropic BSDF.
+    /// It gives exactly what [`arrive`](Self::arrive) and [`lane_surface`](Self::lane_surface)
     /// give there: no light found (only lights' triangles emit), and the same point, shading
-    /// normal (the interpolated one, or the geometric one), sidedness and BSDF. Without building
-    /// the interaction: no texture coordinates, `dp/du` or tangent, and no texture lookups.
-    /// `None` for any other hit, which takes the general steps.
+    /// normal (the interpolated one, or the geometric one), sidedness and BSDF (its textures
+    /// read at the same texture coordinates, [`Geometry::uv`](crate::geometry::Geometry::uv),
+    /// where it has any). Without building the interaction: no `dp/du` or tangent, and no
+    /// texture coordinates for an untextured material. `None` for any other hit, which takes
+    /// the general steps.
     #[inline]
     pub(super) fn plain_surface(&self, hit: &Hit) -> Option<LaneSurface<'a>> {
         let (point, normal, material) = self.scene.geometry.shaded_surface_point(hit)?;
@@ -416,16 +419,17 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
             return None;
         }
         let material = &self.scene.materials[material as usize];
-        if !material.textures.is_empty() || material.bsdf.is_anisotropic() {
+        if material.textures.normal.is_some() || material.bsdf.is_anisotropic() {
             return None;
         }
-        Some(LaneSurface {
-            point,
-            normal,
-            two_sided: material.two_sided,
-            tangent: None,
-            bsdf: Cow::Borrowed(&material.bsdf),
-        })
+        let bsdf = match material.textures.is_empty() {
+            true => Cow::Borrowed(&material.bsdf),
+            false => {
+                let uv = self.scene.geometry.uv(hit);
+                material.bsdf_at(&TextureQuery { uv, p: point.p, footprint: 0.0 })
+            }
+        };
+        Some(LaneSurface { point, normal, two_sided: material.two_sided, tangent: None, bsdf })
     }
 
     /// Next-event estimation at `vertex`: draws a light sample, and returns the shadow ray and
