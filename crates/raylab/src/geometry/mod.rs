@@ -471,6 +471,15 @@ impl Geometry {
         interpolated_uv(Self::corner_values(&self.uvs, s, placement), hit)
     }
 
+    /// `dp/du` at a hit, as [`interaction`](Self::interaction) gives it (the frame of an
+    /// anisotropic BSDF follows it).
+    #[inline]
+    pub fn dp_du(&self, hit: &Hit) -> Vec3 {
+        let (s, placement) = self.locate(hit.triangle as usize);
+        let [v0, v1, v2] = self.surface_point_at(s, placement, hit).1;
+        Self::corner_values(&self.uvs, s, placement).map_or(v1 - v0, |t| dp_du([v0, v1, v2], t))
+    }
+
     /// A per-axis bound on the rounding error of [`surface_point`](Self::surface_point) for any
     /// point of scene triangle `i` (the largest at its corners: the bound grows with the
     /// coordinates' size).

@@ -66,8 +66,8 @@ fn interactions_interpolate_normals_and_uvs() {
     assert!(si.point.error.max_element() < 1e-6);
 }
 
-/// The path tracer's shortcut gives the interaction's point, shading normal, material and
-/// texture coordinates exactly (bit for bit), with and without shading normals (interpolated,
+/// The path tracer's shortcut gives the interaction's point, shading normal, material, texture
+/// coordinates and `dp/du` exactly (bit for bit), with and without shading normals (interpolated,
 /// unset and cancelling) and UVs, and no point through an instance.
 #[test]
 fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
@@ -109,6 +109,8 @@ fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
             assert_eq!(geometry.shaded_surface_point(&hit), Some(expected), "{hit:?}");
             let bits = |uv: Vec2| uv.to_array().map(f32::to_bits);
             assert_eq!(bits(geometry.uv(&hit)), bits(si.uv), "{hit:?}");
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            assert_eq!(bits(geometry.dp_du(&hit)), bits(si.dp_du), "{hit:?}");
             interpolated += usize::from(si.shading_normal != si.point.normal);
         }
     }
@@ -117,7 +119,8 @@ fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
     instanced.add_instanced_mesh(&quad("q"), &[Affine3A::IDENTITY], |_| 0);
     let hit = Hit { t: 1.0, triangle: 0, b1: 0.2, b2: 0.3 };
     assert_eq!(instanced.shaded_surface_point(&hit), None);
-    assert_eq!(instanced.uv(&hit), instanced.interaction(&ray, &hit).uv);
+    let si = instanced.interaction(&ray, &hit);
+    assert_eq!((instanced.uv(&hit), instanced.dp_du(&hit)), (si.uv, si.dp_du));
 }
 
 #[test]

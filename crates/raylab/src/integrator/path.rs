@@ -404,14 +404,15 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
 
     /// The wavefront's shortcut for the commonest hits: a triangle that no instance places
     /// ([`Geometry::shaded_surface_point`](crate::geometry::Geometry::shaded_surface_point))
-    /// and that is no light's, of a material without a normal map and with an isotropic BSDF.
-    /// It gives exactly what [`arrive`](Self::arrive) and [`lane_surface`](Self::lane_surface)
-    /// give there: no light found (only lights' triangles emit), and the same point, shading
-    /// normal (the interpolated one, or the geometric one), sidedness and BSDF (its textures
-    /// read at the same texture coordinates, [`Geometry::uv`](crate::geometry::Geometry::uv),
-    /// where it has any). Without building the interaction: no `dp/du` or tangent, and no
-    /// texture coordinates for an untextured material. `None` for any other hit, which takes
-    /// the general steps.
+    /// and that is no light's, of a material without a normal map. It gives exactly what
+    /// [`arrive`](Self::arrive) and [`lane_surface`](Self::lane_surface) give there: no light
+    /// found (only lights' triangles emit), and the same point, shading normal (the
+    /// interpolated one, or the geometric one), sidedness, `dp/du` for an anisotropic BSDF
+    /// ([`Geometry::dp_du`](crate::geometry::Geometry::dp_du)) and BSDF (its textures read at
+    /// the same texture coordinates, [`Geometry::uv`](crate::geometry::Geometry::uv), where it
+    /// has any). Without building the interaction: no tangent, and no texture coordinates or
+    /// `dp/du` where nothing needs them. `None` for any other hit, which takes the general
+    /// steps.
     #[inline]
     pub(super) fn plain_surface(&self, hit: &Hit) -> Option<LaneSurface<'a>> {
         let (point, normal, material) = self.scene.geometry.shaded_surface_point(hit)?;
@@ -419,9 +420,11 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
             return None;
         }
         let material = &self.scene.materials[material as usize];
-        if material.textures.normal.is_some() || material.bsdf.is_anisotropic() {
+        if material.textures.normal.is_some() {
             return None;
         }
+        // `lane_surface`'s choice of frame.
+        let tangent = material.bsdf.is_anisotropic().then(|| self.scene.geometry.dp_du(hit));
         let bsdf = match material.textures.is_empty() {
             true => Cow::Borrowed(&material.bsdf),
             false => {
@@ -429,7 +432,7 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
                 material.bsdf_at(&TextureQuery { uv, p: point.p, footprint: 0.0 })
             }
         };
-        Some(LaneSurface { point, normal, two_sided: material.two_sided, tangent: None, bsdf })
+        Some(LaneSurface { point, normal, two_sided: material.two_sided, tangent, bsdf })
     }
 
     /// Next-event estimation at `vertex`: draws a light sample, and returns the shadow ray and
