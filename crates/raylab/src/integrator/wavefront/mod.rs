@@ -181,9 +181,16 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut first = true;
         let mut lap = Lap::start(self.times.as_ref());
         while !alive.is_empty() {
-            // 1. Closest hits, as a batch.
-            batch.clear();
-            batch.extend(alive.iter().map(|&i| states[i].ray));
+            // 1. Closest hits, as a batch: the camera rays as they came (every path, in order),
+            // the later rays gathered from the paths still tracing.
+            let batch = match first {
+                true => rays,
+                false => {
+                    batch.clear();
+                    batch.extend(alive.iter().map(|&i| states[i].ray));
+                    &batch[..]
+                }
+            };
             hits.clear();
             hits.resize(batch.len(), None);
             if scene.has_cut_outs() {
@@ -192,9 +199,9 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
                 }
             } else if first {
                 // Camera rays are coherent: packets pay (see the module documentation).
-                accel.closest_hits(&batch, &mut hits);
+                accel.closest_hits(batch, &mut hits);
             } else {
-                accel.closest_hits_incoherent(&batch, &mut hits);
+                accel.closest_hits_incoherent(batch, &mut hits);
             }
             first = false;
             lap.end(|t| &t.closest_hits);
