@@ -164,7 +164,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let (scene, accel) = (path.scene(), path.accel());
         let rr_depth = path.settings().rr_depth;
         // The stages' buffers, made per tile: a thread-local set reused from tile to tile was
-        // measured slower (BENCHMARKS.md, "The wavefront").
+        // measured slower at 64-path tiles and equal at 1,024 (BENCHMARKS.md, "The wavefront",
+        // "Every plain hit by the shortcut").
         let mut states: Vec<PathState> = rays.iter().map(PathState::new).collect();
         // The paths still tracing, by index.
         let mut alive: Vec<usize> = (0..rays.len()).collect();
