@@ -1,5 +1,7 @@
 use super::*;
+use crate::accel::Hit;
 use crate::mesh::CornerAttribute;
+use crate::ray::Ray;
 
 fn quad(name: &str) -> Mesh {
     Mesh {

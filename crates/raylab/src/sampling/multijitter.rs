@@ -68,7 +68,7 @@ impl Grid {
         [self.m, self.n, self.count()].map(mask_of)
     }
 
-    /// Whether both sides are powers of two (then [`point_2d_pow2`] and [`point_1d_pow2`]
+    /// Whether both sides are powers of two (then `point_2d_pow2` and `point_1d_pow2`
     /// apply).
     pub fn is_power_of_two(self) -> bool {
         self.m.is_power_of_two() && self.n.is_power_of_two()
