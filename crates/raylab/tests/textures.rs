@@ -82,25 +82,6 @@ fn one_sample_per_pixel_does_not_alias_a_receding_checkerboard() {
     assert!(filtered_near < 0.1, "near: {filtered_near} against {point_near}");
 }
 
-/// The bumps of the normal-map test: `z = −A (sin kx + sin ky)` over the wall `x, y ∈ [−1, 1]`
-/// (toward the camera at the lab's −z), and its unit normal `(cx, cy, −1)/len` with
-/// `cx = −Ak cos kx`, `cy = −Ak cos ky`, on the camera's side.
-const BUMP_A: f32 = 0.02;
-const BUMP_K: f32 = 2.0 * std::f32::consts::PI;
-
-fn bump_normal(x: f32, y: f32) -> Vec3 {
-    let (cx, cy) = (-BUMP_A * BUMP_K * (BUMP_K * x).cos(), -BUMP_A * BUMP_K * (BUMP_K * y).cos());
-    Vec3::new(cx, cy, -1.0).normalize()
-}
-
-/// A wall lit by a point light, seen by the path tracer (direct light only), its materials
-/// diffuse.
-fn wall_scene(geometry: raylab::Geometry, material: Material) -> Scene {
-    let light =
-        raylab::PointLight { position: Vec3::new(0.4, -0.6, -2.0), power: Vec3::splat(60.0) };
-    Scene::new("wall", geometry, vec![material], light)
-}
-
 /// The same bumps as geometry: a 128 × 128 grid displaced, with the exact normals at its
 /// vertices.
 fn bumpy_wall() -> Scene {
@@ -111,8 +92,12 @@ fn bumpy_wall() -> Scene {
     for j in 0..=n {
         for i in 0..=n {
             let (x, y) = (at(i), at(j));
-            positions.push(Vec3::new(x, y, -BUMP_A * ((BUMP_K * x).sin() + (BUMP_K * y).sin())));
-            normals.push(bump_normal(x, y));
+            positions.push(Vec3::new(
+                x,
+                y,
+                -common::BUMP_A * ((common::BUMP_K * x).sin() + (common::BUMP_K * y).sin()),
+            ));
+            normals.push(common::bump_normal(x, y));
         }
     }
     let index = |i: u32, j: u32| j * (n + 1) + i;
@@ -133,47 +118,7 @@ fn bumpy_wall() -> Scene {
     };
     let mut geometry = raylab::Geometry::new();
     geometry.add_mesh(&mesh, &glam::Affine3A::IDENTITY, |_| 0);
-    wall_scene(geometry, Material::diffuse("wall", Vec3::splat(0.8)))
-}
-
-/// The flat wall with the bumps in a normal map (256², floats), its tangents from MikkTSpace:
-/// along +u (the +x here) and the bitangent along +v (+y), so the map holds the bump normal's
-/// x, y and −z, encoded as (n + 1)/2.
-fn normal_mapped_wall() -> Scene {
-    let m = 256u32;
-    let texels = (0..m * m)
-        .map(|k| {
-            let (i, j) = (k % m, k / m);
-            let (u, v) = ((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
-            let n = bump_normal(2.0 * u - 1.0, 2.0 * v - 1.0);
-            let local = Vec3::new(n.x, n.y, -n.z);
-            let encoded = (local + Vec3::ONE) * 0.5;
-            [encoded.x, encoded.y, encoded.z, 1.0]
-        })
-        .collect();
-    let image = TextureImage::from_rgba_f32("bumps", m, m, texels);
-    let corners = [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)];
-    let triangles = vec![[0, 1, 2], [2, 1, 3]];
-    let mut mesh = Mesh {
-        name: "flat".into(),
-        positions: corners.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect(),
-        uvs: Some(CornerAttribute {
-            values: corners
-                .iter()
-                .map(|&(x, y)| Vec2::new((x + 1.0) / 2.0, (y + 1.0) / 2.0))
-                .collect(),
-            triangles: triangles.clone(),
-        }),
-        triangles,
-        ..Mesh::default()
-    };
-    assert!(mesh.generate_tangents());
-    let mut geometry = raylab::Geometry::new();
-    geometry.add_mesh(&mesh, &glam::Affine3A::IDENTITY, |_| 0);
-    let mut material = Material::diffuse("wall", Vec3::splat(0.8));
-    let texture = Texture::Image(ImageTexture::new(Arc::new(image)));
-    material.textures.normal = Some(raylab::material::NormalMap { texture, scale: 1.0 });
-    wall_scene(geometry, material)
+    common::wall_scene(geometry, Material::diffuse("wall", Vec3::splat(0.8)))
 }
 
 #[test]
@@ -182,7 +127,7 @@ fn a_normal_mapped_plane_shades_as_the_bumpy_geometry() {
     let mut camera = Camera::lab(64, 64);
     camera.focal_length_px = 32.0 * 3.0 / 0.9;
     let settings = PathSettings { max_depth: Some(2), ..PathSettings::default() };
-    let images: Vec<(Film, Film)> = [bumpy_wall(), normal_mapped_wall()]
+    let images: Vec<(Film, Film)> = [bumpy_wall(), common::normal_mapped_wall()]
         .iter()
         .map(|scene| {
             let accel = raylab::Bvh::new(&scene.vertices());

@@ -1,13 +1,15 @@
 //! The wavefront path tracer ([`PathWavefront`]) gives the scalar path tracer's samples, bit for
 //! bit: every scene in `scenes/`, the lab's box, models (OBJ with textures, glTF), the materials
-//! scene of the Mitsuba comparison and a scene with alpha-masked holes, at several depth
-//! limits. Accumulated sums are compared, so every pixel's every sample must agree; the wavefront traces tiles of 128×8 camera rays together
-//! (`radiance_each`), the scalar path one ray at a time.
+//! scene of the Mitsuba comparison, a terrain (noise textures read at the point), the glTF boxes
+//! kept instanced (placed triangles), a normal-mapped wall and a scene with alpha-masked holes,
+//! at several depth limits. Accumulated sums are compared, so every pixel's every sample must
+//! agree; the wavefront traces tiles of 128×8 camera rays together (`radiance_each`), the scalar
+//! path one ray at a time.
 
 mod common;
 
 use raylab::integrator::{Integrator, Path as PathTracer, PathSettings, PathWavefront};
-use raylab::scene::LoadOptions;
+use raylab::scene::{Instancing, LoadOptions};
 use raylab::session::CameraOptions;
 use raylab::{Accumulator, Camera, Film, SampleSettings, SamplerKind, Scene, SceneBvh};
 
@@ -72,15 +74,32 @@ fn check(name: &str, scene: &Scene, camera: &Camera) {
 
 #[test]
 fn the_wavefront_gives_the_scalar_paths_samples_on_every_scene() {
-    for name in scene_names() {
-        let opened =
-            Scene::open(&name, &LoadOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let kept = LoadOptions { instancing: Instancing::Keep };
+    let gltf_boxes = common::repository().join("crates/raylab/tests/data/mitsuba-gltf/boxes.toml");
+    let scenes = scene_names()
+        .into_iter()
+        .map(|name| (name, LoadOptions::default()))
+        .chain([("terrain:32".to_string(), LoadOptions::default())])
+        .chain([(gltf_boxes.display().to_string(), kept)]);
+    for (name, options) in scenes {
+        let opened = Scene::open(&name, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
+        if options.instancing == Instancing::Keep {
+            assert!(opened.scene.geometry.is_instanced(), "{name}: placed triangles");
+        }
         let scene = opened.scene;
         let accel = SceneBvh::build(&scene.geometry).unwrap();
         let cameras = CameraOptions { size: Some(SIZE), ..CameraOptions::default() };
         let camera = cameras.camera(scene.camera, &scene, opened.is_model, &accel).unwrap();
         check(&name, &scene, &camera);
     }
+}
+
+/// Normal maps take the general steps (the shading normal needs the interaction's tangent).
+#[test]
+fn the_wavefront_shades_a_normal_map_as_the_scalar_path_does() {
+    let scene = common::normal_mapped_wall();
+    assert!(scene.materials[0].textures.normal.is_some());
+    check("normal-mapped wall", &scene, &Camera::lab(SIZE.0, SIZE.1));
 }
 
 #[test]

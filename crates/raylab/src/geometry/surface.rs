@@ -54,7 +54,8 @@ impl Geometry {
     /// [`surface_point`](Self::surface_point), the shading normal and the material of a hit on
     /// a triangle that no instance places: exactly what [`interaction`](Self::interaction)
     /// gives there, without the texture coordinates, `dp/du` and tangent. `None` for a placed
-    /// triangle. The path tracer's shortcut for vertices whose material reads no textures.
+    /// triangle. The path tracer's shortcut for vertices without a normal map (with
+    /// [`uv`](Self::uv) and [`dp_du`](Self::dp_du) where their material needs them).
     #[inline]
     pub fn shaded_surface_point(&self, hit: &Hit) -> Option<(SurfacePoint, Vec3, u32)> {
         if self.placed {

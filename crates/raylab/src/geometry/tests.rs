@@ -117,12 +117,25 @@ fn shaded_surface_points_are_the_interactions_on_unplaced_triangles() {
         }
     }
     assert!(interpolated >= 10, "the smooth quad's normals are interpolated: {interpolated}");
+    // Through instances, one of them mirrored (its corners reordered): no shortcut point, and
+    // the interaction's texture coordinates and `dp/du`.
     let mut instanced = Geometry::new();
-    instanced.add_instanced_mesh(&quad("q"), &[Affine3A::IDENTITY], |_| 0);
-    let hit = Hit { t: 1.0, triangle: 0, b1: 0.2, b2: 0.3 };
-    assert_eq!(instanced.shaded_surface_point(&hit), None);
-    let si = instanced.interaction(&ray, &hit);
-    assert_eq!((instanced.uv(&hit), instanced.dp_du(&hit)), (si.uv, si.dp_du));
+    let mirrored = Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+    let uvs = CornerAttribute {
+        values: vec![Vec2::new(0.1, 0.9), Vec2::new(3.7, -0.2), Vec2::new(0.4, 0.45), Vec2::ONE],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let textured = Mesh { uvs: Some(uvs), ..quad("q") };
+    instanced.add_instanced_mesh(&textured, &[Affine3A::IDENTITY, mirrored], |_| 0);
+    for triangle in 0..4 {
+        let hit = Hit { t: 1.0, triangle, b1: 0.2, b2: 0.3 };
+        assert_eq!(instanced.shaded_surface_point(&hit), None);
+        let si = instanced.interaction(&ray, &hit);
+        let bits2 = |uv: Vec2| uv.to_array().map(f32::to_bits);
+        let bits3 = |v: Vec3| v.to_array().map(f32::to_bits);
+        assert_eq!(bits2(instanced.uv(&hit)), bits2(si.uv), "{hit:?}");
+        assert_eq!(bits3(instanced.dp_du(&hit)), bits3(si.dp_du), "{hit:?}");
+    }
 }
 
 #[test]

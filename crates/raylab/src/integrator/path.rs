@@ -425,12 +425,11 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         }
         // `lane_surface`'s choice of frame.
         let tangent = material.bsdf.is_anisotropic().then(|| self.scene.geometry.dp_du(hit));
-        let bsdf = match material.textures.is_empty() {
-            true => Cow::Borrowed(&material.bsdf),
-            false => {
-                let uv = self.scene.geometry.uv(hit);
-                material.bsdf_at(&TextureQuery { uv, p: point.p, footprint: 0.0 })
-            }
+        let bsdf = if material.textures.is_empty() {
+            Cow::Borrowed(&material.bsdf)
+        } else {
+            let uv = self.scene.geometry.uv(hit);
+            material.bsdf_at(&TextureQuery { uv, p: point.p, footprint: 0.0 })
         };
         Some(LaneSurface { point, normal, two_sided: material.two_sided, tangent, bsdf })
     }

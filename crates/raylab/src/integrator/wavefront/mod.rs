@@ -14,8 +14,8 @@
 //!    `max_depth` end; each vertex's material, shading normal and BSDF. The vertex goes
 //!    straight into a lane of its BSDF's kind (its point, shading normal, tangent and the
 //!    BSDF's parameters: [`Path::lane_surface`]; the lanes make its frame). The commonest hits,
-//!    on an unplaced triangle that is no light's, of an untextured material with an isotropic
-//!    BSDF ([`Path::plain_surface`]), go without building their interaction;
+//!    on an unplaced triangle that is no light's, of a material without a normal map
+//!    ([`Path::plain_surface`]), go without building their whole interaction;
 //! 3. **draws**: a chunk's numbers (the light's choice and point, the BSDF's lobe and
 //!    direction, the roulette's) in one pass over their samplers
 //!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
@@ -184,13 +184,12 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         while !alive.is_empty() {
             // 1. Closest hits, as a batch: the camera rays as they came (every path, in order),
             // the later rays gathered from the paths still tracing.
-            let batch = match first {
-                true => rays,
-                false => {
-                    batch.clear();
-                    batch.extend(alive.iter().map(|&i| states[i].ray));
-                    &batch[..]
-                }
+            let batch = if first {
+                rays
+            } else {
+                batch.clear();
+                batch.extend(alive.iter().map(|&i| states[i].ray));
+                &batch[..]
             };
             hits.clear();
             hits.resize(batch.len(), None);
@@ -224,7 +223,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             for (&i, hit) in alive.iter().zip(&hits) {
                 let state = &mut chunk.states[i];
                 let last = state.depth + 1 >= max_depth;
-                // The commonest hits, a triangle of an untextured material, by the shortcut:
+                // The commonest hits, an unplaced triangle of a material without a normal map,
+                // by the shortcut:
                 // nothing is emitted there, so at the depth limit it needs nothing at all. Any
                 // other hit by the general steps.
                 let plain =
