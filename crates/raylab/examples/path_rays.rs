@@ -10,6 +10,10 @@
 //! cargo run --release --example path_rays -- scenes/cornell-mitsuba.toml 128 4  # size, passes
 //! ```
 //!
+//! `--split` (after the other arguments) also times a one-level BVH's bounces by outcome: the
+//! rays that hit, the rays that miss, and as many rays that miss the root box (each bounce's
+//! origin moved 100 units up, pointing up): the per-ray setup and one node.
+//!
 //! `--write DIR` (after the other arguments) also writes the scene's world triangles as
 //! `DIR/scene.obj` and the rays as the ray-set protocol's files (`primary.rays` the camera's,
 //! `diffuse.rays` the bounces, `shadow.rays` the shadow rays), so that Embree traces the very
@@ -72,11 +76,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let file = args.next().ok_or("usage: path_rays SCENE.toml [SIZE [PASSES]]")?;
     let size: u32 = args.next().map_or(Ok(256), |s| s.parse())?;
     let passes: u32 = args.next().map_or(Ok(4), |s| s.parse())?;
-    let write = match args.next().as_deref() {
-        Some("--write") => Some(std::path::PathBuf::from(args.next().ok_or("--write DIR")?)),
-        Some(other) => return Err(format!("unknown argument {other}").into()),
-        None => None,
-    };
+    let (mut write, mut split) = (None, false);
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--write" => write = Some(std::path::PathBuf::from(args.next().ok_or("--write DIR")?)),
+            "--split" => split = true,
+            other => return Err(format!("unknown argument {other}").into()),
+        }
+    }
     let scene = Scene::open(&file, &LoadOptions::default())?.scene;
     let bvh = SceneBvh::build(&scene.geometry)?;
     let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
@@ -174,8 +181,43 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             batched * 1e9 / count as f64,
         );
     }
+    if split && let SceneBvh::Flat(tree) = &bvh {
+        bounces_by_outcome(tree, &kinds[1].1);
+    }
     camera_orders(&bvh, &camera);
     Ok(())
+}
+
+/// The bounces of `batches` timed apart by outcome (see the module documentation): the best of
+/// five replays, one thread, with what each kind of ray visits.
+fn bounces_by_outcome(tree: &raylab::Bvh, batches: &[Vec<Ray>]) {
+    let all: Vec<Ray> = batches.iter().flatten().copied().collect();
+    let (hit, miss): (Vec<Ray>, Vec<Ray>) =
+        all.iter().partition(|ray| tree.closest_hit(ray).is_some());
+    let up = glam::Vec3::Y;
+    let away: Vec<Ray> = all.iter().map(|ray| Ray::new(ray.origin + up * 100.0, up)).collect();
+    for (name, rays) in
+        [("bounces that hit", &hit), ("bounces that miss", &miss), ("root missed", &away)]
+    {
+        if rays.is_empty() {
+            continue;
+        }
+        let time = best_of_five(|| {
+            for ray in rays.iter() {
+                std::hint::black_box(tree.closest_hit(std::hint::black_box(ray)));
+            }
+        });
+        let mut stats = TraversalStats::default();
+        for ray in rays.iter() {
+            tree.closest_hit_counted(ray, &mut stats);
+        }
+        let [nodes, leaves, _] = stats.per_ray();
+        println!(
+            "{name:18} {:>8} rays {:>7.1} ns  nodes {nodes:.2}  leaves {leaves:.2}",
+            rays.len(),
+            time * 1e9 / rays.len() as f64
+        );
+    }
 }
 
 /// Camera rays traced as packets in two orders: 64 pixels, one sample each (the wavefront's
