@@ -145,13 +145,19 @@ pub fn is_degenerate([v0, v1, v2]: [Vec3; 3]) -> bool {
 #[inline]
 pub fn dominant_axis(d: Vec3) -> usize {
     let abs = d.abs();
-    if abs.x >= abs.y && abs.x >= abs.z {
-        0
-    } else if abs.y >= abs.z {
-        1
-    } else {
-        2
-    }
+    // Without branches (a ray's axis is as good as random: a branch on it mispredicts often):
+    // 0 where x is the longest, else 1 where y is at least z, else 2.
+    let x_longest = (abs.x >= abs.y) & (abs.x >= abs.z);
+    let y_over_z = abs.y >= abs.z;
+    usize::from(!x_longest) * (2 - usize::from(y_over_z))
+}
+
+/// Coordinate `k` (0, 1 or 2; a larger `k` reads `z`) of `v`, by an indexed load rather than
+/// the branches of `Vec3`'s `Index`: the per-ray setup reads the coordinates of an axis picked
+/// by the ray's direction, which branches would mispredict.
+#[inline(always)]
+pub(crate) fn coordinate(v: Vec3, k: usize) -> f32 {
+    [v.x, v.y, v.z][k.min(2)]
 }
 
 /// The per-ray part of the watertight test: which axis the ray is mostly along, and the shear that
@@ -181,7 +187,7 @@ impl WatertightRay {
     #[inline]
     pub(crate) fn with_inverse(ray: &Ray, inv_direction: Vec3) -> Self {
         let kz = dominant_axis(ray.direction);
-        let shear_z = inv_direction[kz];
+        let shear_z = coordinate(inv_direction, kz);
         // The answers must be exactly those of `new`, which divides.
         debug_assert!(
             shear_z.to_bits() == (1.0 / ray.direction[kz]).to_bits() || shear_z.is_nan(),
@@ -195,12 +201,9 @@ impl WatertightRay {
     fn with_shear_z(ray: &Ray, shear_z: f32) -> Self {
         let d = ray.direction;
         let kz = dominant_axis(d);
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
+        let (next, after) = ((kz + 1) % 3, (kz + 2) % 3);
         // Swapping x and y keeps the triangles' winding when the ray points along −z.
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let (kx, ky) = if coordinate(d, kz) < 0.0 { (after, next) } else { (next, after) };
         WatertightRay {
             origin: ray.origin,
             // A NaN range start admits no hit.
@@ -208,8 +211,8 @@ impl WatertightRay {
             kx,
             ky,
             kz,
-            shear_x: d[kx] * shear_z,
-            shear_y: d[ky] * shear_z,
+            shear_x: coordinate(d, kx) * shear_z,
+            shear_y: coordinate(d, ky) * shear_z,
             shear_z,
         }
     }
@@ -458,6 +461,34 @@ mod tests {
     }
 
     const UNIT: [Vec3; 3] = [Vec3::ZERO, Vec3::X, Vec3::Y];
+
+    /// The branch-free axis and coordinate picks give what the plain branches and `Vec3`'s
+    /// index give: ties to the lowest axis, NaN and zero components, every sign.
+    #[test]
+    fn axis_picks_are_the_branching_ones() {
+        let reference = |d: Vec3| {
+            let abs = d.abs();
+            if abs.x >= abs.y && abs.x >= abs.z {
+                0
+            } else if abs.y >= abs.z {
+                1
+            } else {
+                2
+            }
+        };
+        let values = [0.0f32, -0.0, 1.0, -1.0, 2.0, -3.0, f32::NAN, f32::INFINITY, 1e-40];
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    let d = Vec3::new(x, y, z);
+                    assert_eq!(dominant_axis(d), reference(d), "{d}");
+                    for k in 0..3 {
+                        assert_eq!(coordinate(d, k).to_bits(), d[k].to_bits(), "{d}[{k}]");
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn hits_the_interior_with_correct_t_and_barycentrics() {

@@ -187,7 +187,7 @@ impl RayBoxTest {
         let o = Vec3A::from(self.origin);
         let farthest = (Vec3A::from(root.min) - o).abs().max((Vec3A::from(root.max) - o).abs());
         let l = farthest.x + farthest.y + farthest.z;
-        let r = l * self.inv_direction[self.dominant_axis].abs();
+        let r = l * crate::triangle::coordinate(self.inv_direction, self.dominant_axis).abs();
         r * ((SLAB_PAD + 4.0 * gamma(3)) * FAR_SCALE)
     }
 

@@ -6,7 +6,7 @@
 //! that a leaf record can transform each of its shared vertices once.
 
 use super::{LaneMask, Lanes};
-use crate::triangle::WatertightRay;
+use crate::triangle::{WatertightRay, coordinate};
 
 /// The watertight test's inputs, one test per lane: the lanes are either triangles against one
 /// ray (a flat list's sixteen) or rays against one triangle (packets). Every
@@ -234,9 +234,9 @@ impl<V: Lanes> RayBroadcast<V> {
         unsafe {
             RayBroadcast {
                 origin: [
-                    V::splat(ray.origin[kx]),
-                    V::splat(ray.origin[ky]),
-                    V::splat(ray.origin[kz]),
+                    V::splat(coordinate(ray.origin, kx)),
+                    V::splat(coordinate(ray.origin, ky)),
+                    V::splat(coordinate(ray.origin, kz)),
                 ],
                 shear: [V::splat(ray.shear_x), V::splat(ray.shear_y), V::splat(ray.shear_z)],
                 abs_shear: [V::splat(ray.shear_x.abs()), V::splat(ray.shear_y.abs())],
