@@ -80,7 +80,10 @@ impl Geometry {
     #[inline]
     pub fn dp_du(&self, hit: &Hit) -> Vec3 {
         let (s, placement) = self.locate(hit.triangle as usize);
-        let [v0, v1, v2] = self.surface_point_at(s, placement, hit).1;
+        // The world corners, as `surface_point_at` places them for the interaction (without
+        // the point, which nothing here needs).
+        let corners = self.stored_triangle(s);
+        let [v0, v1, v2] = placement.map_or(corners, |p| p.triangle(corners));
         Self::corner_values(&self.uvs, s, placement).map_or(v1 - v0, |t| dp_du([v0, v1, v2], t))
     }
 
