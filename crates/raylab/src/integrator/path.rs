@@ -151,17 +151,35 @@ pub(super) struct PathState {
 impl PathState {
     /// A path starting with a camera ray.
     pub fn new(camera_ray: &Ray) -> PathState {
-        PathState {
-            ray: *camera_ray,
-            radiance: Vec3::ZERO,
-            throughput: Vec3::ONE,
-            eta: 1.0,
-            depth: 0,
-            previous_pdf: 1.0,
-            previous_delta: true,
-            previous_point: camera_ray.origin,
-        }
+        PathState { ray: *camera_ray, previous_point: camera_ray.origin, ..PathState::START }
     }
+
+    /// The paths starting with `camera_rays`, in order.
+    ///
+    /// Made as copies of one template whose ray is then set: building each state whole (as
+    /// `new` does) compiles to a state assembled on the stack and read back across two of its
+    /// stores, which stalls store-to-load forwarding once per path (measured: 2 % of the
+    /// materials scene's render).
+    pub fn starting(camera_rays: &[Ray]) -> Vec<PathState> {
+        let mut states = vec![PathState::START; camera_rays.len()];
+        for (state, ray) in states.iter_mut().zip(camera_rays) {
+            state.ray = *ray;
+            state.previous_point = ray.origin;
+        }
+        states
+    }
+
+    /// A path before its camera ray is set.
+    const START: PathState = PathState {
+        ray: Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_min: 0.0, t_max: f32::INFINITY },
+        radiance: Vec3::ZERO,
+        throughput: Vec3::ONE,
+        eta: 1.0,
+        depth: 0,
+        previous_pdf: 1.0,
+        previous_delta: true,
+        previous_point: Vec3::ZERO,
+    };
 }
 
 /// A path's vertex, ready to scatter: its BSDF, in the shading frame.

@@ -166,7 +166,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         // The stages' buffers, made per tile: a thread-local set reused from tile to tile was
         // measured slower at 64-path tiles and equal at 1,024 (BENCHMARKS.md, "The wavefront",
         // "Every plain hit by the shortcut").
-        let mut states: Vec<PathState> = rays.iter().map(PathState::new).collect();
+        let mut states = PathState::starting(rays);
         // The paths still tracing, by index.
         let mut alive: Vec<usize> = (0..rays.len()).collect();
         let mut batch: Vec<Ray> = Vec::with_capacity(rays.len());
