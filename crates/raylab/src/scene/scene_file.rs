@@ -14,7 +14,7 @@ use glam::{Affine3A, Mat4, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::{CameraSettings, FovAxis, Keyframe, LoadOptions, RenderSettings, Scene};
+use super::{CameraSettings, FovAxis, Keyframe, LoadOptions, LoadedMesh, RenderSettings, Scene};
 use crate::camera::Camera;
 use crate::filter::Filter;
 use crate::geometry::Geometry;
@@ -88,7 +88,14 @@ pub fn parse_scene_with(
     let document: Document =
         toml::from_str(text).map_err(|e| at(e.span(), e.message().trim().replace('\n', " ")))?;
     let folder = path.parent().unwrap_or(Path::new("."));
-    Builder { at: &at, folder, options, warnings: Default::default() }.build(document, path)
+    let builder = Builder {
+        at: &at,
+        folder,
+        options,
+        warnings: Default::default(),
+        shared_meshes: Default::default(),
+    };
+    builder.build(document, path)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -182,6 +189,10 @@ struct Builder<'a, F> {
     options: &'a LoadOptions,
     /// The meshes' loaders' warnings, for [`Scene::warnings`].
     warnings: std::cell::RefCell<Vec<String>>,
+    /// The mesh files that several shapes place (five spheres of one `sphere.obj`), by their
+    /// paths as the scene names them: the uses still to come, and the mesh once read. Such a
+    /// file is read and parsed once and kept until its last use; a file used once is not kept.
+    shared_meshes: std::cell::RefCell<BTreeMap<PathBuf, (usize, Option<LoadedMesh>)>>,
 }
 
 type Result<T> = std::result::Result<T, SceneFileError>;
@@ -200,6 +211,12 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             material_index.insert(name.clone(), scene.materials.len() as u32);
             scene.materials.push(material);
         }
+        let mut uses = BTreeMap::<PathBuf, usize>::new();
+        for file in document.shapes.iter().filter_map(|shape| shape.get_ref().file.as_ref()) {
+            *uses.entry(self.folder.join(file.get_ref())).or_default() += 1;
+        }
+        *self.shared_meshes.borrow_mut() =
+            uses.into_iter().filter(|&(_, n)| n > 1).map(|(path, n)| (path, (n, None))).collect();
         let mut geometry = Geometry::new();
         for shape in &document.shapes {
             self.shape(shape, &mut scene.materials, &material_index, &mut geometry)?;
@@ -319,11 +336,8 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
                         "a mesh needs `file = \"…\"` (.obj, .ply, optionally .gz; .gltf, .glb)",
                     );
                 };
-                let mesh_path = self.folder.join(file.get_ref());
-                let mut loaded = super::load_mesh(&mesh_path)
-                    .map_err(|e| (self.at)(Some(file.span()), e.to_string()))?;
+                let mut loaded = self.mesh_file(file)?;
                 self.options.instancing.apply(&mut loaded);
-                self.warnings.borrow_mut().extend(loaded.warnings.iter().cloned());
                 if material.is_none() {
                     // The file's own materials, as diffuse with their Kd and Ke.
                     let base = materials.len() as u32;
@@ -361,6 +375,34 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         };
         geometry.add_mesh(&Mesh { name: kind.to_string(), ..mesh }, &transform, |_| material);
         Ok(())
+    }
+
+    /// The mesh in `file` (relative to the scene's folder). A file that several shapes place is
+    /// read on its first use and copied for the others (`shared_meshes`); its warnings are
+    /// reported once.
+    fn mesh_file(&self, file: &Spanned<String>) -> Result<LoadedMesh> {
+        let path = self.folder.join(file.get_ref());
+        let mut shared = self.shared_meshes.borrow_mut();
+        if let Some((uses, kept)) = shared.get_mut(&path) {
+            *uses -= 1;
+            if *uses == 0
+                && let Some(loaded) = kept.take()
+            {
+                return Ok(loaded);
+            }
+            if let Some(loaded) = kept {
+                return Ok(loaded.clone());
+            }
+        }
+        let loaded =
+            super::load_mesh(&path).map_err(|e| (self.at)(Some(file.span()), e.to_string()))?;
+        self.warnings.borrow_mut().extend(loaded.warnings.iter().cloned());
+        if let Some((uses, kept)) = shared.get_mut(&path)
+            && *uses > 0
+        {
+            *kept = Some(loaded.clone());
+        }
+        Ok(loaded)
     }
 
     /// The lab's Cornell box (30 triangles in `[−1, 1]³`), each face with the scene's material

@@ -433,3 +433,53 @@ fn a_gltf_model_is_a_mesh_shape() {
         scene.warnings
     );
 }
+
+/// A mesh file that several shapes place is read once and placed by each: the same triangles
+/// and materials as copies of the file, in shape order, and the file's warnings reported once.
+#[test]
+fn a_file_placed_by_several_shapes_is_read_once() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("m.mtl"), "newmtl grey\nKd 0.5 0.5 0.5\n").unwrap();
+    // The polyline is skipped with a warning, once per read of the file.
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl grey\nf 1 2 3\nl 1 2\n";
+    for name in ["a.obj", "b.obj", "c.obj"] {
+        std::fs::write(dir.path().join(name), obj).unwrap();
+    }
+    let shapes = |files: [&str; 4]| {
+        files
+            .iter()
+            .enumerate()
+            .map(|(k, file)| {
+                let material = if k == 2 { "material = \"red\"\n" } else { "" };
+                format!("[[shapes]]\ntype = \"mesh\"\nfile = \"{file}\"\ntranslate = [{k}, 0, 0]\n{material}")
+            })
+            .collect::<String>()
+    };
+    let red = "[materials.red]\ntype = \"diffuse\"\nreflectance = [1, 0, 0]\n";
+    let load = |files: [&str; 4], name: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, format!("{red}{}", shapes(files))).unwrap();
+        load_scene_file(&path).unwrap()
+    };
+    let shared = load(["a.obj", "a.obj", "a.obj", "b.obj"], "shared.toml");
+    let apart = load(["a.obj", "b.obj", "c.obj", "b.obj"], "apart.toml");
+    assert_eq!(shared.geometry.len(), 4);
+    for i in 0..4 {
+        assert_eq!(shared.geometry.triangle(i), apart.geometry.triangle(i), "triangle {i}");
+        let name =
+            |scene: &Scene| scene.materials[scene.geometry.material_id(i) as usize].name.clone();
+        assert_eq!(name(&shared), name(&apart), "triangle {i}");
+    }
+    assert_eq!(shared.geometry.triangle(1)[0], Vec3::new(1.0, 0.0, 0.0));
+    // One warning per file read: a.obj and b.obj in the shared scene; a, b and c apart.
+    let count =
+        |scene: &Scene, file: &str| scene.warnings.iter().filter(|w| w.contains(file)).count();
+    assert_eq!(shared.warnings.len(), 2, "{:?}", shared.warnings);
+    assert_eq!((count(&shared, "a.obj"), count(&shared, "b.obj")), (1, 1), "{:?}", shared.warnings);
+    assert_eq!(apart.warnings.len(), 3, "{:?}", apart.warnings);
+    // A shared file that cannot be read is an error at its first use.
+    let path = dir.path().join("missing.toml");
+    std::fs::write(&path, shapes(["a.obj", "gone.obj", "gone.obj", "a.obj"])).unwrap();
+    let e = load_scene_file(&path).unwrap_err().to_string();
+    assert!(e.contains("missing.toml:7:") && e.contains("gone.obj"), "{e}");
+}
