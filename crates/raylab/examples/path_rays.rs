@@ -14,6 +14,10 @@
 //! rays that hit, the rays that miss, and as many rays that miss the root box (each bounce's
 //! origin moved 100 units up, pointing up): the per-ray setup and one node.
 //!
+//! `--isas` (after the other arguments) also times the bounces and shadow rays one by one and
+//! as batches (in lanes through the tree, `bvh/traverse/tree_rays.rs`) with every instruction
+//! set this CPU has.
+//!
 //! `--write DIR` (after the other arguments) also writes the scene's world triangles as
 //! `DIR/scene.obj` and the rays as the ray-set protocol's files (`primary.rays` the camera's,
 //! `diffuse.rays` the bounces, `shadow.rays` the shadow rays), so that Embree traces the very
@@ -76,11 +80,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let file = args.next().ok_or("usage: path_rays SCENE.toml [SIZE [PASSES]]")?;
     let size: u32 = args.next().map_or(Ok(256), |s| s.parse())?;
     let passes: u32 = args.next().map_or(Ok(4), |s| s.parse())?;
-    let (mut write, mut split) = (None, false);
+    let (mut write, mut split, mut isas) = (None, false, false);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--write" => write = Some(std::path::PathBuf::from(args.next().ok_or("--write DIR")?)),
             "--split" => split = true,
+            "--isas" => isas = true,
             other => return Err(format!("unknown argument {other}").into()),
         }
     }
@@ -181,11 +186,56 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             batched * 1e9 / count as f64,
         );
     }
+    if isas {
+        incoherent_by_isa(&scene.geometry.vertices(), &kinds[1].1, &kinds[2].1);
+    }
     if split && let SceneBvh::Flat(tree) = &bvh {
         bounces_by_outcome(tree, &kinds[1].1);
     }
     camera_orders(&bvh, &camera);
     Ok(())
+}
+
+/// The bounces and shadow rays timed one by one and as the batches they came in (the tree's
+/// incoherent queries: in lanes where the set has them), with each instruction set this CPU
+/// has, on a one-level tree without a flat list.
+fn incoherent_by_isa(triangles: &[[glam::Vec3; 3]], bounces: &[Vec<Ray>], shadows: &[Vec<Ray>]) {
+    use raylab::bvh::{BuildSettings, Isa};
+    let settings = BuildSettings { flat_limit: 0, ..BuildSettings::for_triangles(triangles.len()) };
+    for isa in Isa::ALL {
+        let Some(tree) = raylab::Bvh::build(triangles, &settings).with_isa(isa) else { continue };
+        for (name, batches) in [("bounces", bounces), ("shadow rays", shadows)] {
+            let count: usize = batches.iter().map(Vec::len).sum();
+            let shadow = name == "shadow rays";
+            let single = best_of_five(|| {
+                for ray in batches.iter().flatten() {
+                    match shadow {
+                        true => std::hint::black_box(tree.occluded(ray)),
+                        false => std::hint::black_box(tree.closest_hit(ray).is_some()),
+                    };
+                }
+            });
+            let batched = best_of_five(|| {
+                for batch in batches {
+                    if shadow {
+                        let mut occluded = vec![false; batch.len()];
+                        tree.occluded_incoherent(batch, &mut occluded);
+                        std::hint::black_box(&occluded);
+                    } else {
+                        let mut hits = vec![None; batch.len()];
+                        tree.closest_hits_incoherent(batch, &mut hits);
+                        std::hint::black_box(&hits);
+                    }
+                }
+            });
+            println!(
+                "{:8} {name:12} one by one {:6.1} ns, batched {:6.1} ns",
+                isa.name(),
+                single * 1e9 / count as f64,
+                batched * 1e9 / count as f64
+            );
+        }
+    }
 }
 
 /// The bounces of `batches` timed apart by outcome (see the module documentation): the best of

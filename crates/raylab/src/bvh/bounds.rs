@@ -105,6 +105,9 @@ pub struct RayBoxTest {
 /// The factor on far distances that makes the slab test conservative.
 pub const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
 
+/// [`RayBoxTest::margin`]'s factor on the ray's reach `R`.
+pub(crate) const MARGIN_SCALE: f32 = (SLAB_PAD + 4.0 * gamma(3)) * FAR_SCALE;
+
 impl RayBoxTest {
     /// Prepares `ray`.
     #[inline]
@@ -188,7 +191,7 @@ impl RayBoxTest {
         let farthest = (Vec3A::from(root.min) - o).abs().max((Vec3A::from(root.max) - o).abs());
         let l = farthest.x + farthest.y + farthest.z;
         let r = l * crate::triangle::coordinate(self.inv_direction, self.dominant_axis).abs();
-        r * ((SLAB_PAD + 4.0 * gamma(3)) * FAR_SCALE)
+        r * MARGIN_SCALE
     }
 
     /// The entry distance into `bounds` if the ray meets it within `[t_min, t_limit]`, both

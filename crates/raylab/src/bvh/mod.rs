@@ -280,11 +280,8 @@ impl Accelerator for Bvh {
         match &self.flat {
             // SAFETY: as above.
             Some(flat) => unsafe { (self.queries.flat_occluded_each)(flat, rays, occluded) },
-            None => {
-                for (ray, o) in rays.iter().zip(occluded) {
-                    *o = self.occluded(ray);
-                }
-            }
+            // SAFETY: as above.
+            None => unsafe { (self.queries.occluded_incoherent)(&self.wide, rays, occluded) },
         }
     }
 
@@ -295,11 +292,8 @@ impl Accelerator for Bvh {
         match &self.flat {
             // SAFETY: as above.
             Some(flat) => unsafe { (self.queries.flat_closest_hits)(flat, rays, hits) },
-            None => {
-                for (ray, hit) in rays.iter().zip(hits) {
-                    *hit = self.closest_hit(ray);
-                }
-            }
+            // SAFETY: as above.
+            None => unsafe { (self.queries.closest_hits_incoherent)(&self.wide, rays, hits) },
         }
     }
 }

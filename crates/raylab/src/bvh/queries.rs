@@ -10,7 +10,7 @@
 use super::isa::{Isa, Scalar};
 use super::node::WideBvh;
 use super::packet;
-use super::traverse::{self, flat::Flat, flat::FlatKernel};
+use super::traverse::{self, TreeRaysKernel, flat::Flat, flat::FlatKernel};
 use crate::accel::Hit;
 use crate::ray::Ray;
 
@@ -30,6 +30,10 @@ pub(crate) struct Queries {
     pub closest_hits: unsafe fn(&WideBvh, &[Ray], &mut [Option<Hit>]),
     /// Occlusion of rays in packets.
     pub occluded_each: unsafe fn(&WideBvh, &[Ray], &mut [bool]),
+    /// Closest hits of incoherent rays, through the tree in lanes where the set has them.
+    pub closest_hits_incoherent: unsafe fn(&WideBvh, &[Ray], &mut [Option<Hit>]),
+    /// Occlusion of incoherent rays, through the tree in lanes where the set has them.
+    pub occluded_incoherent: unsafe fn(&WideBvh, &[Ray], &mut [bool]),
     /// The closest hit of one ray in a small scene's flat list.
     pub flat_closest_hit: unsafe fn(&Flat, &Ray) -> Option<Hit>,
     /// Whether one ray is occluded, in a small scene's flat list.
@@ -70,6 +74,16 @@ macro_rules! queries {
             unsafe { packet::occluded_each::<$kernel>(bvh, rays, out) }
         }
         $(#[target_feature(enable = $features)])?
+        unsafe fn closest_hits_incoherent(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+            // SAFETY: as above.
+            unsafe { <$kernel as TreeRaysKernel>::closest_hits(bvh, rays, out) }
+        }
+        $(#[target_feature(enable = $features)])?
+        unsafe fn occluded_incoherent(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+            // SAFETY: as above.
+            unsafe { <$kernel as TreeRaysKernel>::occluded_each(bvh, rays, out) }
+        }
+        $(#[target_feature(enable = $features)])?
         unsafe fn flat_closest_hit(flat: &Flat, ray: &Ray) -> Option<Hit> {
             // SAFETY: as above.
             unsafe { <$kernel as FlatKernel>::closest_hit(flat, ray) }
@@ -95,6 +109,8 @@ macro_rules! queries {
             occluded,
             closest_hits,
             occluded_each,
+            closest_hits_incoherent,
+            occluded_incoherent,
             flat_closest_hit,
             flat_occluded,
             flat_closest_hits,

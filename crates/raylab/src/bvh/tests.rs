@@ -518,6 +518,136 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
     assert!(hits > 20_000 && edge_hits > 1000 && ties > 100, "{hits} {edge_hits} {ties}");
 }
 
+/// Incoherent rays through the tree in lanes (`tree_rays.rs`, AVX2 and AVX-512 as this CPU
+/// allows) get exactly the single-ray answers, which the scalar traversal gives: trees of 1 to
+/// about 3,000 triangles without a flat list, leaves of one to thirty-two triangles (several
+/// records to a leaf), meshes on a coarse grid (edge functions exactly zero: the
+/// double-precision path) with shared corners and duplicated triangles (ties at equal `t`),
+/// and rays in groups of sixteen from one origin (a pixel's samples: many lanes open, so the
+/// lanes' node and leaf tests run) or each from its own (few lanes open: the single-ray
+/// fallbacks), from just off a surface, with `t_min`, short ranges and rays that can hit
+/// nothing, in batches whose length is no multiple of a register's lanes.
+#[test]
+fn tree_rays_in_lanes_give_the_single_ray_answers() {
+    let mut rng = Lcg(41);
+    let mut tested = [0usize; 4];
+    let (mut hits, mut blocked, mut ties, mut edge_hits) = (0, 0, 0, 0);
+    for case in 0..60 {
+        let snap = |v: Vec3| if case % 2 == 0 { (v * 8.0).round() / 8.0 } else { v };
+        let count = [1, 7, 40, 300, 3000][case % 5] + case;
+        let pool: Vec<Vec3> = (0..count / 2 + 3).map(|_| snap(rng.vec() * 6.0 - 3.0)).collect();
+        let mut triangles: Vec<[Vec3; 3]> = (0..count)
+            .map(|_| {
+                if case % 3 == 0 {
+                    let k = |rng: &mut Lcg| {
+                        pool[(rng.next() * pool.len() as f32) as usize % pool.len()]
+                    };
+                    return [k(&mut rng), k(&mut rng), k(&mut rng)];
+                }
+                let p = snap(rng.vec() * 6.0 - 3.0);
+                [p, snap(p + rng.vec() * 0.8 - 0.4), snap(p + rng.vec() * 0.8 - 0.4)]
+            })
+            .collect();
+        // Later copies of earlier triangles: hits on them tie, the lower index wins.
+        let copied: std::collections::BTreeSet<usize> =
+            (0..count / 10).map(|k| k * 7 % count).collect();
+        for &k in &copied {
+            triangles.push(triangles[k]);
+        }
+        let max_leaf_size = [1, 4, 8, 16, 32][case / 5 % 5];
+        let settings = BuildSettings { flat_limit: 0, max_leaf_size, ..BuildSettings::MEDIUM };
+        let scalar = Bvh::build(&triangles, &settings).with_isa(Isa::Scalar).expect("scalar");
+        let mut batch = Vec::new();
+        while batch.len() < 400 {
+            let group = batch.len() / 16 % 2 == 0;
+            let origin = snap(rng.vec() * 8.0 - 4.0);
+            for r in 0..16 {
+                let [a, b, c] =
+                    triangles[(rng.next() * triangles.len() as f32) as usize % triangles.len()];
+                let target = match r % 3 {
+                    0 => a,
+                    1 => a.lerp(b, rng.next()),
+                    _ => a.lerp(b, rng.next()).lerp(c, rng.next()),
+                };
+                let from = match (group, r % 5) {
+                    (_, 4) => target + (rng.vec() * 2.0 - 1.0) * 1e-5,
+                    (true, _) => origin,
+                    (false, _) => snap(rng.vec() * 8.0 - 4.0),
+                };
+                if from == target {
+                    continue;
+                }
+                let mut ray = Ray::new(from, target - from);
+                ray.t_min = if r % 7 == 0 { 0.3 * rng.next() } else { 0.0 };
+                ray.t_max = [f32::INFINITY, 1.0, 0.5 + rng.next(), 10.0][r % 4];
+                batch.push(ray);
+            }
+        }
+        let origin = batch[0].origin;
+        let hostile = [
+            Ray::new(origin, Vec3::new(f32::NAN, 1.0, 0.0)),
+            Ray::new(origin, Vec3::ZERO),
+            Ray::new(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X),
+            Ray { t_min: 2.0, t_max: 1.0, ..Ray::new(origin, Vec3::Y) },
+            Ray { t_max: f32::NAN, ..Ray::new(origin, -Vec3::Y) },
+            Ray { t_min: f32::NAN, ..Ray::new(origin, Vec3::Z) },
+            Ray::new(origin, Vec3::new(0.0, -0.0, 1.0)),
+        ];
+        let at = case * 37 % batch.len();
+        batch.splice(at..at, hostile.into_iter().cycle().skip(case).take(1 + case % 7));
+        let batch = &batch[..batch.len() - case % 16];
+        let expected: Vec<_> = batch.iter().map(|r| scalar.closest_hit(r)).collect();
+        let expected_occluded: Vec<_> = batch.iter().map(|r| scalar.occluded(r)).collect();
+        for h in expected.iter().flatten() {
+            hits += 1;
+            edge_hits += (h.b0() == 0.0 || h.b1 == 0.0 || h.b2 == 0.0) as usize;
+            ties += copied.contains(&(h.triangle as usize)) as usize;
+        }
+        blocked += expected_occluded.iter().filter(|&&o| o).count();
+        for (k, isa) in Isa::ALL.into_iter().enumerate() {
+            let Some(simd) = Bvh::build(&triangles, &settings).with_isa(isa) else {
+                continue;
+            };
+            tested[k] += 1;
+            let mut hits = vec![Some(Hit { t: -1.0, triangle: 7, b1: 0.0, b2: 0.0 }); batch.len()];
+            simd.closest_hits_incoherent(batch, &mut hits);
+            for (i, (got, want)) in hits.iter().zip(&expected).enumerate() {
+                let bits = |h: &Option<Hit>| {
+                    h.map(|h| (h.t.to_bits(), h.triangle, h.b1.to_bits(), h.b2.to_bits()))
+                };
+                assert_eq!(
+                    bits(got),
+                    bits(want),
+                    "{} closest, case {case}, ray {i}: {:?}",
+                    isa.name(),
+                    batch[i]
+                );
+            }
+            let mut occluded: Vec<bool> = (0..batch.len()).map(|i| i % 2 == 0).collect();
+            simd.occluded_incoherent(batch, &mut occluded);
+            for (i, (got, want)) in occluded.iter().zip(&expected_occluded).enumerate() {
+                assert_eq!(
+                    got,
+                    want,
+                    "{} occluded, case {case}, ray {i}: {:?}",
+                    isa.name(),
+                    batch[i]
+                );
+            }
+        }
+    }
+    for (k, isa) in Isa::ALL.into_iter().enumerate() {
+        if tested[k] == 0 {
+            eprintln!("note: this CPU lacks {}: its tree rays are not tested here", isa.name());
+        }
+    }
+    assert!(tested[0] > 0 && tested[1] > 0, "the scalar and SSE2 kernels always run");
+    assert!(
+        hits > 10_000 && blocked > 5_000 && edge_hits > 200 && ties > 50,
+        "{hits} {blocked} {edge_hits} {ties}"
+    );
+}
+
 #[test]
 fn more_triangles_than_a_bvh_holds_are_an_error_not_a_panic() {
     assert_eq!(check_triangle_count(MAX_TRIANGLES), Ok(()));

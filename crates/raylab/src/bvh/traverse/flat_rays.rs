@@ -65,25 +65,25 @@ use crate::ray::Ray;
 use crate::triangle::WatertightRay;
 
 /// The most lanes a register holds (AVX-512's sixteen).
-const MAX_LANES: usize = 16;
+pub(super) const MAX_LANES: usize = 16;
 
 /// Up to [`MAX_LANES`] rays, row by row (lane `k` of each row is ray `k`).
 ///
 /// Lanes without a ray, or whose ray can hit nothing ([`can_hit`]), hold a harmless ray along
 /// `+z` with a NaN `t_max`, which admits no hit, and have no bit in `live`.
-struct RayRows {
-    origin: [[f32; MAX_LANES]; 3],
-    direction: [[f32; MAX_LANES]; 3],
-    t_min: [f32; MAX_LANES],
+pub(super) struct RayRows {
+    pub(super) origin: [[f32; MAX_LANES]; 3],
+    pub(super) direction: [[f32; MAX_LANES]; 3],
+    pub(super) t_min: [f32; MAX_LANES],
     t_max: [f32; MAX_LANES],
     /// Bit `k` set where lane `k` has a ray that can hit.
-    live: u32,
+    pub(super) live: u32,
 }
 
 impl RayRows {
     /// The rows of `rays` (at most [`MAX_LANES`]).
     #[inline(always)]
-    fn new(rays: &[Ray]) -> RayRows {
+    pub(super) fn new(rays: &[Ray]) -> RayRows {
         debug_assert!(rays.len() <= MAX_LANES);
         let mut rows = RayRows {
             origin: [[0.0; MAX_LANES]; 3],
@@ -110,12 +110,12 @@ impl RayRows {
 
 /// The rays' watertight set-up in registers of `V` ([`WatertightRay`] lane by lane), and the
 /// masks that pick each lane's permuted coordinates.
-struct RayRegisters<V: Lanes> {
+pub(super) struct RayRegisters<V: Lanes> {
     /// The origin's `kx`, `ky`, `kz` coordinates.
     origin: [V; 3],
     /// `shear_x`, `shear_y`, `shear_z`.
     shear: [V; 3],
-    ray: RayLanes<V>,
+    pub(super) ray: RayLanes<V>,
     /// Per axis `kx`, `ky`, `kz`: the lanes where it is `x`, and those where it is `y`.
     picks: [[V::Mask; 2]; 3],
 }
@@ -130,7 +130,7 @@ impl<V: Lanes> RayRegisters<V> {
     /// # Safety
     /// The CPU must support `V`'s instruction set, which holds at most [`MAX_LANES`] floats.
     #[inline(always)]
-    unsafe fn new(rows: &RayRows) -> Self {
+    pub(super) unsafe fn new(rows: &RayRows) -> Self {
         // No closures: they would not inherit the caller's target features.
         // SAFETY: the caller's guarantee; every row holds `MAX_LANES` floats.
         unsafe {
@@ -174,7 +174,7 @@ impl<V: Lanes> RayRegisters<V> {
     /// # Safety
     /// The CPU must support `V`'s instruction set.
     #[inline(always)]
-    unsafe fn corner(&self, p: Vec3) -> [V; 3] {
+    pub(super) unsafe fn corner(&self, p: Vec3) -> [V; 3] {
         // SAFETY: the caller's guarantee.
         unsafe {
             let xyz = [V::splat(p.x), V::splat(p.y), V::splat(p.z)];
@@ -393,7 +393,10 @@ fn frame_for<V: Lanes>(shared: &SharedCorners) -> Vec<[V; 4]> {
 /// # Safety
 /// Every index of `corners` must be below `frame.len()`.
 #[inline(always)]
-unsafe fn corners_of<V: Lanes>(frame: &[[V; 4]], corners: [u32; 3]) -> (ShearedLanes<V>, [V; 3]) {
+pub(super) unsafe fn corners_of<V: Lanes>(
+    frame: &[[V; 4]],
+    corners: [u32; 3],
+) -> (ShearedLanes<V>, [V; 3]) {
     // SAFETY: every index is below `frame.len()` (the caller's guarantee).
     let [a, b, c] = corners.map(|k| unsafe { *frame.get_unchecked(k as usize) });
     let sheared =
@@ -405,7 +408,7 @@ unsafe fn corners_of<V: Lanes>(frame: &[[V; 4]], corners: [u32; 3]) -> (ShearedL
 /// zero).
 #[cold]
 #[inline(never)]
-fn blocked_rarely(ray: &Ray, [v0, v1, v2]: [Vec3; 3]) -> bool {
+pub(super) fn blocked_rarely(ray: &Ray, [v0, v1, v2]: [Vec3; 3]) -> bool {
     WatertightRay::new(ray).intersect(v0, v1, v2, ray.t_max).is_some()
 }
 
@@ -413,7 +416,7 @@ fn blocked_rarely(ray: &Ray, [v0, v1, v2]: [Vec3; 3]) -> bool {
 /// its hit kept in `best` as [`Hit::keep_first`] orders hits.
 #[cold]
 #[inline(never)]
-fn decide_rarely(
+pub(super) fn decide_rarely(
     rays: &[Ray],
     lane: usize,
     [v0, v1, v2]: [Vec3; 3],

@@ -8,6 +8,8 @@
 pub(crate) mod flat;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod flat_rays;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod tree_rays;
 
 use crate::accel::Hit;
 use crate::bvh::bounds::{FAR_SCALE, RayBoxTest};
@@ -24,9 +26,43 @@ pub(crate) trait Kernel: NodeKernel + RecordKernel {}
 
 impl<K: NodeKernel + RecordKernel> Kernel for K {}
 
+/// Many incoherent rays through the tree at once, per instruction set: by default one by one
+/// (the single-ray traversals, the scalar twin); the vector sets put them in lanes
+/// (`tree_rays.rs`).
+pub(crate) trait TreeRaysKernel: Kernel {
+    /// The closest hit of each ray, `hits[i]` for `rays[i]`: exactly [`closest_hit`]'s answers.
+    ///
+    /// # Safety
+    /// The CPU must support the kernel's instruction set.
+    #[inline(always)]
+    unsafe fn closest_hits(bvh: &WideBvh, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one answer per ray");
+        for (ray, hit) in rays.iter().zip(hits) {
+            // SAFETY: the caller's guarantee.
+            *hit = unsafe { closest_hit::<Self>(bvh, ray) };
+        }
+    }
+
+    /// Whether each ray is occluded, `occluded[i]` for `rays[i]`: exactly [`occluded`]'s
+    /// answers.
+    ///
+    /// # Safety
+    /// The CPU must support the kernel's instruction set.
+    #[inline(always)]
+    unsafe fn occluded_each(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray");
+        for (ray, o) in rays.iter().zip(out) {
+            // SAFETY: the caller's guarantee.
+            *o = unsafe { occluded::<Self>(bvh, ray) };
+        }
+    }
+}
+
+impl TreeRaysKernel for crate::bvh::isa::Scalar {}
+
 /// Stack entries: the wide tree is at most ~80 levels deep (the builder bounds the binary depth),
 /// and each level pushes at most seven siblings.
-const STACK_SIZE: usize = 640;
+pub(crate) const STACK_SIZE: usize = 640;
 
 /// A traversal stack on the call stack, not initialized: zeroing 5 KB per ray would cost about as
 /// much as tracing it.
@@ -282,17 +318,35 @@ pub(crate) unsafe fn closest_hit_counted<K: Kernel, C: Counter>(
     // SAFETY: as above.
     let box_ray = unsafe { K::prepare(&box_ray, margin) };
     let mut closest = Closest::new(ray);
+    // SAFETY: the caller's guarantee.
+    unsafe { closest_in::<K, C>(bvh, &box_ray, &triangle_ray, 0, &mut closest, counter) };
+    closest.best
+}
 
+/// The closest hit in the subtree of child reference `start` (an interior node or a leaf),
+/// for a ray set up for `K`'s kernels, kept in `closest` (which may already hold a hit).
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn closest_in<K: Kernel, C: Counter>(
+    bvh: &WideBvh,
+    box_ray: &<K as NodeKernel>::Ray,
+    triangle_ray: &TriangleRay<K::RecordRay>,
+    start: u32,
+    closest: &mut Closest,
+    counter: &mut C,
+) {
     let mut stack = Stack::<(u32, f32)>::new();
     // The child being descended into: an interior node or a leaf (never `EMPTY`).
-    let mut current = 0u32;
+    let mut current = start;
     loop {
         // Descend through interior nodes, into the nearest child entered, pushing the others.
         while let Child::Node(index) = decode(current) {
             counter.node();
             let node = &bvh.nodes[index as usize];
             // SAFETY: the caller guarantees `K`'s instruction set.
-            let (mut mask, near) = unsafe { K::enter(node, &box_ray, closest.box_limit) };
+            let (mut mask, near) = unsafe { K::enter(node, box_ray, closest.box_limit) };
             if mask == 0 {
                 current = EMPTY;
                 break;
@@ -332,12 +386,12 @@ pub(crate) unsafe fn closest_hit_counted<K: Kernel, C: Counter>(
         if let Child::Leaf(offset) = decode(current) {
             counter.leaf(&bvh.leaves, offset);
             // SAFETY: the caller guarantees `K`'s instruction set.
-            unsafe { closest.leaf::<K>(bvh, offset, &triangle_ray) };
+            unsafe { closest.leaf::<K>(bvh, offset, triangle_ray) };
         }
         // Pop the next child still in reach.
         loop {
             let Some((child, near)) = stack.pop() else {
-                return closest.best;
+                return;
             };
             if near <= closest.box_limit {
                 current = child;
@@ -401,14 +455,77 @@ pub(crate) unsafe fn occluded_counted<K: Kernel, C: Counter>(
     let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
     // SAFETY: as above.
     let box_ray = unsafe { K::prepare(&box_ray, margin) };
-    let box_limit = ray.t_max;
+    // SAFETY: the caller's guarantee.
+    unsafe { occluded_in::<K, C>(bvh, &box_ray, &triangle_ray, ray.t_max, 0, counter) }
+}
+
+/// A single ray prepared for `K`'s kernels: what every query of it sets up first.
+#[derive(Clone, Copy)]
+pub(crate) struct Prepared<K: Kernel> {
+    pub(crate) box_ray: <K as NodeKernel>::Ray,
+    pub(crate) triangle_ray: TriangleRay<K::RecordRay>,
+    pub(crate) t_max: f32,
+}
+
+impl<K: Kernel> Prepared<K> {
+    /// `ray` prepared, or `None` if it can hit nothing ([`can_hit`]).
+    ///
+    /// # Safety
+    /// The CPU must support `K`'s instruction set.
+    #[inline(always)]
+    pub(crate) unsafe fn new(bvh: &WideBvh, ray: &Ray) -> Option<Self> {
+        if !can_hit(ray) {
+            return None;
+        }
+        let box_ray = RayBoxTest::new(ray);
+        let margin = box_ray.margin(&bvh.root);
+        let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
+        // SAFETY: (both) the caller guarantees `K`'s instruction set.
+        let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
+        // SAFETY: as above.
+        let box_ray = unsafe { K::prepare(&box_ray, margin) };
+        Some(Prepared { box_ray, triangle_ray, t_max: ray.t_max })
+    }
+}
+
+/// [`occluded_counted`] for a prepared ray, in the subtree of node `start` only.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn occluded_prepared<K: Kernel, C: Counter>(
+    bvh: &WideBvh,
+    prepared: &Prepared<K>,
+    start: u32,
+    counter: &mut C,
+) -> bool {
+    let (box_ray, triangle_ray) = (&prepared.box_ray, &prepared.triangle_ray);
+    // SAFETY: the caller's guarantee.
+    unsafe { occluded_in::<K, C>(bvh, box_ray, triangle_ray, prepared.t_max, start, counter) }
+}
+
+/// Whether the ray, set up for `K`'s kernels, hits anything below `t_max` in the subtree of
+/// node `start`.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+unsafe fn occluded_in<K: Kernel, C: Counter>(
+    bvh: &WideBvh,
+    box_ray: &<K as NodeKernel>::Ray,
+    triangle_ray: &TriangleRay<K::RecordRay>,
+    t_max: f32,
+    start: u32,
+    counter: &mut C,
+) -> bool {
+    let box_limit = t_max;
     let mut stack = Stack::<u32>::new();
-    let mut index = 0;
+    let mut index = start;
     loop {
         counter.node();
         let node = &bvh.nodes[index as usize];
         // SAFETY: the caller guarantees `K`'s instruction set.
-        let (mut mask, _) = unsafe { K::enter(node, &box_ray, box_limit) };
+        let (mut mask, _) = unsafe { K::enter(node, box_ray, box_limit) };
         // Leaves are tested at once (a hit ends the search); the first interior child is
         // visited next without going through the stack, the others pushed.
         let mut next = None;
@@ -424,7 +541,7 @@ pub(crate) unsafe fn occluded_counted<K: Kernel, C: Counter>(
                 Child::Leaf(offset) => {
                     counter.leaf(&bvh.leaves, offset);
                     // SAFETY: the caller guarantees `K`'s instruction set.
-                    if unsafe { leaf_occluded::<K>(bvh, offset, &triangle_ray, ray.t_max) } {
+                    if unsafe { leaf_occluded::<K>(bvh, offset, triangle_ray, t_max) } {
                         return true;
                     }
                 }
