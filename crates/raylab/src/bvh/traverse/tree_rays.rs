@@ -189,6 +189,8 @@ pub(crate) unsafe fn occluded_lanes<V: Lanes, K: Kernel, const W: usize>(
     occluded: &mut [bool],
 ) {
     assert_eq!(rays.len(), occluded.len(), "one answer per ray");
+    // The nodes still to visit and the lanes that enter each, on the heap (made once a batch).
+    let mut stack: Vec<(u32, u32)> = Vec::with_capacity(STACK_SIZE);
     for (rays, occluded) in rays.chunks(W).zip(occluded.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         let mut blocked = 0u32;
@@ -198,15 +200,11 @@ pub(crate) unsafe fn occluded_lanes<V: Lanes, K: Kernel, const W: usize>(
             let boxes = BoxLanes::<V>::new(&rows, &registers, bvh);
             let limit = registers.ray.t_max;
             let mut singles = Singles::<K>::new();
-            let mut stack = [(0u32, 0u32); STACK_SIZE];
-            let mut len = 0;
+            stack.clear();
             if rows.live != 0 {
-                stack[0] = (0, rows.live);
-                len = 1;
+                stack.push((0, rows.live));
             }
-            while len > 0 {
-                len -= 1;
-                let (index, mask) = stack[len];
+            while let Some((index, mask)) = stack.pop() {
                 let open = mask & !blocked;
                 if open == 0 {
                     continue;
@@ -235,8 +233,7 @@ pub(crate) unsafe fn occluded_lanes<V: Lanes, K: Kernel, const W: usize>(
                     }
                     match decode(child) {
                         Child::Node(i) => {
-                            stack[len] = (i, entered);
-                            len += 1;
+                            stack.push((i, entered));
                         }
                         Child::Leaf(offset) if entered.count_ones() <= LEAF_SWITCH => {
                             let mut rest = entered;
@@ -413,11 +410,9 @@ pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
     hits: &mut [Option<Hit>],
 ) {
     assert_eq!(rays.len(), hits.len(), "one answer per ray");
-    // SAFETY: any bits are a valid register of floats.
-    let zero_v = unsafe { std::mem::zeroed::<V>() };
-    // On the heap: 640 entries of a register and two words (80 KB with AVX-512).
-    let mut stack: Vec<Entry<V>> =
-        std::iter::repeat_n(Entry { child: 0, lanes: 0, near: zero_v }, STACK_SIZE).collect();
+    // The children still to visit, on the heap (made once a batch, not cleared: entries of a
+    // register and two words, 128 bytes with AVX-512).
+    let mut stack: Vec<Entry<V>> = Vec::with_capacity(STACK_SIZE);
     for (rays, hits) in rays.chunks(W).zip(hits.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         let mut state = LaneClosest::new(rays, rows.live);
@@ -426,14 +421,11 @@ pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
             let registers = RayRegisters::<V>::new(&rows);
             let boxes = BoxLanes::<V>::new(&rows, &registers, bvh);
             let mut singles = Singles::<K>::new();
-            let mut len = 0;
+            stack.clear();
             if rows.live != 0 {
-                stack[0] = Entry { child: 0, lanes: rows.live, near: V::splat(f32::NEG_INFINITY) };
-                len = 1;
+                stack.push(Entry { child: 0, lanes: rows.live, near: V::splat(f32::NEG_INFINITY) });
             }
-            while len > 0 {
-                len -= 1;
-                let entry = stack[len];
+            while let Some(entry) = stack.pop() {
                 let box_limit = V::loadu(state.box_limit.as_ptr());
                 let open = entry.lanes & entry.near.le_mask(box_limit);
                 if open == 0 {
@@ -482,8 +474,7 @@ pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
                     let (entered, near) = boxes.enter_near(node, k, box_limit);
                     let entered = entered & open;
                     if entered != 0 {
-                        stack[len] = Entry { child, lanes: entered, near };
-                        len += 1;
+                        stack.push(Entry { child, lanes: entered, near });
                     }
                 }
             }
