@@ -69,9 +69,11 @@ use crate::triangle::WatertightRay;
 use std::arch::x86_64::{__m256, __m512};
 
 /// A node that at most this many of a group's open rays enter is left to them one by one
-/// (the single-ray traversal of its subtree). Measured on the recorded rays of the glTF boxes
-/// and the materials scene (`examples/path_rays.rs`, one thread): 3 to 10 all within 5 % on
-/// the boxes; the materials scene's bounces want 5 or more.
+/// (the single-ray traversal of its subtree). Measured with [`LEAF_SWITCH`] in whole renders
+/// (the materials and glTF scenes, 256², 32 spp, one thread, medians of five): 6 and 4, 8 and
+/// 4, 6 and 6, 10 and 4 all within 0.54–0.55 s and 0.63–0.65 s; on the recorded rays
+/// (`examples/path_rays.rs`) 3 to 10 within 5 % on the glTF boxes, while the materials scene's
+/// bounces want 5 or more.
 const NODE_SWITCH: u32 = 6;
 /// A leaf that at most this many open rays enter is tested ray by ray with the single-ray
 /// record kernel (the same answers): a record's frames cost sixteen operations a vertex for
