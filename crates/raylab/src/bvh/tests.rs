@@ -398,6 +398,20 @@ fn traversal_counts_are_the_nodes_leaves_and_records_visited() {
     assert_eq!(total.per_ray(), [0.75, 0.5, 0.5]);
 }
 
+/// Rays from `origin` that a batch of queries must answer as single rays do: directions with
+/// NaN or zero parts, an infinite origin, an empty or NaN range.
+fn hostile_rays(origin: Vec3) -> [Ray; 7] {
+    [
+        Ray::new(origin, Vec3::new(f32::NAN, 1.0, 0.0)),
+        Ray::new(origin, Vec3::ZERO),
+        Ray::new(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X),
+        Ray { t_min: 2.0, t_max: 1.0, ..Ray::new(origin, Vec3::Y) },
+        Ray { t_max: f32::NAN, ..Ray::new(origin, -Vec3::Y) },
+        Ray { t_min: f32::NAN, ..Ray::new(origin, Vec3::Z) },
+        Ray::new(origin, Vec3::new(0.0, -0.0, 1.0)),
+    ]
+}
+
 /// Every flat kernel (SSE2, AVX2, AVX-512, as this CPU allows) gives exactly its scalar twin's
 /// answers, which are brute force's: scenes on a coarse grid (edge functions exactly zero, so
 /// the double-precision path decides), with duplicated triangles (ties at equal `t`, which go to
@@ -475,15 +489,7 @@ fn flat_kernels_agree_with_their_scalar_twin_and_brute_force() {
                 assert_eq!(simd.occluded(&ray), occluded, "{}, case {case}: {ray:?}", isa.name());
             }
         }
-        let origin = batch.first().map_or(Vec3::ZERO, |r| r.origin);
-        let hostile = [
-            Ray::new(origin, Vec3::new(f32::NAN, 1.0, 0.0)),
-            Ray::new(origin, Vec3::ZERO),
-            Ray::new(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X),
-            Ray { t_min: 2.0, t_max: 1.0, ..Ray::new(origin, Vec3::Y) },
-            Ray { t_max: f32::NAN, ..Ray::new(origin, -Vec3::Y) },
-            Ray { t_min: f32::NAN, ..Ray::new(origin, Vec3::Z) },
-        ];
+        let hostile = hostile_rays(batch.first().map_or(Vec3::ZERO, |r| r.origin));
         let at = case % (batch.len() + 1);
         batch.splice(at..at, hostile.into_iter().cycle().skip(case).take(1 + case % 7));
         let batch = &batch[..=(case % batch.len())];
@@ -583,16 +589,7 @@ fn tree_rays_in_lanes_give_the_single_ray_answers() {
                 batch.push(ray);
             }
         }
-        let origin = batch[0].origin;
-        let hostile = [
-            Ray::new(origin, Vec3::new(f32::NAN, 1.0, 0.0)),
-            Ray::new(origin, Vec3::ZERO),
-            Ray::new(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X),
-            Ray { t_min: 2.0, t_max: 1.0, ..Ray::new(origin, Vec3::Y) },
-            Ray { t_max: f32::NAN, ..Ray::new(origin, -Vec3::Y) },
-            Ray { t_min: f32::NAN, ..Ray::new(origin, Vec3::Z) },
-            Ray::new(origin, Vec3::new(0.0, -0.0, 1.0)),
-        ];
+        let hostile = hostile_rays(batch[0].origin);
         let at = case * 37 % batch.len();
         batch.splice(at..at, hostile.into_iter().cycle().skip(case).take(1 + case % 7));
         let batch = &batch[..batch.len() - case % 16];

@@ -470,6 +470,10 @@ pub(crate) struct Prepared<K: Kernel> {
 impl<K: Kernel> Prepared<K> {
     /// `ray` prepared, or `None` if it can hit nothing ([`can_hit`]).
     ///
+    /// [`closest_hit_counted`] and [`occluded_counted`] write the same set-up out rather than
+    /// call this: through it (the prepared ray returned, then passed by reference) the single
+    /// rays' occlusion measured 74 against 67 ns a shadow ray on the glTF boxes' recorded rays.
+    ///
     /// # Safety
     /// The CPU must support `K`'s instruction set.
     #[inline(always)]

@@ -133,7 +133,9 @@ impl<V: Lanes> BoxLanes<V> {
         }
     }
 
-    /// [`enter`](Self::enter), with each lane's entry distance.
+    /// The lanes that enter child `k`'s box within `[t_min, limit]`, as
+    /// [`RayBoxTest::enter_with_margin`](crate::bvh::RayBoxTest::enter_with_margin) decides
+    /// for each, and each lane's entry distance (less the margin).
     ///
     /// # Safety
     /// The CPU must support `V`'s instruction set.
@@ -157,26 +159,15 @@ impl<V: Lanes> BoxLanes<V> {
     }
 
     /// The lanes that enter child `k`'s box within `[t_min, limit]`, as
-    /// [`RayBoxTest::enter_with_margin`] decides for each.
+    /// [`RayBoxTest::enter_with_margin`](crate::bvh::RayBoxTest::enter_with_margin) decides
+    /// for each (the entry distances of [`enter_near`](Self::enter_near) left unused).
     ///
     /// # Safety
     /// The CPU must support `V`'s instruction set.
     #[inline(always)]
     unsafe fn enter(&self, node: &WideNode, k: usize, limit: V) -> u32 {
         // SAFETY: the caller's guarantee.
-        unsafe {
-            let mut near = self.t_min;
-            let mut far = limit;
-            for axis in 0..3 {
-                let lo = V::splat(node.planes[axis][k]);
-                let hi = V::splat(node.planes[3 + axis][k]);
-                let near_plane = V::select(self.negative[axis], hi, lo);
-                let far_plane = V::select(self.negative[axis], lo, hi);
-                near = near_plane.sub(self.origin[axis]).mul(self.inv[axis]).max(near);
-                far = far_plane.sub(self.origin[axis]).mul(self.inv[axis]).min(far);
-            }
-            near.sub(self.margin).le_mask(far.add(self.margin))
-        }
+        unsafe { self.enter_near(node, k, limit).0 }
     }
 }
 
