@@ -274,7 +274,8 @@ impl Accelerator for Bvh {
     }
 
     /// A small scene's flat list traces the rays in lanes, one triangle per step
-    /// (`traverse/flat_rays.rs`); the tree traces them one by one.
+    /// (`traverse/flat_rays.rs`); the tree traces them in lanes too with AVX2 and AVX-512
+    /// (`traverse/tree_rays.rs`), one by one with SSE2 and the portable kernels.
     fn occluded_incoherent(&self, rays: &[Ray], occluded: &mut [bool]) {
         assert_eq!(rays.len(), occluded.len(), "one answer per ray");
         match &self.flat {
@@ -286,7 +287,8 @@ impl Accelerator for Bvh {
     }
 
     /// A small scene's flat list traces the rays in lanes, one triangle per step
-    /// (`traverse/flat_rays.rs`); the tree traces them one by one.
+    /// (`traverse/flat_rays.rs`); the tree traces them in lanes too with AVX2 and AVX-512
+    /// (`traverse/tree_rays.rs`), one by one with SSE2 and the portable kernels.
     fn closest_hits_incoherent(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), hits.len(), "one answer per ray");
         match &self.flat {

@@ -22,7 +22,7 @@ impl Lcg {
 
 /// Nodes with random boxes, including flat ones, boxes that share the ray's origin planes, and
 /// unused slots; rays with ±0 and tiny direction components.
-fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {
+pub(in crate::bvh) fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {
     let mut rng = Lcg(7);
     let mut cases = Vec::new();
     for i in 0..4000 {
@@ -74,7 +74,7 @@ fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {
 }
 
 /// The box around a node's children: the root that single rays' margins are taken over.
-fn node_root(node: &WideNode) -> Bounds {
+pub(in crate::bvh) fn node_root(node: &WideNode) -> Bounds {
     (0..8).fold(Bounds::EMPTY, |b, k| b.union(node.bounds(k)))
 }
 

@@ -212,7 +212,9 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             scene.materials.push(material);
         }
         let mut uses = BTreeMap::<PathBuf, usize>::new();
-        for file in document.shapes.iter().filter_map(|shape| shape.get_ref().file.as_ref()) {
+        let mesh_files = document.shapes.iter().map(|shape| shape.get_ref());
+        let mesh_files = mesh_files.filter(|shape| shape.kind.get_ref() == "mesh");
+        for file in mesh_files.filter_map(|shape| shape.file.as_ref()) {
             *uses.entry(self.folder.join(file.get_ref())).or_default() += 1;
         }
         *self.shared_meshes.borrow_mut() =
@@ -384,6 +386,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         let path = self.folder.join(file.get_ref());
         let mut shared = self.shared_meshes.borrow_mut();
         if let Some((uses, kept)) = shared.get_mut(&path) {
+            debug_assert!(*uses > 0, "a shared mesh file's uses were counted");
             *uses -= 1;
             if *uses == 0
                 && let Some(loaded) = kept.take()

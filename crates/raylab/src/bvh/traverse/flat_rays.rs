@@ -65,7 +65,7 @@ use crate::ray::Ray;
 use crate::triangle::WatertightRay;
 
 /// The most lanes a register holds (AVX-512's sixteen).
-pub(super) const MAX_LANES: usize = 16;
+const MAX_LANES: usize = 16;
 
 /// Up to [`MAX_LANES`] rays, row by row (lane `k` of each row is ray `k`).
 ///
@@ -416,7 +416,7 @@ pub(super) fn blocked_rarely(ray: &Ray, [v0, v1, v2]: [Vec3; 3]) -> bool {
 /// its hit kept in `best` as [`Hit::keep_first`] orders hits.
 #[cold]
 #[inline(never)]
-pub(super) fn decide_rarely(
+fn decide_rarely(
     rays: &[Ray],
     lane: usize,
     [v0, v1, v2]: [Vec3; 3],

@@ -13,7 +13,8 @@
 //! - a node's eight boxes are tested one at a time against every open lane, each lane by
 //!   [`RayBoxTest::enter_with_margin`](crate::bvh::RayBoxTest::enter_with_margin)'s own
 //!   operations (its near and far planes picked by its direction's signs, its margin from the
-//!   root box), and each child is pushed with the lanes that enter it;
+//!   root box), and each interior child is pushed with the lanes that enter it (a leaf too
+//!   for the closest hit; for occlusion a leaf is tested at once);
 //! - a leaf's record puts each of its distinct corners in every lane's watertight frame once
 //!   (`flat_rays.rs`'s permutation per lane) and tests its triangles sixteen rays per
 //!   instruction ([`watertight_sheared_scaled`]);
@@ -29,12 +30,16 @@
 //!
 //! # The answers are the single-ray queries'
 //! Every box and triangle decision of a lane is its ray's own, by the same operations in the
-//! same order, and a lane enters at least every box its single ray would before its best hit
-//! (its limits are the single ray's at each point). A hit is kept as [`Closest::leaf`] keeps
-//! it ([`Hit::precedes`]: nearer, or as near with a lower index), so the answer does not
-//! depend on the order of the search. The scalar twin is the single-ray traversal, ray by ray
-//! ([`TreeRaysKernel`]'s default); `bvh::tests::tree_rays_in_lanes_give_the_single_ray_answers`
-//! compares them bit for bit.
+//! same order. The order of the search differs (the single ray goes nearest child first, the
+//! lanes in the node's order), and so do the limits at a given box, but the answer does not
+//! depend on either: a box that holds a hit at `t` is entered whenever the limit is at least
+//! `t·FAR_SCALE`, which each lane's limit is until it has found that hit or a better one, as
+//! the single ray's is (the property the single ray's agreement with brute force rests on).
+//! A hit is kept as [`Closest::leaf`] keeps it ([`Hit::precedes`]: nearer, or as near with a
+//! lower index), and a triangle's test accepts it for any limit above its `t`. The scalar twin
+//! is the single-ray traversal, ray by ray ([`TreeRaysKernel`]'s default);
+//! `bvh::tests::tree_rays_in_lanes_give_the_single_ray_answers` compares them bit for bit, and
+//! `bvh::tests::the_lanes_box_test_is_each_rays_own` the box test lane by lane.
 //!
 //! # Measured
 //! The rays a render asks for, recorded and traced again (`cargo run --release --example
@@ -174,7 +179,8 @@ impl<V: Lanes> BoxLanes<V> {
 /// Whether each ray is blocked, `W` rays to a register `V`: exactly the single-ray answers.
 ///
 /// # Safety
-/// The CPU must support `V`'s and `K`'s instruction sets, and `V` must hold `W` floats.
+/// The CPU must support `V`'s and `K`'s instruction sets, and `V` must hold `W` floats, at
+/// most sixteen (the rows of `RayRows`).
 #[inline(always)]
 pub(crate) unsafe fn occluded_lanes<V: Lanes, K: Kernel, const W: usize>(
     bvh: &WideBvh,
@@ -184,6 +190,7 @@ pub(crate) unsafe fn occluded_lanes<V: Lanes, K: Kernel, const W: usize>(
     assert_eq!(rays.len(), occluded.len(), "one answer per ray");
     // The nodes still to visit and the lanes that enter each, on the heap (made once a batch).
     let mut stack: Vec<(u32, u32)> = Vec::with_capacity(STACK_SIZE);
+    let mut frame = new_frame::<V>();
     for (rays, occluded) in rays.chunks(W).zip(occluded.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         let mut blocked = 0u32;
@@ -241,7 +248,8 @@ pub(crate) unsafe fn occluded_lanes<V: Lanes, K: Kernel, const W: usize>(
                             }
                         }
                         Child::Leaf(offset) => {
-                            blocked |= leaf_occluded(bvh, offset, &registers, rays, entered);
+                            blocked |=
+                                leaf_occluded(bvh, offset, &registers, rays, entered, &mut frame);
                         }
                         Child::Empty => {}
                     }
@@ -283,6 +291,18 @@ impl<K: Kernel> Singles<K> {
     }
 }
 
+/// A leaf record's corners in the lanes' ray frames: per corner its `kx`, `ky`, `kz`
+/// coordinates and `kz` scaled by `shear_z` (`flat_rays.rs`), made once a batch (zeroing it
+/// per leaf cost 4 KB of stores with AVX-512).
+type Frame<V> = [[V; 4]; RECORD_VERTICES];
+
+/// A frame for [`leaf_occluded`] and [`leaf_closest`] to fill.
+#[inline(always)]
+fn new_frame<V: Lanes>() -> Frame<V> {
+    // SAFETY: any bits are a valid register of floats.
+    [[unsafe { std::mem::zeroed::<V>() }; 4]; RECORD_VERTICES]
+}
+
 /// The lanes of `open` that a triangle of the leaf at `offset` blocks.
 ///
 /// # Safety
@@ -294,10 +314,9 @@ unsafe fn leaf_occluded<V: Lanes>(
     registers: &RayRegisters<V>,
     rays: &[Ray],
     open: u32,
+    frame: &mut Frame<V>,
 ) -> u32 {
     let mut blocked = 0;
-    // SAFETY: any bits are a valid register of floats.
-    let mut frame = [[unsafe { std::mem::zeroed::<V>() }; 4]; RECORD_VERTICES];
     for record in bvh.leaves.leaf(offset) {
         let open = open & !blocked;
         if open == 0 {
@@ -321,7 +340,7 @@ unsafe fn leaf_occluded<V: Lanes>(
             // slots were just written; the caller's guarantee of the instruction set.
             unsafe {
                 let corners = [u32::from(ca[t]), u32::from(cb[t]), u32::from(cc[t])];
-                let (sheared, scaled) = corners_of(&frame, corners);
+                let (sheared, scaled) = corners_of(frame, corners);
                 let decided =
                     watertight_sheared_scaled::<V, true>(&sheared, scaled, &registers.ray, open);
                 blocked |= decided.hits;
@@ -395,7 +414,8 @@ struct Entry<V> {
 /// The closest hit of each ray, `W` rays to a register `V`: exactly the single-ray answers.
 ///
 /// # Safety
-/// The CPU must support `V`'s and `K`'s instruction sets, and `V` must hold `W` floats.
+/// The CPU must support `V`'s and `K`'s instruction sets, and `V` must hold `W` floats, at
+/// most sixteen (the rows of `RayRows`).
 #[inline(always)]
 pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
     bvh: &WideBvh,
@@ -403,9 +423,10 @@ pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
     hits: &mut [Option<Hit>],
 ) {
     assert_eq!(rays.len(), hits.len(), "one answer per ray");
-    // The children still to visit, on the heap (made once a batch, not cleared: entries of a
+    // The children still to visit, on the heap (made once a batch, not zeroed: entries of a
     // register and two words, 128 bytes with AVX-512).
     let mut stack: Vec<Entry<V>> = Vec::with_capacity(STACK_SIZE);
+    let mut frame = new_frame::<V>();
     for (rays, hits) in rays.chunks(W).zip(hits.chunks_mut(W)) {
         let rows = RayRows::new(rays);
         let mut state = LaneClosest::new(rays, rows.live);
@@ -450,7 +471,7 @@ pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
                 let index = match decode(entry.child) {
                     Child::Node(index) => index,
                     Child::Leaf(offset) => {
-                        leaf_closest(bvh, offset, &registers, rays, open, &mut state);
+                        leaf_closest(bvh, offset, &registers, rays, open, &mut state, &mut frame);
                         continue;
                     }
                     Child::Empty => continue,
@@ -490,9 +511,8 @@ unsafe fn leaf_closest<V: Lanes>(
     rays: &[Ray],
     open: u32,
     state: &mut LaneClosest,
+    frame: &mut Frame<V>,
 ) {
-    // SAFETY: any bits are a valid register of floats.
-    let mut frame = [[unsafe { std::mem::zeroed::<V>() }; 4]; RECORD_VERTICES];
     for record in bvh.leaves.leaf(offset) {
         let [x, y, z] = record.rows();
         for (j, slot) in frame.iter_mut().enumerate().take(record.vertices()) {
@@ -508,7 +528,7 @@ unsafe fn leaf_closest<V: Lanes>(
             // slots were just written; the caller's guarantee of the instruction set.
             unsafe {
                 let corners = [u32::from(ca[t]), u32::from(cb[t]), u32::from(cc[t])];
-                let (sheared, scaled) = corners_of(&frame, corners);
+                let (sheared, scaled) = corners_of(frame, corners);
                 let ray = crate::bvh::simd::RayLanes {
                     t_max: V::loadu(state.triangle_limit.as_ptr()),
                     ..registers.ray
@@ -566,3 +586,123 @@ macro_rules! tree_rays_kernel {
 impl TreeRaysKernel for Sse {}
 tree_rays_kernel!(Avx2, __m256, 8);
 tree_rays_kernel!(Avx512, __m512, 16);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::RayBoxTest;
+    use crate::bvh::bounds::Bounds;
+    use crate::bvh::leaf::Leaves;
+    use crate::bvh::tests::{hostile_cases, node_root};
+
+    /// [`BoxLanes::enter_near`] with each register this CPU has: every lane's mask bit and
+    /// entry distance are its ray's own [`RayBoxTest::enter_with_margin`], bit for bit (but
+    /// for the sign of a zero entry), with
+    /// the margin of a root box around the node (and none for an empty root): boxes that share
+    /// the origin's planes, flat boxes, unused slots, ±0 and tiny direction components, `t_min`
+    /// and finite limits (`bvh::tests::hostile_cases`), sixteen rays to a group.
+    #[test]
+    fn the_lanes_box_test_is_each_rays_own() {
+        let cases = hostile_cases();
+        let mut checked = [0usize; 2];
+        let mut entered = 0;
+        for (c, group) in cases.chunks(16).enumerate() {
+            let (node, _, _) = &group[0];
+            let root = if c % 5 == 4 { Bounds::EMPTY } else { node_root(node) };
+            let bvh = WideBvh { nodes: Vec::new(), leaves: Leaves::default(), root };
+            let rays: Vec<Ray> = group.iter().map(|(_, ray, _)| *ray).collect();
+            let mut limits = [f32::NAN; 16];
+            for (lane, (_, _, limit)) in group.iter().enumerate() {
+                limits[lane] = *limit;
+            }
+            for k in 0..8 {
+                let mut expected = (0u32, [0.0f32; 16]);
+                for (lane, ray) in rays.iter().enumerate() {
+                    if !crate::bvh::traverse::can_hit(ray) {
+                        continue;
+                    }
+                    let test = RayBoxTest::new(ray);
+                    let margin = test.margin(&bvh.root);
+                    if let Some(near) =
+                        test.enter_with_margin(&node.bounds(k), limits[lane], margin)
+                    {
+                        expected.0 |= 1 << lane;
+                        expected.1[lane] = near;
+                        entered += 1;
+                    }
+                }
+                let rows = RayRows::new(&rays);
+                // SAFETY: (both) checked just before each.
+                if std::arch::is_x86_feature_detected!("avx512f") {
+                    checked[0] += 1;
+                    let got = unsafe { lanes_avx512(&rows, &bvh, node, k, &limits) };
+                    compare(got, expected, rows.live, "AVX-512", c, k);
+                }
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    checked[1] += 1;
+                    let got = unsafe { lanes_avx2(&rows, &bvh, node, k, &limits) };
+                    compare(got, expected, rows.live & 0xFF, "AVX2", c, k);
+                }
+            }
+        }
+        assert!(entered > 1000, "{entered} boxes entered");
+        if checked[0] == 0 {
+            eprintln!("note: this CPU lacks AVX-512: its lanes' box test is not tested here");
+        }
+        if checked[1] == 0 {
+            eprintln!("note: this CPU lacks AVX2: its lanes' box test is not tested here");
+        }
+    }
+
+    fn compare(
+        (mask, near): (u32, [f32; 16]),
+        expected: (u32, [f32; 16]),
+        live: u32,
+        isa: &str,
+        group: usize,
+        k: usize,
+    ) {
+        assert_eq!(mask & live, expected.0 & live, "{isa}: group {group}, child {k}");
+        for lane in 0..16 {
+            if mask & live & (1 << lane) != 0 {
+                // Bit for bit, but for the sign of a zero entry (`f32::max` of ±0 may return
+                // either; only comparisons read the entry, and they cannot tell).
+                let (a, b) = (near[lane], expected.1[lane]);
+                assert!(
+                    a.to_bits() == b.to_bits() || (a == 0.0 && b == 0.0),
+                    "{isa}: group {group}, child {k}, lane {lane}: {a:e} against {b:e}"
+                );
+            }
+        }
+    }
+
+    macro_rules! lanes_with {
+        ($name:ident, $register:ty, $features:literal) => {
+            /// The lanes' box test of child `k`, mask and entry distances.
+            ///
+            /// # Safety
+            /// The CPU must support the register's instruction set.
+            #[target_feature(enable = $features)]
+            unsafe fn $name(
+                rows: &RayRows,
+                bvh: &WideBvh,
+                node: &WideNode,
+                k: usize,
+                limits: &[f32; 16],
+            ) -> (u32, [f32; 16]) {
+                // SAFETY: the caller's guarantee; the rows hold sixteen floats.
+                unsafe {
+                    let registers = RayRegisters::<$register>::new(rows);
+                    let boxes = BoxLanes::<$register>::new(rows, &registers, bvh);
+                    let limit = <$register as Lanes>::loadu(limits.as_ptr());
+                    let (mask, near) = boxes.enter_near(node, k, limit);
+                    let mut out = [0.0f32; 16];
+                    near.store(out.as_mut_ptr());
+                    (mask, out)
+                }
+            }
+        };
+    }
+    lanes_with!(lanes_avx512, __m512, "avx2,avx512f,avx512vl");
+    lanes_with!(lanes_avx2, __m256, "avx2");
+}

@@ -8,8 +8,8 @@
 //!
 //! 1. **closest hits** of every live path's ray: the camera rays as packets
 //!    ([`Accelerator::closest_hits`]), the later rays as one batch
-//!    ([`Accelerator::closest_hits_incoherent`]: in lanes against a small scene's flat list,
-//!    one by one through a tree);
+//!    ([`Accelerator::closest_hits_incoherent`]: in lanes, against a small scene's flat list
+//!    or through a tree);
 //! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
 //!    `max_depth` end; each vertex's material, shading normal and BSDF. The vertex goes
 //!    straight into a lane of its BSDF's kind (its point, shading normal, tangent and the
@@ -26,8 +26,7 @@
 //!    environment, and the rare lane whose offset point overflows, run the scalar path's steps
 //!    ([`Path::sample_light_with`], `bounce`, `survives_roulette`) one by one;
 //! 5. **occlusion** of the shadow rays as one batch ([`Accelerator::occluded_incoherent`]: in
-//!    lanes against a small scene's flat list, one by one through a tree), and the light they
-//!    bring.
+//!    lanes, against a small scene's flat list or through a tree), and the light they bring.
 //!
 //! Stages 2 to 4 run a chunk at a time: as soon as sixteen vertices of a kind are gathered,
 //! their numbers are drawn and they are shaded, while their rows are still in the first-level
