@@ -632,14 +632,17 @@ mod tests {
                     }
                 }
                 let rows = RayRows::new(&rays);
-                // SAFETY: (both) checked just before each.
-                if std::arch::is_x86_feature_detected!("avx512f") {
+                if std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                {
                     checked[0] += 1;
+                    // SAFETY: checked just above.
                     let got = unsafe { lanes_avx512(&rows, &bvh, node, k, &limits) };
                     compare(got, expected, rows.live, "AVX-512", c, k);
                 }
                 if std::arch::is_x86_feature_detected!("avx2") {
                     checked[1] += 1;
+                    // SAFETY: checked just above.
                     let got = unsafe { lanes_avx2(&rows, &bvh, node, k, &limits) };
                     compare(got, expected, rows.live & 0xFF, "AVX2", c, k);
                 }
@@ -663,11 +666,10 @@ mod tests {
         k: usize,
     ) {
         assert_eq!(mask & live, expected.0 & live, "{isa}: group {group}, child {k}");
-        for lane in 0..16 {
+        for (lane, (&a, &b)) in near.iter().zip(&expected.1).enumerate() {
             if mask & live & (1 << lane) != 0 {
                 // Bit for bit, but for the sign of a zero entry (`f32::max` of ±0 may return
                 // either; only comparisons read the entry, and they cannot tell).
-                let (a, b) = (near[lane], expected.1[lane]);
                 assert!(
                     a.to_bits() == b.to_bits() || (a == 0.0 && b == 0.0),
                     "{isa}: group {group}, child {k}, lane {lane}: {a:e} against {b:e}"
