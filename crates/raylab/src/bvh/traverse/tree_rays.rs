@@ -65,7 +65,7 @@ use crate::accel::Hit;
 use crate::bvh::bounds::FAR_SCALE;
 use crate::bvh::bounds::MARGIN_SCALE;
 use crate::bvh::isa::{Avx2, Avx512, Sse};
-use crate::bvh::leaf::RECORD_VERTICES;
+use crate::bvh::leaf::{RECORD_VERTICES, Record};
 use crate::bvh::node::{Child, EMPTY, WIDTH, WideBvh, WideNode, decode};
 use crate::bvh::simd::{Lanes, watertight_sheared_scaled};
 use crate::float::next_float_up;
@@ -303,6 +303,23 @@ fn new_frame<V: Lanes>() -> Frame<V> {
     [[unsafe { std::mem::zeroed::<V>() }; 4]; RECORD_VERTICES]
 }
 
+/// Each of `record`'s corners in every lane's ray frame (the first
+/// [`vertices`](crate::bvh::leaf::Record::vertices) slots of `frame`).
+///
+/// # Safety
+/// The CPU must support `V`'s instruction set.
+#[inline(always)]
+unsafe fn fill_frame<V: Lanes>(registers: &RayRegisters<V>, record: &Record, frame: &mut Frame<V>) {
+    let [x, y, z] = record.rows();
+    for (j, slot) in frame.iter_mut().enumerate().take(record.vertices()) {
+        // SAFETY: the caller's guarantee.
+        unsafe {
+            let [a, b, c] = registers.corner(Vec3::new(x[j], y[j], z[j]));
+            *slot = [a, b, c, registers.ray.shear_z.mul(c)];
+        }
+    }
+}
+
 /// The lanes of `open` that a triangle of the leaf at `offset` blocks.
 ///
 /// # Safety
@@ -322,14 +339,8 @@ unsafe fn leaf_occluded<V: Lanes>(
         if open == 0 {
             break;
         }
-        let [x, y, z] = record.rows();
-        for (j, slot) in frame.iter_mut().enumerate().take(record.vertices()) {
-            // SAFETY: the caller's guarantee.
-            unsafe {
-                let [a, b, c] = registers.corner(Vec3::new(x[j], y[j], z[j]));
-                *slot = [a, b, c, registers.ray.shear_z.mul(c)];
-            }
-        }
+        // SAFETY: the caller's guarantee.
+        unsafe { fill_frame(registers, &record, frame) };
         let [ca, cb, cc] = record.corner_rows();
         for t in 0..record.triangles() {
             let open = open & !blocked;
@@ -514,14 +525,8 @@ unsafe fn leaf_closest<V: Lanes>(
     frame: &mut Frame<V>,
 ) {
     for record in bvh.leaves.leaf(offset) {
-        let [x, y, z] = record.rows();
-        for (j, slot) in frame.iter_mut().enumerate().take(record.vertices()) {
-            // SAFETY: the caller's guarantee.
-            unsafe {
-                let [a, b, c] = registers.corner(Vec3::new(x[j], y[j], z[j]));
-                *slot = [a, b, c, registers.ray.shear_z.mul(c)];
-            }
-        }
+        // SAFETY: the caller's guarantee.
+        unsafe { fill_frame(registers, &record, frame) };
         let [ca, cb, cc] = record.corner_rows();
         for t in 0..record.triangles() {
             // SAFETY: the corner indices are below the record's vertex count, whose frame
