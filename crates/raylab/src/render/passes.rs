@@ -201,9 +201,10 @@ impl Band<'_> {
                 for x in columns.clone() {
                     let x = first_column + x;
                     let pixel = (x as u32, y as u32);
-                    for s in sample..sample + count as u32 {
+                    let indices = sample..sample + count as u32;
+                    for made in Sampler::counted_range(kind, settings.seed, pixel, indices, grid) {
                         let (sampler, film) = slot.next().expect("a tile's rays fit");
-                        *sampler = Sampler::counted(kind, settings.seed, pixel, s, grid);
+                        *sampler = made;
                         *film = Vec2::new(x as f32, y as f32);
                     }
                 }
