@@ -34,6 +34,8 @@ use crate::unknown_name::UnknownName;
 #[derive(Clone, Debug)]
 pub struct LightSet {
     lights: Vec<SampledLight>,
+    /// Each light as the lanes take it ([`pick_for_lanes`](Self::pick_for_lanes)).
+    lane_lights: Vec<LaneLight>,
     /// By power, the environment's share apart; `None` without lights.
     distribution: Option<DiscreteDistribution>,
     /// For each triangle, the index of its light, or `u32::MAX`.
@@ -113,21 +115,61 @@ pub struct LightSample {
     pub shadow_ray: Ray,
 }
 
-/// What [`LightSet::pick_for_lanes`] picked (the light by reference: the lanes copy its fields
-/// straight into their rows).
-#[derive(Clone, Copy, Debug)]
-pub(super) enum LanePick<'a> {
+/// How the lanes take a light ([`LaneLight::role`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) enum LaneRole {
     /// No light: nothing to sample.
+    #[default]
     Nothing,
-    /// A triangle the lanes sample uniformly by area, with a constant radiance; the
-    /// probability of having picked it, and where its share of the first number starts.
-    Triangle { light: &'a TriangleLight, selection: f32, start: f32 },
-    /// The constant environment, which the lanes sample by [`square_to_uniform_sphere`]: its
-    /// radiance, the probability of having picked it, and where its share of the first number
-    /// starts.
-    Environment { radiance: Vec3, selection: f32, start: f32 },
+    /// A triangle the lanes sample uniformly by area, with a constant radiance.
+    Triangle,
+    /// The constant environment, which the lanes sample by [`square_to_uniform_sphere`].
+    Environment,
     /// A light the lanes leave to [`LightSet::sample`].
     Other,
+}
+
+/// A light as the lanes copy it into their rows, whatever its kind: a triangle's corners,
+/// normal, rounding bound, area and radiance; the environment's radiance (its other fields
+/// zero); and its role. One record for every kind, so that a lane takes its light without a
+/// branch on the kind: the lights a chunk's lanes pick are random, and the branch on each
+/// lane's mispredicted half the time (a fifth of `shade_lanes` in the materials scene).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct LaneLight {
+    pub corners: [Vec3; 3],
+    pub normal: Vec3,
+    pub error: Vec3,
+    pub area: f32,
+    pub radiance: Vec3,
+    pub role: LaneRole,
+}
+
+/// No light, for [`LightSet::pick_for_lanes`] without lights.
+static NO_LIGHT: LaneLight = LaneLight {
+    corners: [Vec3::ZERO; 3],
+    normal: Vec3::ZERO,
+    error: Vec3::ZERO,
+    area: 0.0,
+    radiance: Vec3::ZERO,
+    role: LaneRole::Nothing,
+};
+
+/// What [`LightSet::pick_for_lanes`] picked: the light by reference (the lanes copy its fields
+/// straight into their rows), the probability of having picked it, and where its share of the
+/// first number starts.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LanePick<'a> {
+    pub light: &'a LaneLight,
+    pub selection: f32,
+    pub start: f32,
+}
+
+impl LanePick<'_> {
+    /// How the lanes take the light.
+    #[inline(always)]
+    pub fn role(&self) -> LaneRole {
+        self.light.role
+    }
 }
 
 /// The fraction of a shadow ray toward a point on a surface light that is tested: the rest
@@ -216,12 +258,41 @@ impl LightSet {
         }
         LightSet {
             lights,
+            lane_lights: Vec::new(),
             distribution: DiscreteDistribution::new(&powers),
             triangle_light,
             environment,
             triangle_sampling: TriangleSampling::Area,
             textures,
         }
+        .with_lane_lights()
+    }
+
+    /// The lights' records for the lanes ([`LaneLight`]), as the triangle sampling says.
+    fn with_lane_lights(mut self) -> LightSet {
+        let lane_light = |light: &SampledLight| match light {
+            SampledLight::Triangle(light)
+                if self.triangle_sampling == TriangleSampling::Area
+                    && self.textures.get(light.texture as usize).is_none() =>
+            {
+                LaneLight {
+                    corners: light.corners,
+                    normal: light.normal,
+                    error: light.error,
+                    area: light.area,
+                    radiance: light.radiance,
+                    role: LaneRole::Triangle,
+                }
+            }
+            SampledLight::Environment { radiance } => LaneLight {
+                radiance: *radiance,
+                role: LaneRole::Environment,
+                ..LaneLight::default()
+            },
+            _ => LaneLight { role: LaneRole::Other, ..LaneLight::default() },
+        };
+        self.lane_lights = self.lights.iter().map(lane_light).collect();
+        self
     }
 
     /// A triangle light's radiance at barycentrics `(b1, b2)`, point `p`: `radiance` times its
@@ -238,7 +309,7 @@ impl LightSet {
     /// The same lights, with triangle lights sampled as `sampling` says.
     pub fn with_triangle_sampling(mut self, sampling: TriangleSampling) -> LightSet {
         self.triangle_sampling = sampling;
-        self
+        self.with_lane_lights()
     }
 
     /// The solid angle of a triangle light seen from `p`, when it is sampled by solid angle.
@@ -370,20 +441,11 @@ impl LightSet {
     /// other light, which a lane leaves to `sample`; or nothing, without lights.
     #[inline(always)]
     pub(super) fn pick_for_lanes(&self, u: Vec2) -> LanePick<'_> {
-        let Some(distribution) = &self.distribution else { return LanePick::Nothing };
+        let Some(distribution) = &self.distribution else {
+            return LanePick { light: &NO_LIGHT, selection: 0.0, start: 0.0 };
+        };
         let (index, selection, start) = distribution.pick(u.x);
-        match &self.lights[index] {
-            SampledLight::Triangle(light)
-                if self.triangle_sampling == TriangleSampling::Area
-                    && self.textures.get(light.texture as usize).is_none() =>
-            {
-                LanePick::Triangle { light, selection, start }
-            }
-            SampledLight::Environment { radiance } => {
-                LanePick::Environment { radiance: *radiance, selection, start }
-            }
-            _ => LanePick::Other,
-        }
+        LanePick { light: &self.lane_lights[index], selection, start }
     }
 
     /// The radiance a ray from `origin` (the previous path vertex's point) sees at `hit` on an

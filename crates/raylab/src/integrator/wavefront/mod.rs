@@ -62,7 +62,7 @@ use glam::Vec3;
 use lanes::{LaneDraws, LaneVertex, Lanes};
 
 use super::Integrator;
-use super::light_sampler::LanePick;
+use super::light_sampler::LaneRole;
 use super::path::{LaneKind, Path, PathSettings, PathState, Vertex};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
@@ -316,7 +316,7 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
         for (lane, &i) in paths.iter().enumerate() {
             let drawn = chunk.numbers.drawn[lane];
             let light = path.lights().pick_for_lanes(drawn.point);
-            if let LanePick::Other = light {
+            if light.role() == LaneRole::Other {
                 scalar |= 1 << lane;
                 let vertex = lanes.vertex::<B>(lane);
                 chunk

@@ -32,7 +32,7 @@
 //!
 //! What the lanes cannot do they leave to the scalar code, lane by lane: a light other than a
 //! triangle sampled by area with a constant radiance or the constant environment
-//! ([`LanePick::Other`]: point lights, textured emitters, solid-angle sampling), and the rare point
+//! ([`LaneRole::Other`]: point lights, textured emitters, solid-angle sampling), and the rare point
 //! whose offset is not finite (`exact` is false: the scalar offset's fallback decides it).
 //!
 //! [`Path::sample_light_with`]: super::super::Path
@@ -43,7 +43,7 @@ use glam::{Vec2, Vec3};
 
 use std::borrow::Cow;
 
-use super::super::light_sampler::{LanePick, SHADOW_RAY_LENGTH};
+use super::super::light_sampler::{LanePick, LaneRole, SHADOW_RAY_LENGTH};
 use super::super::path::{Frame, LaneKind, LaneSurface, Vertex, facing};
 use crate::cpu::Isa;
 use crate::material::lanes::{LaneBsdf, PARAMS};
@@ -452,29 +452,21 @@ impl Lanes {
     pub(super) fn set_draws(&mut self, i: usize, draws: &LaneDraws) {
         let input = &mut self.inputs[i / LANES];
         let k = i % LANES;
-        // A lane without a light computes a harmless one (the last one, or zeros) that
-        // `has_light` discards.
-        let (has_light, environment) = match &draws.light {
-            LanePick::Triangle { light, selection, start } => {
-                input.v0.set(k, light.corners[0]);
-                input.v1.set(k, light.corners[1]);
-                input.v2.set(k, light.corners[2]);
-                input.light_normal.set(k, light.normal);
-                input.light_error.set(k, light.error);
-                input.area[k] = light.area;
-                input.radiance.set(k, light.radiance);
-                input.selection[k] = *selection;
-                input.start[k] = *start;
-                (true, false)
-            }
-            LanePick::Environment { radiance, selection, start } => {
-                input.radiance.set(k, *radiance);
-                input.selection[k] = *selection;
-                input.start[k] = *start;
-                (true, true)
-            }
-            LanePick::Nothing | LanePick::Other => (false, false),
-        };
+        // Every light's record whole, whatever its role, without a branch on it (the lanes
+        // pick lights at random): a lane without a light in lanes computes a harmless one
+        // (zeros) that `has_light` discards.
+        let LanePick { light, selection, start } = draws.light;
+        input.v0.set(k, light.corners[0]);
+        input.v1.set(k, light.corners[1]);
+        input.v2.set(k, light.corners[2]);
+        input.light_normal.set(k, light.normal);
+        input.light_error.set(k, light.error);
+        input.area[k] = light.area;
+        input.radiance.set(k, light.radiance);
+        input.selection[k] = selection;
+        input.start[k] = start;
+        let has_light = matches!(light.role, LaneRole::Triangle | LaneRole::Environment);
+        let environment = light.role == LaneRole::Environment;
         input.has_light[k] = has_light;
         input.environment[k] = environment;
         input.u_point[0][k] = draws.u_point.x;
@@ -485,7 +477,7 @@ impl Lanes {
         input.u_roulette[k] = draws.u_roulette;
     }
 
-    /// Lane `i`'s vertex, for the scalar steps ([`LanePick::Other`] lights, lanes that are not
+    /// Lane `i`'s vertex, for the scalar steps ([`LaneRole::Other`] lights, lanes that are not
     /// exact); `B` is the lanes' kind.
     pub(super) fn vertex<B: LaneBsdf>(&self, i: usize) -> Vertex<'static> {
         let (input, k) = (&self.inputs[i / LANES], i % LANES);
