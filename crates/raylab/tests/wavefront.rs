@@ -11,7 +11,9 @@ mod common;
 use raylab::integrator::{Integrator, Path as PathTracer, PathSettings, PathWavefront};
 use raylab::scene::{Instancing, LoadOptions};
 use raylab::session::CameraOptions;
-use raylab::{Accumulator, Camera, Film, SampleSettings, SamplerKind, Scene, SceneBvh};
+use raylab::{
+    Accumulator, Camera, Film, SampleSettings, SamplerKind, Scene, SceneBvh, TriangleSampling,
+};
 
 const SIZE: (u32, u32) = (32, 24);
 
@@ -49,13 +51,17 @@ fn sums(
 /// Checks the wavefront against the scalar path on `scene` seen by `camera`.
 fn check(name: &str, scene: &Scene, camera: &Camera) {
     let accel = SceneBvh::build(&scene.geometry).unwrap();
-    // The default sampler at every depth, `multijitter` (its draws in lanes) at two.
-    let runs = [Some(1), Some(2), Some(4), None]
-        .map(|depth| (depth, None))
-        .into_iter()
-        .chain([(Some(2), Some(SamplerKind::MultiJitter)), (None, Some(SamplerKind::MultiJitter))]);
-    for (max_depth, sampler) in runs {
-        let settings = PathSettings { max_depth, ..PathSettings::default() };
+    // The default sampler at every depth, `multijitter` (its draws in lanes) at two; triangle
+    // lights sampled by solid angle (which the lanes leave to the scalar steps) once.
+    let (area, solid_angle) = (TriangleSampling::Area, TriangleSampling::SolidAngle);
+    let runs =
+        [Some(1), Some(2), Some(4), None].map(|depth| (depth, None, area)).into_iter().chain([
+            (Some(2), Some(SamplerKind::MultiJitter), area),
+            (None, Some(SamplerKind::MultiJitter), area),
+            (None, None, solid_angle),
+        ]);
+    for (max_depth, sampler, light_sampling) in runs {
+        let settings = PathSettings { max_depth, light_sampling, ..PathSettings::default() };
         let scalar = PathTracer::new(scene, &accel, settings);
         let wavefront = PathWavefront::new(scene, &accel, settings);
         let (expected, got) =
@@ -67,7 +73,7 @@ fn check(name: &str, scene: &Scene, camera: &Camera) {
         let differing = bits(&expected).iter().zip(bits(&got)).filter(|(a, b)| *a != b).count();
         assert_eq!(
             differing, 0,
-            "{name}, max depth {max_depth:?}, {sampler:?}: pixels that differ"
+            "{name}, max depth {max_depth:?}, {sampler:?}, {light_sampling:?}: pixels that differ"
         );
     }
 }

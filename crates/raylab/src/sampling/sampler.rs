@@ -135,6 +135,7 @@ impl Sampler {
         mix64(pixel_hash(pixel.0, pixel.1) ^ mix64(seed))
     }
 
+    /// [`counted`](Self::counted) for a pixel whose [`pixel_seed`](Self::pixel_seed) is made.
     #[inline(always)]
     fn with_pixel_seed(
         kind: SamplerKind,
