@@ -14,6 +14,10 @@
 //! rays that hit, the rays that miss, and as many rays that miss the root box (each bounce's
 //! origin moved 100 units up, pointing up): the per-ray setup and one node.
 //!
+//! `--group` (after the other arguments) renders the passes as one group, each pixel's samples
+//! side by side, as `raylab render` traces them (`Accumulator::add_samples_with_progress`),
+//! instead of one pass at a time.
+//!
 //! `--isas` (after the other arguments) also times the bounces and shadow rays one by one and
 //! as batches (in lanes through the tree, `bvh/traverse/tree_rays.rs`) with every instruction
 //! set this CPU has.
@@ -80,12 +84,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let file = args.next().ok_or("usage: path_rays SCENE.toml [SIZE [PASSES]]")?;
     let size: u32 = args.next().map_or(Ok(256), |s| s.parse())?;
     let passes: u32 = args.next().map_or(Ok(4), |s| s.parse())?;
-    let (mut write, mut split, mut isas) = (None, false, false);
+    let (mut write, mut split, mut isas, mut group) = (None, false, false, false);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--write" => write = Some(std::path::PathBuf::from(args.next().ok_or("--write DIR")?)),
             "--split" => split = true,
             "--isas" => isas = true,
+            "--group" => group = true,
             other => return Err(format!("unknown argument {other}").into()),
         }
     }
@@ -104,7 +109,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut accumulator = Accumulator::new(camera.width, camera.height)?;
     accumulator.settings = settings.samples;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    pool.install(|| (0..passes).for_each(|_| accumulator.add_sample(&camera, &wavefront)));
+    pool.install(|| match group {
+        true => accumulator.add_samples_with_progress(&camera, &wavefront, passes, &|_| {}),
+        false => (0..passes).for_each(|_| accumulator.add_sample(&camera, &wavefront)),
+    });
     let samples = f64::from(passes) * f64::from(camera.width * camera.height);
     println!("{file}: {}×{}, {passes} passes, one thread", camera.width, camera.height);
     println!(
