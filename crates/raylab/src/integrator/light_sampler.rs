@@ -132,8 +132,10 @@ pub(super) enum LaneRole {
 /// A light as the lanes copy it into their rows, whatever its kind: a triangle's corners,
 /// normal, rounding bound, area and radiance; the environment's radiance (its other fields
 /// zero); and its role. One record for every kind, so that a lane takes its light without a
-/// branch on the kind: the lights a chunk's lanes pick are random, and the branch on each
-/// lane's mispredicted half the time (a fifth of `shade_lanes` in the materials scene).
+/// branch on the kind: the lights a chunk's lanes pick are random, and where they are of
+/// several kinds a branch on each lane's kind goes the wrong way often (in the materials
+/// scene, an area light and the environment each picked about half the time, it took a fifth
+/// of `shade_lanes`).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct LaneLight {
     pub corners: [Vec3; 3],

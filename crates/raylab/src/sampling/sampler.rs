@@ -116,7 +116,8 @@ impl Sampler {
     }
 
     /// [`counted`](Self::counted) for the samples `indices` of one pixel, in order: the
-    /// pixel's hash made once (per sample it was a tenth of the camera stage).
+    /// pixel's hash made once (per sample it was a quarter of the camera band's own time,
+    /// `Band::add`, in the materials scene's profile).
     #[inline]
     pub fn counted_range(
         kind: SamplerKind,

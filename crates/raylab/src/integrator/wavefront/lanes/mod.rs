@@ -454,7 +454,8 @@ impl Lanes {
         let k = i % LANES;
         // Every light's record whole, whatever its role, without a branch on it (the lanes
         // pick lights at random): a lane without a light in lanes computes a harmless one
-        // (zeros) that `has_light` discards.
+        // (zeros) that `has_light` discards, and an environment lane a zero triangle that its
+        // `sky` select discards.
         let LanePick { light, selection, start } = draws.light;
         input.v0.set(k, light.corners[0]);
         input.v1.set(k, light.corners[1]);
