@@ -3,7 +3,9 @@
 # multi-jittered sampler" and later sections): for each scene, three alternating rounds of
 # Mitsuba `multijitter` (its `mi.render` after a warm-up render) and raylab `sobol` and
 # `multijitter` (the whole process), 64 spp, the machine's threads; then the RMSE of each
-# render against a long Mitsuba reference, and raylab's at seeds 2 and 3.
+# render against a long Mitsuba reference, and raylab's at seeds 2 and 3. raylab writes PFM:
+# Mitsuba's timed call writes no file, and EXR's ZIP compression alone costs raylab about 9 ms
+# of a 256² render's wall time (BENCHMARKS.md, "Renders written as PFM in the sitting").
 #
 # usage: tools/mitsuba/sitting.sh PYTHON REFS
 #   PYTHON  a Python with mitsuba and numpy (e.g. mi/bin/python; export DRJIT_LIBLLVM_PATH
@@ -21,6 +23,7 @@ PY=$1
 REFS=$2
 cd "$(dirname "$0")/../.."
 R=target/release/raylab
+[ -x "$R" ] || { echo "sitting.sh: $R not found: cargo build --release -p raylab-cli first" >&2; exit 1; }
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 date
@@ -42,18 +45,18 @@ for name in gltf materials cbox; do
     fi
     for sampler in sobol multijitter; do
       /usr/bin/time -f "round $r raylab $sampler: %e s (user %U)" \
-        $R render "$S" $SIZE --spp 64 --sampler $sampler -o "$OUT/${sampler}_$name.exr" 2>&1 | tail -1
+        $R render "$S" $SIZE --spp 64 --sampler $sampler -o "$OUT/${sampler}_$name.pfm" 2>&1 | tail -1
     done
   done
-  for f in "$OUT/m_$name.npy" "$OUT/sobol_$name.exr" "$OUT/multijitter_$name.exr"; do
+  for f in "$OUT/m_$name.npy" "$OUT/sobol_$name.pfm" "$OUT/multijitter_$name.pfm"; do
     echo -n "$(basename "$f"): "
     "$PY" tools/mitsuba/cbox_compare.py "$f" "$REFS/$name.npy" | grep -E "RMSE \(all"
   done
   for seed in 2 3; do
     for sampler in sobol multijitter; do
-      $R render "$S" $SIZE --spp 64 --seed $seed --sampler $sampler -o "$OUT/x.exr" >/dev/null 2>&1
+      $R render "$S" $SIZE --spp 64 --seed $seed --sampler $sampler -o "$OUT/x.pfm" >/dev/null 2>&1
       echo -n "seed $seed $sampler: "
-      "$PY" tools/mitsuba/cbox_compare.py "$OUT/x.exr" "$REFS/$name.npy" | grep -E "RMSE \(all"
+      "$PY" tools/mitsuba/cbox_compare.py "$OUT/x.pfm" "$REFS/$name.npy" | grep -E "RMSE \(all"
     done
   done
 done
