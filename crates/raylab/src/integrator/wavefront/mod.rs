@@ -270,10 +270,9 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
             // 5. Occlusion of the shadow rays, and the light they bring.
             shadows.trace(scene, accel);
             for (&blocked, &(i, contribution)) in shadows.blocked.iter().zip(&shadows.light) {
-                // A select, not a branch (a quarter of the rays are blocked, at random). Adding
-                // zero leaves the radiance as it was: it starts at +0 and only ever adds, so it
-                // is never −0.
-                states[i].radiance += if blocked { Vec3::ZERO } else { contribution };
+                if !blocked {
+                    states[i].radiance += contribution;
+                }
             }
             lap.end(|t| &t.occlusion);
         }
@@ -351,21 +350,17 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
                 }
                 continue;
             }
-            // Without branches on what became of the lane (the lanes' outcomes are random, so
-            // such branches go the wrong way often): the shadow ray kept or not, the next
-            // segment written whether the path goes on or ends (an ended path's state is read
-            // no more, but for its radiance), its index kept or not.
-            let (shadow, contribution, shadowed) = lanes.shadow(lane);
-            chunk.shadows.push_if(i, shadow, contribution, shadowed);
-            let (next, goes_on) = lanes.next(lane);
-            state.ray = next.ray;
-            state.throughput = next.throughput;
-            state.eta = next.eta;
-            state.previous_pdf = next.pdf;
-            state.previous_delta = next.delta;
-            state.previous_point = lanes.point(lane);
-            state.depth += 1;
-            push_if(chunk.bounced, i, goes_on);
+            chunk.shadows.add(i, result.shadow);
+            if let Some(next) = result.next {
+                state.ray = next.ray;
+                state.throughput = next.throughput;
+                state.eta = next.eta;
+                state.previous_pdf = next.pdf;
+                state.previous_delta = next.delta;
+                state.previous_point = lanes.point(lane);
+                state.depth += 1;
+                chunk.bounced.push(i);
+            }
         }
         if let Some(times) = &self.times {
             let vertices = paths.len() as u64;
@@ -429,17 +424,6 @@ impl ShadowRays {
         self.open_light.clear();
     }
 
-    /// Path `i`'s shadow ray and what it brings, kept where `keep`, without a branch on
-    /// `keep` or on the ray's kind: written to both lists, each kept by a length.
-    #[inline(always)]
-    fn push_if(&mut self, i: usize, ray: Ray, contribution: Vec3, keep: bool) {
-        let open = ray.t_max == f32::INFINITY;
-        push_if(&mut self.rays, ray, keep & !open);
-        push_if(&mut self.light, (i, contribution), keep & !open);
-        push_if(&mut self.open_rays, ray, keep & open);
-        push_if(&mut self.open_light, (i, contribution), keep & open);
-    }
-
     /// Path `i`'s light sample, if it made one.
     #[inline]
     fn add(&mut self, i: usize, sample: Option<(Ray, Vec3)>) {
@@ -453,15 +437,6 @@ impl ShadowRays {
             }
         }
     }
-}
-
-/// Pushes `value` and keeps it only where `keep`, without a branch on `keep`.
-#[inline(always)]
-fn push_if<T: Copy>(list: &mut Vec<T>, value: T, keep: bool) {
-    let len = list.len();
-    list.push(value);
-    // SAFETY: `len + 1` elements are initialized (the push), and `len + keep` is at most that.
-    unsafe { list.set_len(len + usize::from(keep)) };
 }
 
 /// The numbers a stage's vertices draw, in the scalar path's order: the light's choice and

@@ -398,8 +398,12 @@ pub(super) struct Next {
     pub eta: f32,
 }
 
-/// What [`Lanes::result`] gives for a lane: whether the lanes decided it.
+/// What [`Lanes::result`] gives for a lane.
 pub(super) struct LaneResult {
+    /// The shadow ray and what it brings if unblocked.
+    pub shadow: Option<(Ray, Vec3)>,
+    /// The next segment, if the path goes on.
+    pub next: Option<Next>,
     /// False where the scalar code must decide the lane instead.
     pub exact: bool,
     /// Whether the lanes sampled the lane's light (a triangle or the environment).
@@ -516,37 +520,24 @@ impl Lanes {
         }
     }
 
-    /// Lane `i`'s shadow ray, what it brings if unblocked, and whether there is one, after
-    /// [`shade`](Self::shade) (read whatever the answer, so that the caller need not branch).
+    /// Lane `i`'s result, after [`shade`](Self::shade).
     #[inline(always)]
-    pub(super) fn shadow(&self, i: usize) -> (Ray, Vec3, bool) {
-        let (output, k) = (&self.outputs[i / LANES], i % LANES);
-        let (origin, direction) = (output.shadow_origin.get(k), output.shadow_direction.get(k));
-        let ray = Ray::segment(origin, direction, output.shadow_t_max[k]);
-        (ray, output.contribution.get(k), output.shadowed[k])
-    }
-
-    /// Lane `i`'s next segment and whether its path goes on, after [`shade`](Self::shade)
-    /// (read whatever the answer, so that the caller need not branch).
-    #[inline(always)]
-    pub(super) fn next(&self, i: usize) -> (Next, bool) {
-        let (output, k) = (&self.outputs[i / LANES], i % LANES);
-        let next = Next {
+    pub(super) fn result(&self, i: usize) -> LaneResult {
+        let (c, k) = (i / LANES, i % LANES);
+        let output = &self.outputs[c];
+        let shadow = output.shadowed[k].then(|| {
+            let (origin, direction) = (output.shadow_origin.get(k), output.shadow_direction.get(k));
+            (Ray::segment(origin, direction, output.shadow_t_max[k]), output.contribution.get(k))
+        });
+        let next = output.goes_on[k].then(|| Next {
             ray: Ray::new(output.origin.get(k), output.direction.get(k)),
             throughput: output.throughput.get(k),
             pdf: output.pdf[k],
             delta: output.delta[k],
             eta: output.eta[k],
-        };
-        (next, output.goes_on[k])
-    }
-
-    /// Whether the lanes decided lane `i`, after [`shade`](Self::shade); its shadow ray and
-    /// next segment are [`shadow`](Self::shadow) and [`next`](Self::next).
-    #[inline(always)]
-    pub(super) fn result(&self, i: usize) -> LaneResult {
-        let (c, k) = (i / LANES, i % LANES);
-        LaneResult { exact: self.outputs[c].exact[k], light_in_lanes: self.inputs[c].has_light[k] }
+        });
+        let light_in_lanes = self.inputs[c].has_light[k];
+        LaneResult { shadow, next, exact: output.exact[k], light_in_lanes }
     }
 }
 

@@ -240,8 +240,7 @@ fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: LaneKind, sky: bool) {
                 let expected =
                     path.sample_light_with(vertex, Vec2::new(u[0], u[1]), state.throughput);
                 let lamp = light.role() == LaneRole::Triangle;
-                let (ray, contribution, shadowed) = lanes.shadow(lane);
-                match (light.role(), shadowed.then_some((ray, contribution))) {
+                match (light.role(), result.shadow) {
                     (LaneRole::Other, shadow) => assert!(shadow.is_none(), "{isa:?} lane {lane}"),
                     (_, None) => {
                         assert!(expected.is_none(), "{kind:?} {isa:?} lane {lane}: {expected:?}");
@@ -263,9 +262,8 @@ fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: LaneKind, sky: bool) {
                 let mut scalar = *state;
                 let goes_on = path.bounce(&mut scalar, vertex, u[2], Vec2::new(u[3], u[4]))
                     && path.survives_roulette(&mut scalar, u[5]);
-                let (next, lane_goes_on) = lanes.next(lane);
-                assert_eq!(lane_goes_on, goes_on, "{kind:?} {isa:?} lane {lane}");
-                if goes_on {
+                assert_eq!(result.next.is_some(), goes_on, "{kind:?} {isa:?} lane {lane}");
+                if let Some(next) = result.next {
                     bounces += 1;
                     assert!(
                         same3(next.ray.origin, scalar.ray.origin)
