@@ -374,17 +374,9 @@ impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
 
 /// The shadow rays of a stage's vertices, and the light each brings to its path if nothing
 /// blocks it.
-///
-/// The segments toward points on lights and the rays without end toward the environment are
-/// gathered apart and traced segments first: the segments toward one light run side by side
-/// and share the tree's nodes in the lanes, where mixed with the environment's rays (which
-/// point everywhere) they shared a group with rays going elsewhere.
 struct ShadowRays {
     rays: Vec<Ray>,
     light: Vec<(usize, Vec3)>,
-    /// The rays toward the environment (no end), until [traced](Self::trace).
-    open_rays: Vec<Ray>,
-    open_light: Vec<(usize, Vec3)>,
     /// Whether each ray is blocked, once [traced](Self::trace).
     blocked: Vec<bool>,
 }
@@ -394,18 +386,13 @@ impl ShadowRays {
         ShadowRays {
             rays: Vec::with_capacity(n),
             light: Vec::with_capacity(n),
-            open_rays: Vec::with_capacity(n),
-            open_light: Vec::with_capacity(n),
             blocked: Vec::with_capacity(n),
         }
     }
 
     /// Finds which rays are blocked: as a batch ([`Accelerator::occluded_incoherent`]), or one
-    /// by one through their holes in a scene with cut-outs. The rays toward the environment
-    /// join the batch after the segments.
+    /// by one through their holes in a scene with cut-outs.
     fn trace<A: Accelerator + ?Sized>(&mut self, scene: &Scene, accel: &A) {
-        self.rays.append(&mut self.open_rays);
-        self.light.append(&mut self.open_light);
         self.blocked.clear();
         self.blocked.resize(self.rays.len(), false);
         if scene.has_cut_outs() {
@@ -420,21 +407,14 @@ impl ShadowRays {
     fn clear(&mut self) {
         self.rays.clear();
         self.light.clear();
-        self.open_rays.clear();
-        self.open_light.clear();
     }
 
     /// Path `i`'s light sample, if it made one.
     #[inline]
     fn add(&mut self, i: usize, sample: Option<(Ray, Vec3)>) {
         if let Some((ray, contribution)) = sample {
-            if ray.t_max == f32::INFINITY {
-                self.open_rays.push(ray);
-                self.open_light.push((i, contribution));
-            } else {
-                self.rays.push(ray);
-                self.light.push((i, contribution));
-            }
+            self.rays.push(ray);
+            self.light.push((i, contribution));
         }
     }
 }
