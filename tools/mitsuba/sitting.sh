@@ -5,7 +5,8 @@
 # `multijitter` (the whole process), 64 spp, the machine's threads; then the RMSE of each
 # render against a long Mitsuba reference, and raylab's at seeds 2 and 3. raylab writes PFM:
 # Mitsuba's timed call writes no file, and EXR's ZIP compression alone costs raylab about 9 ms
-# of a 256² render's wall time (BENCHMARKS.md, "Renders written as PFM in the sitting").
+# of a 256² render's wall time (BENCHMARKS.md, "Measured and not kept: trees, ray order,
+# branches, numbers").
 #
 # usage: tools/mitsuba/sitting.sh PYTHON REFS
 #   PYTHON  a Python with mitsuba and numpy (e.g. mi/bin/python; export DRJIT_LIBLLVM_PATH
