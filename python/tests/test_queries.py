@@ -1,0 +1,139 @@
+"""Known answers, and the Rust library's answers, for Mesh.intersect / occluded / refit."""
+
+import os
+import pathlib
+
+import numpy as np
+import pytest
+
+import raylab
+from conftest import MESHES, random_rays
+
+TRIANGLE = ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+
+
+def test_a_ray_and_the_unit_triangle():
+    mesh = raylab.Mesh(*TRIANGLE)
+    hits = mesh.intersect(
+        [[0.25, 0.25, -1], [0.25, 0.5, 2], [2, 2, -1], [0.5, 0.25, -1]],
+        [[0, 0, 1], [0, 0, -1], [0, 0, 1], [0, 0, 4]],
+    )
+    assert hits.t.dtype == np.float32 and hits.triangle.dtype == np.int64
+    # t in units of the direction's length: the last direction is 4 long.
+    assert hits.t.tolist() == [1.0, 2.0, np.inf, 0.25]
+    assert hits.triangle.tolist() == [0, 0, -1, 0]
+    # u, v: the weights of the second and third vertex.
+    assert hits.u.tolist() == [0.25, 0.25, 0.0, 0.5]
+    assert hits.v.tolist() == [0.25, 0.5, 0.0, 0.25]
+
+
+def test_the_limits_of_a_ray():
+    mesh = raylab.Mesh(*TRIANGLE)
+    o, d = [[0.25, 0.25, -1]] * 4, [[0, 0, 1]] * 4
+    t_max = np.array([0.5, 1.5, np.inf, 2.0])
+    t_min = np.array([0.0, 0.0, 1.5, 0.5])
+    assert mesh.intersect(o, d, t_min=t_min, t_max=t_max).t.tolist() == [np.inf, 1, np.inf, 1]
+    assert mesh.occluded(o, d, t_min=t_min, t_max=t_max).tolist() == [False, True, False, True]
+    # A scalar limit holds for every ray.
+    assert mesh.occluded(o, d, t_max=0.999).tolist() == [False] * 4
+
+
+def square_fan(n):
+    """A unit square cut into `n` triangles around its centre (the shared vertex)."""
+    corners = [(0, 0), (0.5, 0), (1, 0), (1, 0.5), (1, 1), (0.5, 1), (0, 1), (0, 0.5)]
+    rim = corners[: n] if n == 8 else corners
+    vertices = [[0.5, 0.5, 0.0]] + [[x, y, 0.0] for x, y in rim]
+    faces = [[0, 1 + i, 1 + (i + 1) % len(rim)] for i in range(len(rim))]
+    return np.array(vertices), np.array(faces)
+
+
+def test_rays_through_a_shared_edge_or_vertex_always_hit():
+    # Two triangles sharing the diagonal x = y: rays through exactly that edge.
+    square = raylab.Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    s = (np.arange(1, 512) / 512).astype(np.float32)
+    for dz in (1.0, -1.0):
+        for tilt in (0.0, 0.3, -0.7):
+            origins = np.stack([s - tilt, s + tilt * 0.5, np.full_like(s, -dz)], axis=1)
+            directions = np.tile(np.float32([tilt, -tilt * 0.5, dz]), (len(s), 1))
+            hits = square.intersect(origins, directions)
+            assert (hits.triangle >= 0).all(), "a ray slipped through the shared edge"
+            assert square.occluded(origins, directions).all()
+    # Eight triangles around a shared vertex: rays through exactly that vertex, at any angle.
+    fan = raylab.Mesh(*square_fan(8))
+    rng = np.random.default_rng(5)
+    directions = rng.normal(size=(4096, 3)).astype(np.float32)
+    directions[:, 2] = np.abs(directions[:, 2]) + 0.05
+    origins = (np.float32([0.5, 0.5, 0.0]) - directions).astype(np.float32)
+    hits = fan.intersect(origins, directions)
+    assert (hits.triangle >= 0).all(), "a ray slipped through the shared vertex"
+
+
+def test_occluded_agrees_with_intersect(bunny):
+    origins, directions = random_rays(bunny, 20_000, seed=1)
+    hits = bunny.intersect(origins, directions)
+    assert 0.3 < (hits.triangle >= 0).mean() < 0.9
+    np.testing.assert_array_equal(bunny.occluded(origins, directions), hits.triangle >= 0)
+    # Segments that end before the hit are not blocked; t == inf for the misses gives inf.
+    assert not bunny.occluded(origins, directions, t_max=np.minimum(hits.t * 0.5, 1e30)).any()
+
+
+def test_any_thread_count_gives_the_same_answers(bunny):
+    origins, directions = random_rays(bunny, 50_000, seed=2)
+    one = bunny.intersect(origins, directions, threads=1)
+    for threads in (2, 3, None):
+        other = bunny.intersect(origins, directions, threads=threads)
+        for a, b in zip(one, other):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_float64_input_is_rounded_to_float32(bunny):
+    origins, directions = random_rays(bunny, 1000, seed=3)
+    a = bunny.intersect(origins, directions)
+    b = bunny.intersect(origins.astype(np.float64), directions.astype(np.float64))
+    np.testing.assert_array_equal(a.t, b.t)
+
+
+def read(directory, name, dtype, shape=(-1,)):
+    return np.fromfile(directory / name, dtype=np.dtype(dtype).newbyteorder("<")).reshape(shape)
+
+
+@pytest.mark.skipif(
+    "RAYLAB_RUST_ANSWERS" not in os.environ,
+    reason="the Rust library's answers are written by `cargo test -p raylab-python`",
+)
+def test_the_rust_librarys_answers_bit_for_bit(bunny):
+    directory = pathlib.Path(os.environ["RAYLAB_RUST_ANSWERS"])
+    origins = read(directory, "origins.f32", np.float32, (-1, 3))
+    directions = read(directory, "directions.f32", np.float32, (-1, 3))
+    hits = bunny.intersect(origins, directions)
+    # Bit for bit: the floats compared as their bit patterns.
+    for name, got in (("t", hits.t), ("u", hits.u), ("v", hits.v)):
+        want = read(directory, f"{name}.f32", np.float32)
+        np.testing.assert_array_equal(got.view(np.uint32), want.view(np.uint32), err_msg=name)
+    np.testing.assert_array_equal(hits.triangle, read(directory, "triangle.i64", np.int64))
+    assert 0.2 < (hits.triangle >= 0).mean() < 0.9
+    # Shadow segments to half the hit (odd rays: twice), or of length 1 for a miss.
+    scale = np.where(np.arange(len(hits.t)) % 2 == 0, 0.5, 2.0).astype(np.float32)
+    t_max = np.where(hits.triangle >= 0, hits.t * scale, np.float32(1.0)).astype(np.float32)
+    want = read(directory, "occluded.u8", np.uint8).astype(bool)
+    np.testing.assert_array_equal(bunny.occluded(origins, directions, t_max=t_max), want)
+
+
+def test_refit_gives_a_new_meshs_answers(bunny):
+    vertices, faces = bunny.vertices, bunny.faces
+    moved = (vertices * np.float32(1.5) + np.float32([0.1, -0.2, 0.05])).astype(np.float32)
+    refitted = raylab.load_mesh(MESHES / "bunny.obj.gz")
+    refitted.refit(moved)
+    fresh = raylab.Mesh(moved, faces)
+    origins, directions = random_rays(fresh, 20_000, seed=4)
+    a, b = refitted.intersect(origins, directions), fresh.intersect(origins, directions)
+    np.testing.assert_array_equal(a.triangle, b.triangle)
+    np.testing.assert_array_equal(a.t, b.t)
+    np.testing.assert_array_equal(refitted.vertices, moved)
+
+
+def test_load_mesh_reads_the_formats():
+    assert len(raylab.load_mesh(MESHES / "bunny.obj.gz")) == 75_408
+    assert len(raylab.load_mesh(MESHES / "bunny_lowres.obj")) == 3_674
+    # A glTF's instanced meshes are copied into their places.
+    assert len(raylab.load_mesh(MESHES / "2CylinderEngine/2CylinderEngine.glb")) == 121_496
