@@ -25,6 +25,10 @@ from . import _raylab
 __version__ = _raylab.__version__
 __all__ = ["Hits", "Mesh", "load_mesh"]
 
+# `Mesh.contains`' ray direction: no axis, diagonal or simple ratio, so that rays from points
+# on a grid do not run along a mesh's axis-aligned faces and edges.
+_CONTAINS_DIRECTION = np.array([0.5773502, 0.6188021, -0.5327641], dtype=np.float32)
+
 Hits = namedtuple("Hits", ["t", "triangle", "u", "v"])
 Hits.__doc__ = """The closest hit of each ray.
 
@@ -172,6 +176,30 @@ class Mesh:
         """
         rays = _rays(origins, directions, t_min, t_max)
         return self._mesh.occluded(*rays, threads=_threads(threads))
+
+    def count_hits(self, origins, directions, t_min=0.0, t_max=math.inf, *, threads=None):
+        """How many times each ray crosses the surface with t_min < t < t_max: an int64
+        array (n,).
+
+        Every hit counts, not only the closest. A ray through an edge or a vertex that faces
+        share counts once where the surface goes on across the point (and twice or not at all
+        where it folds back, as at a silhouette), so on a closed mesh the count's parity
+        tells inside from outside. The arguments are those of `intersect`.
+        """
+        rays = _rays(origins, directions, t_min, t_max)
+        return self._mesh.count_hits(*rays, threads=_threads(threads))
+
+    def contains(self, points, *, threads=None):
+        """Whether each point is inside the mesh, which must be closed: a bool array (n,).
+
+        A ray from each point crosses the surface an odd number of times exactly when the
+        point is inside (`count_hits`, along one fixed direction). Points on the surface
+        itself may answer either way.
+        """
+        points = _points(points, "points")
+        directions = np.broadcast_to(_CONTAINS_DIRECTION, points.shape)
+        counts = self.count_hits(points, directions, threads=threads)
+        return counts % 2 == 1
 
     def refit(self, vertices):
         """Moves the vertices (same count, faces unchanged) and refits the BVH in place,

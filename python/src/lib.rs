@@ -334,6 +334,33 @@ impl Mesh {
         Ok(blocked.into_pyarray(py))
     }
 
+    /// How often each ray crosses the surface between `t_min` and `t_max` (every hit, not
+    /// only the closest, a shared edge or vertex counted once where the surface goes on
+    /// across it: `Bvh::crossings`).
+    #[pyo3(signature = (origins, directions, t_min, t_max, threads=None))]
+    fn count_hits<'py>(
+        &self,
+        py: Python<'py>,
+        origins: PyReadonlyArray2<'py, f32>,
+        directions: PyReadonlyArray2<'py, f32>,
+        t_min: Limit<'py>,
+        t_max: Limit<'py>,
+        threads: Option<usize>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
+        let mut counts = vec![0i64; rays.len()];
+        let bvh = &self.bvh;
+        run(py, threads, || {
+            rays.each(
+                &mut counts[..],
+                |c| c.chunks_mut(CHUNK).collect(),
+                |c, k, ray| c[k] = i64::from(bvh.count_crossings(ray)),
+            )
+        })?
+        .map_err(PyValueError::new_err)?;
+        Ok(counts.into_pyarray(py))
+    }
+
     /// Moves the vertices (the same count, the faces unchanged) and refits the BVH; rebuilds
     /// it where a refit cannot keep the tree (a face that had no area has one now).
     fn refit(&mut self, py: Python<'_>, vertices: PyReadonlyArray2<'_, f32>) -> PyResult<()> {

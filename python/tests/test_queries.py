@@ -137,3 +137,54 @@ def test_load_mesh_reads_the_formats():
     assert len(raylab.load_mesh(MESHES / "bunny_lowres.obj")) == 3_674
     # A glTF's instanced meshes are copied into their places.
     assert len(raylab.load_mesh(MESHES / "2CylinderEngine/2CylinderEngine.glb")) == 121_496
+
+
+def cube():
+    vertices = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    index = {tuple(v): i for i, v in enumerate(vertices.astype(int).tolist())}
+    quads = [
+        [(0, 0, 0), (0, 1, 0), (1, 1, 0), (1, 0, 0)],
+        [(0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)],
+        [(0, 0, 0), (1, 0, 0), (1, 0, 1), (0, 0, 1)],
+        [(0, 1, 0), (0, 1, 1), (1, 1, 1), (1, 1, 0)],
+        [(0, 0, 0), (0, 0, 1), (0, 1, 1), (0, 1, 0)],
+        [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1)],
+    ]
+    faces = []
+    for a, b, c, d in quads:
+        faces += [[index[a], index[b], index[c]], [index[a], index[c], index[d]]]
+    return raylab.Mesh(vertices, faces)
+
+
+def test_count_hits_through_shared_edges_and_corners():
+    mesh = cube()
+    centre = np.full((27, 3), 0.5)
+    grid = np.array([[x, y, z] for x in (0, 0.5, 1) for y in (0, 0.5, 1) for z in (0, 0.5, 1)])
+    keep = ~(grid == 0.5).all(axis=1)
+    # From the centre through every corner, edge midpoint and face centre: one crossing.
+    assert mesh.count_hits(centre[keep], grid[keep] - 0.5).tolist() == [1] * 26
+    # From beyond, back through the point and the cube: two.
+    assert mesh.count_hits(grid[keep] * 3 - 1, 0.5 - grid[keep]).tolist() == [2] * 26
+    # The closest hit still counts every touching triangle as hit: none slips through.
+    assert (mesh.intersect(centre[keep], grid[keep] - 0.5).triangle >= 0).all()
+
+
+def test_contains_a_closed_cube_and_the_bunny(bunny):
+    mesh = cube()
+    rng = np.random.default_rng(8)
+    points = rng.uniform(-0.5, 1.5, (20_000, 3))
+    inside = ((points > 0) & (points < 1)).all(axis=1)
+    np.testing.assert_array_equal(mesh.contains(points), inside)
+    # Points on a grid whose rays run through the cube's edges and corners.
+    g = np.arange(-2, 11) / 8
+    grid = np.stack(np.meshgrid(g, g, g), axis=-1).reshape(-1, 3)
+    grid = grid[~((grid == 0) | (grid == 1)).any(axis=1)]
+    np.testing.assert_array_equal(mesh.contains(grid), ((grid > 0) & (grid < 1)).all(axis=1))
+    # The bunny: every point agrees along three directions.
+    lo, hi = bunny.vertices.min(0), bunny.vertices.max(0)
+    points = lo + rng.random((5000, 3)) * (hi - lo)
+    parity = [bunny.count_hits(points, np.tile(d, (5000, 1))) % 2 for d in np.eye(3)]
+    np.testing.assert_array_equal(parity[0], parity[1])
+    np.testing.assert_array_equal(parity[0], parity[2])
+    np.testing.assert_array_equal(bunny.contains(points), parity[0] == 1)
+    assert 0.05 < bunny.contains(points).mean() < 0.95

@@ -235,6 +235,36 @@ impl WatertightRay {
     /// for `0 < t < t_max` and `t >= ray.t_min`. Both sides of the triangle are hit.
     #[inline(always)]
     pub fn intersect(&self, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f32) -> Option<TriangleHit> {
+        self.intersect_with::<false>(v0, v1, v2, t_max)
+    }
+
+    /// [`intersect`](Self::intersect) with half-open edges: a ray through an edge or a vertex
+    /// that triangles share crosses exactly one of them where the surface goes on across it
+    /// (and none or two where it folds back), so counting these hits along a ray counts how
+    /// often it crosses a closed surface, whose parity says inside or outside.
+    ///
+    /// Where an edge function is exactly zero (the ray meets the edge's line: the test decides
+    /// that exactly), the edge counts as inside only if it is the triangle's "owned" edge: its
+    /// direction in the ray's frame, turned by the sign of the triangle's winding as seen from
+    /// the ray, points to `+y` (or along `+x` if level). Two triangles that share an edge with
+    /// a consistent winding run along it in opposite directions, so one owns it and the other
+    /// does not; the differences are exactly opposite in floating point too. At a shared vertex
+    /// both of a triangle's edges through it must be owned: of a fan around the vertex, exactly
+    /// one triangle is (the half-open rule of rasterisers, e.g. Direct3D's top-left rule).
+    #[inline(always)]
+    pub fn crossing(&self, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f32) -> Option<TriangleHit> {
+        self.intersect_with::<true>(v0, v1, v2, t_max)
+    }
+
+    /// [`intersect`](Self::intersect), or [`crossing`](Self::crossing) if `HALF_OPEN`.
+    #[inline(always)]
+    fn intersect_with<const HALF_OPEN: bool>(
+        &self,
+        v0: Vec3,
+        v1: Vec3,
+        v2: Vec3,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         // Translate to the ray's origin, then shear so the ray runs along +z.
         let a = v0 - self.origin;
@@ -277,6 +307,18 @@ impl WatertightRay {
         let det = e0 + e1 + e2;
         if det == 0.0 || det.is_nan() {
             return None; // Edge-on or degenerate triangle, or a NaN ray.
+        }
+        if HALF_OPEN && (e0 == 0.0 || e1 == 0.0 || e2 == 0.0) {
+            // The edge from `p` to `q` (e0: b to c, e1: c to a, e2: a to b), its direction
+            // turned by the winding's sign.
+            let owned = |e: f32, (px, py): (f32, f32), (qx, qy): (f32, f32)| {
+                let (dx, dy) = if det > 0.0 { (qx - px, qy - py) } else { (px - qx, py - qy) };
+                e != 0.0 || dy > 0.0 || (dy == 0.0 && dx > 0.0)
+            };
+            let (a2, b2, c2) = ((ax, ay), (bx, by), (cx, cy));
+            if !(owned(e0, b2, c2) && owned(e1, c2, a2) && owned(e2, a2, b2)) {
+                return None;
+            }
         }
 
         // Scaled distance along the ray, compared against the range without dividing. The

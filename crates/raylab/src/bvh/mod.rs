@@ -40,6 +40,7 @@
 
 mod bounds;
 mod build;
+mod crossings;
 mod isa;
 mod leaf;
 mod node;
