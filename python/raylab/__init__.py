@@ -23,7 +23,7 @@ import numpy as np
 from . import _raylab
 
 __version__ = _raylab.__version__
-__all__ = ["Hits", "Mesh", "load_mesh"]
+__all__ = ["AllHits", "Hits", "Mesh", "load_mesh"]
 
 # `Mesh.contains`' ray direction: no axis, diagonal or simple ratio, so that rays from points
 # on a grid do not run along a mesh's axis-aligned faces and edges.
@@ -36,6 +36,14 @@ t: float32 (n,), the distance along the ray in units of its direction's length; 
 triangle: int64 (n,), the index of the face hit; -1 on a miss.
 u, v: float32 (n,), the barycentric weights of the face's second and third vertex (the
     point is (1 - u - v)·a + u·b + v·c); 0 on a miss.
+"""
+
+
+AllHits = namedtuple("AllHits", ["ray", "triangle", "t", "u", "v"])
+AllHits.__doc__ = """Every crossing of a set of rays, one entry per crossing.
+
+ray: int64 (m,), the index of the ray; triangle: int64 (m,), the face crossed; t, u, v:
+float32 (m,), as in `Hits`. Sorted by ray, then t, then triangle.
 """
 
 
@@ -188,6 +196,25 @@ class Mesh:
         """
         rays = _rays(origins, directions, t_min, t_max)
         return self._mesh.count_hits(*rays, threads=_threads(threads))
+
+    def intersect_all(
+        self, origins, directions, t_min=0.0, t_max=math.inf, *, max_hits=None, threads=None
+    ):
+        """Every crossing of every ray with the surface (those `count_hits` counts), at most
+        `max_hits` per ray (its nearest; None: all).
+
+        Returns `AllHits(ray, triangle, t, u, v)`, one entry per crossing, sorted by ray,
+        then t, then triangle. The arguments are those of `intersect`.
+        """
+        rays = _rays(origins, directions, t_min, t_max)
+        if max_hits is None:
+            max_hits = 2**63 - 1
+        elif isinstance(max_hits, bool) or not isinstance(max_hits, (int, np.integer)):
+            raise TypeError(f"max_hits must be a non-negative integer or None, not {max_hits!r}")
+        elif max_hits < 0:
+            raise ValueError(f"max_hits must be at least 0, not {max_hits}")
+        found = self._mesh.all_hits(*rays, int(max_hits), threads=_threads(threads))
+        return AllHits(*found)
 
     def contains(self, points, *, threads=None):
         """Whether each point is inside the mesh, which must be closed: a bool array (n,).

@@ -21,7 +21,7 @@ use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
-use raylab::{Accelerator, Bvh, Ray};
+use raylab::{Accelerator, Bvh, Hit, Ray};
 
 /// Rays per task: large enough that a task's set-up is nothing, small enough for two threads
 /// to share a million rays evenly.
@@ -359,6 +359,70 @@ impl Mesh {
         })?
         .map_err(PyValueError::new_err)?;
         Ok(counts.into_pyarray(py))
+    }
+
+    /// Every crossing of every ray (as [`count_hits`](Self::count_hits) counts them), at most
+    /// `max_hits` per ray (its nearest): `(ray, triangle, t, u, v)`, sorted by ray, then `t`,
+    /// then triangle.
+    #[pyo3(signature = (origins, directions, t_min, t_max, max_hits, threads=None))]
+    #[allow(clippy::type_complexity, clippy::too_many_arguments)]
+    fn all_hits<'py>(
+        &self,
+        py: Python<'py>,
+        origins: PyReadonlyArray2<'py, f32>,
+        directions: PyReadonlyArray2<'py, f32>,
+        t_min: Limit<'py>,
+        t_max: Limit<'py>,
+        max_hits: usize,
+        threads: Option<usize>,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<i64>>,
+        Bound<'py, PyArray1<i64>>,
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<f32>>,
+    )> {
+        let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
+        let bvh = &self.bvh;
+        // Each chunk's hits, in ray order; the chunks then joined in order.
+        let chunks = (rays.len() + CHUNK - 1) / CHUNK;
+        let mut found: Vec<Vec<(u32, Hit)>> = vec![Vec::new(); chunks];
+        run(py, threads, || {
+            rays.each(
+                &mut found[..],
+                |f| f.chunks_mut(1).collect(),
+                |f, k, ray| {
+                    let hits = &mut f[0];
+                    let start = hits.len();
+                    bvh.crossings(ray, |h| hits.push((k as u32, h)));
+                    let mine = &mut hits[start..];
+                    mine.sort_unstable_by(|a, b| {
+                        a.1.t.total_cmp(&b.1.t).then(a.1.triangle.cmp(&b.1.triangle))
+                    });
+                    hits.truncate(start + max_hits.min(hits.len() - start));
+                },
+            )
+        })?
+        .map_err(PyValueError::new_err)?;
+        let all = found.iter().enumerate().flat_map(|(c, hits)| {
+            hits.iter().map(move |&(k, h)| ((c * CHUNK) as i64 + i64::from(k), h))
+        });
+        let (mut ray, mut triangle) = (Vec::new(), Vec::new());
+        let (mut t, mut u, mut v) = (Vec::new(), Vec::new(), Vec::new());
+        for (r, h) in all {
+            ray.push(r);
+            triangle.push(i64::from(h.triangle));
+            t.push(h.t);
+            u.push(h.b1);
+            v.push(h.b2);
+        }
+        Ok((
+            ray.into_pyarray(py),
+            triangle.into_pyarray(py),
+            t.into_pyarray(py),
+            u.into_pyarray(py),
+            v.into_pyarray(py),
+        ))
     }
 
     /// Moves the vertices (the same count, the faces unchanged) and refits the BVH; rebuilds
