@@ -385,7 +385,7 @@ impl Mesh {
         let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
         let bvh = &self.bvh;
         // Each chunk's hits, in ray order; the chunks then joined in order.
-        let chunks = (rays.len() + CHUNK - 1) / CHUNK;
+        let chunks = rays.len().div_ceil(CHUNK);
         let mut found: Vec<Vec<(u32, Hit)>> = vec![Vec::new(); chunks];
         run(py, threads, || {
             rays.each(
