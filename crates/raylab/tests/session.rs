@@ -96,6 +96,14 @@ fn a_job_gives_the_pixels_of_its_parts_put_together_by_hand() {
         let expected = by_hand(&scene, &settings, &camera, region);
         let part = read_film(&part, region.width(), region.height());
         assert!(bits(&part) == bits(&expected), "{name}: the region's pixels differ");
+
+        // In memory (`render_film`, what the Python package calls): the same pixels.
+        let in_memory = job.render_film(&camera, &no_events).unwrap();
+        assert_eq!((in_memory.samples, in_memory.region), (2, region), "{name}");
+        assert!(bits(&in_memory.film) == bits(&expected), "{name}: the film's pixels differ");
+        job.region = None;
+        let in_memory = job.render_film(&camera, &no_events).unwrap();
+        assert!(bits(&in_memory.film) == bits(&whole), "{name}: the whole film differs");
     }
 }
 

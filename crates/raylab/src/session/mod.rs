@@ -41,7 +41,7 @@ use std::time::Duration;
 pub use camera_options::CameraOptions;
 pub use checkpoint::{Checkpoints, checkpoint_path};
 pub use identity::{CameraIdentity, IdentityError, RenderIdentity};
-pub use job::{Event, FrameOutcome, RenderJob, check_memory, frame_path};
+pub use job::{Event, FilmOutcome, FrameOutcome, RenderJob, check_memory, frame_path};
 pub use merge::{MergeReport, merge_parts};
 pub use summary::FrameSummary;
 

@@ -6,6 +6,10 @@ use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+mod frames;
+
+pub use frames::frame_path;
+
 use super::checkpoint::{Checkpoints, channels_of, checkpoint_path, resume_from};
 use super::{RenderIdentity, ResolvedSettings, SessionError};
 use crate::bvh::{Bvh, SceneBvh};
@@ -72,6 +76,34 @@ pub struct FrameOutcome {
     pub interrupted: bool,
     /// The checkpoint, where checkpoints are written (after an interrupt, the one to resume).
     pub checkpoint: Option<PathBuf>,
+}
+
+/// What [`RenderJob::passes`] did.
+struct Passes {
+    interrupted: bool,
+    checkpoint_time: Duration,
+    elapsed: Duration,
+    /// Samples the integrator itself discarded.
+    base_discarded: u64,
+}
+
+/// What rendering a frame into memory did ([`RenderJob::render_film`]).
+#[derive(Debug)]
+pub struct FilmOutcome {
+    /// The picture (the mean of the samples) of the region, row by row.
+    pub film: Film,
+    /// The AOV layers ([`RenderJob::aovs`]), in order, of the region.
+    pub layers: Vec<Film>,
+    /// The part of the image rendered.
+    pub region: Region,
+    /// Samples per pixel reached.
+    pub samples: u32,
+    /// Samples that were not finite (NaN or infinite) and count as black.
+    pub discarded: u64,
+    /// The time the passes took.
+    pub elapsed: Duration,
+    /// Whether the stop flag ended it early.
+    pub interrupted: bool,
 }
 
 /// A scene ready to render: see the module documentation of [`crate::session`].
@@ -259,7 +291,6 @@ impl<'s> RenderJob<'s> {
         let (width, height) = (camera.width, camera.height);
         self.check_output(output, (width, height))?;
         self.accel()?;
-        let accel = self.accel.get().expect("built");
         let (scene, settings, region) = (self.scene, self.settings, self.region((width, height)));
         let identity = self.identity(camera);
         let header = PartHeader {
@@ -302,6 +333,94 @@ impl<'s> RenderJob<'s> {
             _ => None,
         };
 
+        let mut accumulator = match resume {
+            Some(part) => resume_from(part, &header, &self.aovs, settings, events)?,
+            None => {
+                let mut accumulator = Accumulator::for_region(width, height, region)?;
+                accumulator.settings = settings.samples;
+                accumulator.with_layers(self.aovs.len(), None)?
+            }
+        };
+        let first_sample = accumulator.samples();
+        // A checkpoint that cannot be written is reported, and the render goes on: its work is
+        // not thrown away for want of a checkpoint.
+        let write_checkpoint = |accumulator: &Accumulator, path: &Path| -> Duration {
+            let start = Instant::now();
+            let state = PartHeader {
+                kind: PartKind::Checkpoint,
+                samples: accumulator.samples(),
+                ..header.clone()
+            };
+            let channels = channels_of(accumulator.sums(), accumulator.layer_sums(), &self.aovs);
+            if let Err(error) =
+                parts::write_exr(path, (width, height), region, channels, Some(&state))
+            {
+                events(Event::CheckpointNotWritten(&error));
+            }
+            start.elapsed()
+        };
+        let Passes { interrupted, checkpoint_time, elapsed, base_discarded } =
+            self.passes(camera, &mut accumulator, checkpoint.as_ref(), &write_checkpoint, events);
+        // The work so far is kept first: on a pre-empted node the time left may be short.
+        if interrupted && let Some((path, _)) = &checkpoint {
+            write_checkpoint(&accumulator, path);
+        }
+        let samples = accumulator.samples();
+        if samples == 0 {
+            events(Event::Finished);
+            return Err(SessionError::NothingRendered);
+        }
+        let film = accumulator.mean()?;
+        let layers = (0..self.aovs.len())
+            .map(|k| accumulator.layer_mean(k))
+            .collect::<Result<Vec<_>, _>>()?;
+        events(Event::Finished);
+
+        if image_io::check_writable(output)? == ImageFormat::Exr {
+            let header = PartHeader { samples, command: None, ..header.clone() };
+            let channels = channels_of(&film, &layers, &self.aovs);
+            parts::write_exr(output, (width, height), region, channels, Some(&header))?;
+        } else {
+            image_io::save_film(output, &film, &self.display())?;
+        }
+        if !interrupted
+            && let Some((path, _)) = &checkpoint
+            && path.exists()
+        {
+            std::fs::remove_file(path).map_err(|source| ImageIoError::Io {
+                action: "delete the finished render's checkpoint",
+                path: path.clone(),
+                source,
+            })?;
+        }
+        Ok(FrameOutcome {
+            output: output.to_path_buf(),
+            camera: *camera,
+            film: Some(film),
+            samples,
+            first_sample,
+            discarded: base_discarded + accumulator.discarded_samples(),
+            elapsed,
+            checkpoint_time,
+            interrupted,
+            checkpoint: checkpoint.map(|(path, _)| path),
+        })
+    }
+
+    /// The passes of a frame into `accumulator`, from the samples it holds to the settings'
+    /// count (or the stop flag, or the time limit), with checkpoints to `checkpoint` (its path
+    /// and how often) written by `write_checkpoint`.
+    fn passes(
+        &self,
+        camera: &Camera,
+        accumulator: &mut Accumulator,
+        checkpoint: Option<&(PathBuf, Duration)>,
+        write_checkpoint: &(dyn Fn(&Accumulator, &Path) -> Duration + Sync),
+        events: &(dyn Fn(Event) + Sync),
+    ) -> Passes {
+        let accel = self.accel.get().expect("the BVH is built before the passes");
+        let (scene, settings) = (self.scene, self.settings);
+        let region = accumulator.region();
         // The integrator, with its layers.
         let lab = Lab::new(scene, accel, settings.stage).for_camera(camera);
         let (wavefront, scalar, aov);
@@ -323,14 +442,6 @@ impl<'s> RenderJob<'s> {
         let with_layers = WithAovs::new(base, scene, accel, &self.aovs);
         let integrator: &dyn Integrator = if self.aovs.is_empty() { base } else { &with_layers };
 
-        let mut accumulator = match resume {
-            Some(part) => resume_from(part, &header, &self.aovs, settings, events)?,
-            None => {
-                let mut accumulator = Accumulator::for_region(width, height, region)?;
-                accumulator.settings = settings.samples;
-                accumulator.with_layers(self.aovs.len(), None)?
-            }
-        };
         let first_sample = accumulator.samples();
         let passes = settings.spp.saturating_sub(first_sample) as u64;
         events(Event::Started {
@@ -341,23 +452,6 @@ impl<'s> RenderJob<'s> {
         let start = Instant::now();
         let mut last_checkpoint = Instant::now();
         let mut checkpoint_time = Duration::ZERO;
-        // A checkpoint that cannot be written is reported, and the render goes on: its work is
-        // not thrown away for want of a checkpoint.
-        let write_checkpoint = |accumulator: &Accumulator, path: &Path| -> Duration {
-            let start = Instant::now();
-            let state = PartHeader {
-                kind: PartKind::Checkpoint,
-                samples: accumulator.samples(),
-                ..header.clone()
-            };
-            let channels = channels_of(accumulator.sums(), accumulator.layer_sums(), &self.aovs);
-            if let Err(error) =
-                parts::write_exr(path, (width, height), region, channels, Some(&state))
-            {
-                events(Event::CheckpointNotWritten(&error));
-            }
-            start.elapsed()
-        };
         let mut interrupted = false;
         // Passes go in groups, each pixel's samples side by side (the same pixels, faster:
         // `Accumulator::add_samples_with_progress`): as many as take about a quarter of a
@@ -384,137 +478,53 @@ impl<'s> RenderJob<'s> {
                     && last_checkpoint.elapsed() >= *every
                     && accumulator.samples() < settings.spp
                 {
-                    checkpoint_time += write_checkpoint(&accumulator, path);
+                    checkpoint_time += write_checkpoint(accumulator, path);
                     last_checkpoint = Instant::now();
                 }
             }
         });
         interrupted |= self.stopped();
-        // The work so far is kept first: on a pre-empted node the time left may be short.
-        if interrupted && let Some((path, _)) = &checkpoint {
-            write_checkpoint(&accumulator, path);
+        Passes {
+            interrupted,
+            checkpoint_time,
+            elapsed: start.elapsed(),
+            base_discarded: base.discarded_samples(),
         }
+    }
+
+    /// Renders one frame through `camera` into memory, as [`render_frame`](Self::render_frame)
+    /// renders it into a file (the same pixels, for the job's region), without checkpoints.
+    /// With the stop flag set, it stops between passes and returns what it has
+    /// ([`FilmOutcome::interrupted`]).
+    pub fn render_film(
+        &mut self,
+        camera: &Camera,
+        events: &(dyn Fn(Event) + Sync),
+    ) -> Result<FilmOutcome, SessionError> {
+        self.accel()?;
+        let region = self.region((camera.width, camera.height));
+        let mut accumulator = Accumulator::for_region(camera.width, camera.height, region)?;
+        accumulator.settings = self.settings.samples;
+        let mut accumulator = accumulator.with_layers(self.aovs.len(), None)?;
+        let no_checkpoint = |_: &Accumulator, _: &Path| Duration::ZERO;
+        let passes = self.passes(camera, &mut accumulator, None, &no_checkpoint, events);
         let samples = accumulator.samples();
+        events(Event::Finished);
         if samples == 0 {
-            events(Event::Finished);
             return Err(SessionError::NothingRendered);
         }
-        let film = accumulator.mean()?;
-        let layers = (0..self.aovs.len())
-            .map(|k| accumulator.layer_mean(k))
-            .collect::<Result<Vec<_>, _>>()?;
-        let elapsed = start.elapsed();
-        events(Event::Finished);
-
-        if image_io::check_writable(output)? == ImageFormat::Exr {
-            let header = PartHeader { samples, command: None, ..header.clone() };
-            let channels = channels_of(&film, &layers, &self.aovs);
-            parts::write_exr(output, (width, height), region, channels, Some(&header))?;
-        } else {
-            image_io::save_film(output, &film, &self.display())?;
-        }
-        if !interrupted
-            && let Some((path, _)) = &checkpoint
-            && path.exists()
-        {
-            std::fs::remove_file(path).map_err(|source| ImageIoError::Io {
-                action: "delete the finished render's checkpoint",
-                path: path.clone(),
-                source,
-            })?;
-        }
-        Ok(FrameOutcome {
-            output: output.to_path_buf(),
-            camera: *camera,
-            film: Some(film),
+        Ok(FilmOutcome {
+            film: accumulator.mean()?,
+            layers: (0..self.aovs.len())
+                .map(|k| accumulator.layer_mean(k))
+                .collect::<Result<Vec<_>, _>>()?,
+            region,
             samples,
-            first_sample,
-            discarded: base.discarded_samples() + accumulator.discarded_samples(),
-            elapsed,
-            checkpoint_time,
-            interrupted,
-            checkpoint: checkpoint.map(|(path, _)| path),
+            discarded: passes.base_discarded + accumulator.discarded_samples(),
+            elapsed: passes.elapsed,
+            interrupted: passes.interrupted,
         })
     }
-
-    /// Renders frames `first..=last` of the scene's animation, each through the camera
-    /// `camera_at` gives for it, to `pattern` with the frame's number in place (see
-    /// [`frame_path`]); `resume` goes on with the frame whose checkpoint it is. `each` gets
-    /// every frame's outcome. Returns the frame it stopped before, if the stop flag stopped it.
-    pub fn render_frames<E: From<SessionError>>(
-        &mut self,
-        (first, last): (u32, u32),
-        pattern: &Path,
-        camera_at: &dyn Fn(&mut Self, u32) -> Result<Camera, SessionError>,
-        mut resume: Option<Part>,
-        events: &(dyn Fn(Event) + Sync),
-        each: &mut dyn FnMut(&Self, FrameOutcome) -> Result<(), E>,
-    ) -> Result<Option<u32>, E> {
-        if self.scene.keyframes.is_empty() {
-            return Err(SessionError::Invalid(format!(
-                "frames are an animation's, and {} has no camera keyframes ([[keyframes]] in a \
-                 scene file, see docs/scene-format.md)",
-                self.scene.name
-            ))
-            .into());
-        }
-        frame_path(pattern, first)?;
-        for frame in first..=last {
-            if self.stopped() {
-                return Ok(Some(frame));
-            }
-            let output = frame_path(pattern, frame)?;
-            let camera = camera_at(self, frame)?;
-            let checkpoint = checkpoint_path(&output);
-            let outcome = self.render_frame(
-                &camera,
-                &output,
-                resume.take_if(|s| s.path == checkpoint),
-                events,
-            )?;
-            let interrupted = outcome.interrupted;
-            each(self, outcome)?;
-            if interrupted {
-                return Ok(Some(frame + 1));
-            }
-        }
-        Ok(None)
-    }
-}
-
-/// The file of frame `frame` of an animation written to `pattern`: its printf-style `%d` or
-/// `%0Nd` replaced by the frame's number (`out_%04d.exr`, frame 7: `out_0007.exr`).
-pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf, SessionError> {
-    let name = pattern.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let missing = || {
-        SessionError::Invalid(format!(
-            "an animation is written a file per frame: the output name needs the frame number's \
-             place, like out_%04d.exr, not {}",
-            pattern.display()
-        ))
-    };
-    let start = name.find('%').ok_or_else(missing)?;
-    let rest = &name[start + 1..];
-    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
-    if !rest[digits.len()..].starts_with('d') {
-        return Err(missing());
-    }
-    let width: usize = if digits.is_empty() { 0 } else { digits.parse().map_err(|_| missing())? };
-    if width > 10 {
-        return Err(SessionError::Invalid(format!(
-            "{}: at most 10 digits for the frame number",
-            pattern.display()
-        )));
-    }
-    let number = format!("{frame:0width$}");
-    let file = format!("{}{number}{}", &name[..start], &rest[digits.len() + 1..]);
-    if file.contains('%') {
-        return Err(SessionError::Invalid(format!(
-            "{}: one frame number place only",
-            pattern.display()
-        )));
-    }
-    Ok(pattern.with_file_name(file))
 }
 
 /// About how long a group of passes may take: a stop or a checkpoint waits for the group in
