@@ -17,13 +17,14 @@ The queries release the GIL and run on every core unless ``threads=`` says how m
 from collections import namedtuple
 import math
 import os
+import warnings
 
 import numpy as np
 
 from . import _raylab
 
 __version__ = _raylab.__version__
-__all__ = ["AllHits", "Hits", "Mesh", "load_mesh"]
+__all__ = ["AllHits", "Hits", "Mesh", "Render", "load_mesh", "render", "write_image"]
 
 # `Mesh.contains`' ray direction: no axis, diagonal or simple ratio, so that rays from points
 # on a grid do not run along a mesh's axis-aligned faces and edges.
@@ -241,3 +242,129 @@ def load_mesh(path):
     Raises OSError when the file cannot be read, ValueError when its content is malformed.
     """
     return Mesh(_raylab.load_mesh(os.fspath(path)), None)
+
+
+Render = namedtuple("Render", ["image", "aovs", "samples", "interrupted", "region"])
+Render.__doc__ = """A rendered picture.
+
+image: float32 (height, width, 3), linear radiance (the region's pixels for a region).
+aovs: {name: float32 (height, width, 3)} for the AOVs asked for ("albedo", "normals",
+    "depth"; depth is the same in all three channels).
+samples: the samples per pixel reached (fewer than asked if interrupted).
+interrupted: whether Ctrl-C or the progress callback stopped it.
+region: (x0, y0, x1, y1), the part of the image rendered.
+"""
+
+
+def _positive_int(value, name, allow_none=True):
+    if value is None and allow_none:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be a positive integer, not {value!r}")
+    if value < 1:
+        raise ValueError(f"{name} must be at least 1, not {value}")
+    return int(value)
+
+
+def _name(value, name):
+    if value is None or isinstance(value, str):
+        return value
+    raise TypeError(f"{name} must be a name (str), not {value!r}")
+
+
+def render(
+    scene="cornell",
+    *,
+    size=None,
+    spp=None,
+    integrator=None,
+    seed=None,
+    max_depth=None,
+    sampler=None,
+    region=None,
+    aovs=(),
+    threads=None,
+    progress=None,
+):
+    """Renders a scene into numpy arrays, exactly as `raylab render` renders it to a file
+    (the same pixels for the same scene, settings and seed).
+
+    scene: a built-in scene ("cornell", "terrain"), or a file: a TOML scene, or a model
+        (.obj, .ply, .gltf, .glb) that the camera frames.
+    size: (width, height) in pixels [the scene file's, else 500×500].
+    spp: samples per pixel [the scene file's; 16 for path tracing, 1 for the lab].
+    integrator: "path", "path-scalar", "lab", "albedo", "normals" or "depth" [the scene
+        file's; "path" for scenes with area lights, else "lab"].
+    seed: the seed of every random number [0]. max_depth: the longest path, as Mitsuba counts
+        it [unlimited]. sampler: "sobol", "multijitter", "stratified" or "independent".
+    region: (x0, y0, x1, y1), the part of the image to render (x1, y1 excluded).
+    aovs: names of extra layers from the same samples: "albedo", "normals", "depth".
+    threads: how many threads [every core].
+    progress: called as progress(fraction) about twenty times a second from the calling
+        thread, and with 1.0 at the end; an exception in it stops the render and is raised.
+
+    Ctrl-C stops the render at the end of the pass in flight: the picture so far is returned,
+    with `samples` telling how many it has and `interrupted` set.
+
+    Returns a `Render`. Raises OSError for a file that cannot be read, ValueError for a
+    malformed scene or a setting out of range.
+    """
+    if isinstance(scene, os.PathLike):
+        scene = os.fspath(scene)
+    if not isinstance(scene, str):
+        raise TypeError(f"scene must be a name or a path, not {scene!r}")
+    if size is not None:
+        if len(size) != 2:
+            raise ValueError(f"size must be (width, height), not {size!r}")
+        size = (_positive_int(size[0], "size's width"), _positive_int(size[1], "size's height"))
+    if region is not None:
+        region = tuple(region)
+        if len(region) != 4 or any(
+            isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0 for v in region
+        ):
+            raise ValueError(f"region must be (x0, y0, x1, y1), non-negative integers: {region!r}")
+        region = tuple(int(v) for v in region)
+    if isinstance(aovs, str):
+        aovs = [aovs]
+    aovs = [_name(a, "each AOV") for a in aovs]
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
+                             or seed < 0):
+        raise ValueError(f"seed must be a non-negative integer, not {seed!r}")
+    if max_depth is not None and (
+        isinstance(max_depth, bool) or not isinstance(max_depth, (int, np.integer)) or max_depth < 0
+    ):
+        raise ValueError(f"max_depth must be a non-negative integer, not {max_depth!r}")
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be callable, not {progress!r}")
+    image, layers, samples, interrupted, region, notes, _ = _raylab.render(
+        scene,
+        size=size,
+        spp=_positive_int(spp, "spp"),
+        integrator=_name(integrator, "integrator"),
+        seed=None if seed is None else int(seed),
+        max_depth=None if max_depth is None else int(max_depth),
+        sampler=_name(sampler, "sampler"),
+        region=region,
+        aovs=aovs,
+        threads=_threads(threads),
+        progress=progress,
+    )
+    for note in notes:
+        warnings.warn(note, stacklevel=2)
+    return Render(image, dict(layers), samples, interrupted, region)
+
+
+def write_image(path, image, *, exposure=0.0, tone_map="clamp", srgb=True):
+    """Writes an image, float (height, width, 3) or (height, width), in the format the file
+    name's extension says: .exr and .pfm keep linear float values; .png (and .ppm) are
+    8-bit, brightened by 2**exposure, tone-mapped ("clamp", "reinhard" or "aces") and
+    sRGB-encoded unless srgb=False. The file is replaced whole or not at all.
+    """
+    array = _real_array(image, "image", (None, None, None)[: np.ndim(image)], np.float32)
+    if array.ndim == 2:
+        array = np.repeat(array[:, :, None], 3, axis=2)
+    if array.ndim != 3 or array.shape[2] != 3:
+        raise ValueError(f"image must have shape (height, width, 3) or (height, width), "
+                         f"not {array.shape}")
+    _raylab.write_image(os.fspath(path), np.ascontiguousarray(array), exposure=float(exposure),
+                        tone_map=_name(tone_map, "tone_map"), srgb=bool(srgb))

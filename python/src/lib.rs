@@ -23,6 +23,8 @@ use rayon::prelude::*;
 
 use raylab::{Accelerator, Bvh, Hit, Ray};
 
+mod render;
+
 /// Rays per task: large enough that a task's set-up is nothing, small enough for two threads
 /// to share a million rays evenly.
 const CHUNK: usize = 2048;
@@ -482,6 +484,8 @@ fn load_mesh(py: Python<'_>, path: PathBuf) -> PyResult<Mesh> {
 fn _raylab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Mesh>()?;
     m.add_function(wrap_pyfunction!(load_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(render::write_image, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -177,6 +177,13 @@ fn pytest_suite() {
         build.arg("--release");
     }
     run(&mut build).expect("cargo build -p raylab-python");
+    // The command, to compare `raylab.render` with `raylab render`.
+    let mut build = Command::new(env!("CARGO"));
+    build.args(["build", "-q", "-p", "raylab-cli"]).current_dir(&package);
+    if !cfg!(debug_assertions) {
+        build.arg("--release");
+    }
+    run(&mut build).expect("cargo build -p raylab-cli");
     let staged = profile.join("python-package").join("raylab");
     std::fs::create_dir_all(&staged).expect("the staged package");
     for entry in std::fs::read_dir(package.join("raylab")).expect("python/raylab") {
@@ -201,6 +208,8 @@ fn pytest_suite() {
         .env("PYTHONPATH", staged.parent().expect("python-package"))
         .env("RAYLAB_RUST_ANSWERS", &answers)
         .env("RAYLAB_TEST_MESHES", &meshes)
+        .env("RAYLAB_BIN", profile.join("raylab"))
+        .env("RAYLAB_REPOSITORY", package.parent().expect("the repository"))
         .status()
         .expect("pytest runs");
     assert!(status.success(), "pytest failed ({status}): see its report above");
