@@ -179,6 +179,32 @@ impl<'a> Rays<'a> {
         Ok(Ray { origin: Vec3::from(o), direction: Vec3::from(d), t_min: t_min.max(0.0), t_max })
     }
 
+    /// Every ray's answer, in the rays' order: `answer` run on each in parallel, in chunks; the
+    /// first bad ray's message if there is one. (Tracing a large batch sorted by origin and
+    /// direction, for the cache, was measured slower: BENCHMARKS.md, "raylab for Python".)
+    fn answers<T: Send + Copy + Default>(
+        &self,
+        answer: impl Fn(&Ray) -> T + Sync,
+    ) -> Result<Vec<T>, String> {
+        let n = self.len();
+        let ray = |i: usize| {
+            let (o, d) = (self.origins[i], self.directions[i]);
+            Rays::ray(i, o, d, self.t_min.get(i), self.t_max.get(i))
+        };
+        // Every ray checked first, so that the error names the first bad one.
+        let bad = (0..n).into_par_iter().with_min_len(CHUNK).find_first(|&i| ray(i).is_err());
+        if let Some(i) = bad {
+            return Err(ray(i).expect_err("a bad ray"));
+        }
+        let mut out = vec![T::default(); n];
+        out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+            for (k, slot) in out.iter_mut().enumerate() {
+                *slot = answer(&ray(c * CHUNK + k).expect("checked"));
+            }
+        });
+        Ok(out)
+    }
+
     /// Runs `answer` on every ray and its index in parallel, in chunks, for `out`'s chunk
     /// (`CHUNK` slots of each output per chunk); the first bad ray's message if there is one
     /// (the outputs are then partly written).
@@ -286,28 +312,18 @@ impl Mesh {
         Bound<'py, PyArray1<f32>>,
     )> {
         let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
-        let n = rays.len();
-        // Zeroed memory is mapped lazily: each slot is written once, by its thread.
-        let (mut t, mut triangle) = (vec![0.0f32; n], vec![0i64; n]);
-        let (mut u, mut v) = (vec![0.0f32; n], vec![0.0f32; n]);
         let bvh = &self.bvh;
-        run(py, threads, || {
-            rays.each(
-                (&mut t[..], &mut triangle[..], &mut u[..], &mut v[..]),
-                |(t, triangle, u, v)| {
-                    let chunks = t.chunks_mut(CHUNK).zip(triangle.chunks_mut(CHUNK));
-                    let more = u.chunks_mut(CHUNK).zip(v.chunks_mut(CHUNK));
-                    chunks.zip(more).map(|((t, tr), (u, v))| (t, tr, u, v)).collect()
-                },
-                |(t, triangle, u, v), k, ray| {
-                    (t[k], triangle[k], u[k], v[k]) = match bvh.closest_hit(ray) {
-                        Some(h) => (h.t, i64::from(h.triangle), h.b1, h.b2),
-                        None => (f32::INFINITY, -1, 0.0, 0.0),
-                    };
-                },
-            )
+        let hits = run(py, threads, || {
+            rays.answers(|ray| match bvh.closest_hit(ray) {
+                Some(h) => (h.t, i64::from(h.triangle), h.b1, h.b2),
+                None => (f32::INFINITY, -1, 0.0, 0.0),
+            })
         })?
         .map_err(PyValueError::new_err)?;
+        let t = hits.iter().map(|h| h.0).collect::<Vec<_>>();
+        let triangle = hits.iter().map(|h| h.1).collect::<Vec<_>>();
+        let u = hits.iter().map(|h| h.2).collect::<Vec<_>>();
+        let v = hits.iter().map(|h| h.3).collect::<Vec<_>>();
         Ok((t.into_pyarray(py), triangle.into_pyarray(py), u.into_pyarray(py), v.into_pyarray(py)))
     }
 
@@ -323,16 +339,9 @@ impl Mesh {
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
-        let mut blocked = vec![false; rays.len()];
         let bvh = &self.bvh;
-        run(py, threads, || {
-            rays.each(
-                &mut blocked[..],
-                |b| b.chunks_mut(CHUNK).collect(),
-                |b, k, ray| b[k] = bvh.occluded(ray),
-            )
-        })?
-        .map_err(PyValueError::new_err)?;
+        let blocked = run(py, threads, || rays.answers(|ray| bvh.occluded(ray)))?
+            .map_err(PyValueError::new_err)?;
         Ok(blocked.into_pyarray(py))
     }
 
@@ -350,16 +359,9 @@ impl Mesh {
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
-        let mut counts = vec![0i64; rays.len()];
         let bvh = &self.bvh;
-        run(py, threads, || {
-            rays.each(
-                &mut counts[..],
-                |c| c.chunks_mut(CHUNK).collect(),
-                |c, k, ray| c[k] = i64::from(bvh.count_crossings(ray)),
-            )
-        })?
-        .map_err(PyValueError::new_err)?;
+        let counts = run(py, threads, || rays.answers(|ray| i64::from(bvh.count_crossings(ray))))?
+            .map_err(PyValueError::new_err)?;
         Ok(counts.into_pyarray(py))
     }
 
