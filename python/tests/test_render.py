@@ -4,6 +4,7 @@ import _thread
 import os
 import pathlib
 import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -127,3 +128,23 @@ def test_bad_input(call, error, words):
     with pytest.raises(error) as raised:
         call()
     assert words in str(raised.value)
+
+
+@pytest.mark.parametrize("example", ["depth_image.py", "visibility.py", "render_png.py"])
+def test_the_readmes_examples_run(tmp_path, example):
+    script = REPOSITORY / "python/examples" / example
+    environment = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [os.path.dirname(os.path.dirname(raylab.__file__)), os.environ.get("PYTHONPATH", "")]))
+    arguments = {
+        "depth_image.py": [str(REPOSITORY / "crates/raylab/tests/data/meshes/bunny.obj.gz"),
+                           str(tmp_path / "depth.png")],
+        "visibility.py": [str(REPOSITORY / "crates/raylab/tests/data/meshes/bunny.obj.gz")],
+        "render_png.py": [str(CORNELL), str(tmp_path / "render.png")],
+    }[example]
+    done = subprocess.run([sys.executable, str(script), *arguments], cwd=tmp_path,
+                          env=environment, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    if example == "depth_image.py":
+        assert (tmp_path / "depth.png").read_bytes()[:4] == b"\x89PNG"
+    if example == "render_png.py":
+        assert (tmp_path / "render_albedo.png").exists() and (tmp_path / "render.exr").exists()
