@@ -24,7 +24,9 @@ import numpy as np
 from . import _raylab
 
 __version__ = _raylab.__version__
-__all__ = ["AllHits", "Hits", "Mesh", "Render", "load_mesh", "render", "write_image"]
+__all__ = [
+    "AllHits", "Hits", "Mesh", "Render", "Scene", "load_mesh", "render", "write_image"
+]
 
 # `Mesh.contains`' ray direction: no axis, diagonal or simple ratio, so that rays from points
 # on a grid do not run along a mesh's axis-aligned faces and edges.
@@ -290,7 +292,7 @@ def render(
     (the same pixels for the same scene, settings and seed).
 
     scene: a built-in scene ("cornell", "terrain"), or a file: a TOML scene, or a model
-        (.obj, .ply, .gltf, .glb) that the camera frames.
+        (.obj, .ply, .gltf, .glb) that the camera frames; or a `raylab.Scene`.
     size: (width, height) in pixels [the scene file's, else 500×500].
     spp: samples per pixel [the scene file's; 16 for path tracing, 1 for the lab].
     integrator: "path", "path-scalar", "lab", "albedo", "normals" or "depth" [the scene
@@ -309,10 +311,13 @@ def render(
     Returns a `Render`. Raises OSError for a file that cannot be read, ValueError for a
     malformed scene or a setting out of range.
     """
+    text, meshes = None, []
+    if isinstance(scene, Scene):
+        text, meshes, scene = scene.to_toml(), scene._arrays(), "<python scene>"
     if isinstance(scene, os.PathLike):
         scene = os.fspath(scene)
     if not isinstance(scene, str):
-        raise TypeError(f"scene must be a name or a path, not {scene!r}")
+        raise TypeError(f"scene must be a name, a path or a raylab.Scene, not {scene!r}")
     if size is not None:
         if len(size) != 2:
             raise ValueError(f"size must be (width, height), not {size!r}")
@@ -348,6 +353,8 @@ def render(
         aovs=aovs,
         threads=_threads(threads),
         progress=progress,
+        scene_text=text,
+        meshes=meshes,
     )
     for note in notes:
         warnings.warn(note, stacklevel=2)
@@ -368,3 +375,6 @@ def write_image(path, image, *, exposure=0.0, tone_map="clamp", srgb=True):
                          f"not {array.shape}")
     _raylab.write_image(os.fspath(path), np.ascontiguousarray(array), exposure=float(exposure),
                         tone_map=_name(tone_map, "tone_map"), srgb=bool(srgb))
+
+
+from .scene import Scene  # noqa: E402  (it uses the checks above)

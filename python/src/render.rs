@@ -16,7 +16,11 @@ use numpy::{IntoPyArray, PyArray3, PyArrayMethods};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyValueError};
 use pyo3::prelude::*;
 
-use raylab::scene::{LoadOptions, OpenError, OpenedScene};
+use std::collections::BTreeMap;
+
+use numpy::PyReadonlyArray2;
+use raylab::LoadedMesh;
+use raylab::scene::{LoadOptions, OpenError, OpenedScene, parse_scene_with_meshes};
 use raylab::session::{CameraOptions, Event, FilmOutcome, RenderJob, RenderOptions};
 use raylab::session::{ResolvedSettings, SessionError};
 use raylab::settings::{AovKind, IntegratorKind};
@@ -45,6 +49,35 @@ fn open_error(e: OpenError) -> PyErr {
     }
 }
 
+/// A `raylab.Scene`'s meshes, by the names its text gives them.
+fn in_memory(
+    meshes: &[(String, PyReadonlyArray2<'_, f32>, PyReadonlyArray2<'_, u32>)],
+) -> PyResult<BTreeMap<String, LoadedMesh>> {
+    let mut out = BTreeMap::new();
+    for (name, vertices, faces) in meshes {
+        let (vertices, faces) = (vertices.as_array(), faces.as_array());
+        if vertices.ncols() != 3 || faces.ncols() != 3 {
+            return Err(PyValueError::new_err(format!(
+                "{name}: vertices and faces need 3 columns"
+            )));
+        }
+        let positions: Vec<glam::Vec3> =
+            vertices.rows().into_iter().map(|r| glam::Vec3::new(r[0], r[1], r[2])).collect();
+        let triangles: Vec<[u32; 3]> =
+            faces.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        if let Some(i) =
+            triangles.iter().position(|t| t.iter().any(|&v| v as usize >= positions.len()))
+        {
+            return Err(PyValueError::new_err(format!(
+                "{name}: faces[{i}] indexes past the vertices"
+            )));
+        }
+        let mesh = raylab::Mesh { name: name.clone(), positions, triangles, ..Default::default() };
+        out.insert(name.clone(), LoadedMesh { mesh, ..Default::default() });
+    }
+    Ok(out)
+}
+
 /// What [`render`] returns to the Python layer: the picture, the AOV layers by name, the
 /// samples per pixel reached, whether it was stopped, its region `(x0, y0, x1, y1)`, the
 /// scene's warnings and the samples that were not finite.
@@ -62,7 +95,8 @@ type Rendered<'py> = (
 #[pyfunction]
 #[pyo3(signature = (
     scene, size=None, spp=None, integrator=None, seed=None, max_depth=None, sampler=None,
-    region=None, aovs=Vec::new(), threads=None, progress=None
+    region=None, aovs=Vec::new(), threads=None, progress=None, scene_text=None,
+    meshes=Vec::new()
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
@@ -78,6 +112,8 @@ pub fn render<'py>(
     aovs: Vec<String>,
     threads: Option<usize>,
     progress: Option<Bound<'py, PyAny>>,
+    scene_text: Option<String>,
+    meshes: Vec<(String, PyReadonlyArray2<'py, f32>, PyReadonlyArray2<'py, u32>)>,
 ) -> PyResult<Rendered<'py>> {
     let options = RenderOptions {
         integrator: integrator
@@ -92,8 +128,19 @@ pub fn render<'py>(
     };
     let aovs = aovs.iter().map(|a| a.parse::<AovKind>()).collect::<Result<Vec<_>, _>>();
     let aovs = aovs.map_err(value_error)?;
-    let OpenedScene { scene, is_model } =
-        py.detach(|| Scene::open(&scene, &LoadOptions::default())).map_err(open_error)?;
+    let OpenedScene { scene, is_model } = match scene_text {
+        None => py.detach(|| Scene::open(&scene, &LoadOptions::default())).map_err(open_error)?,
+        Some(text) => {
+            let meshes = in_memory(&meshes)?;
+            // Files the scene names (textures, meshes) are found from the working folder.
+            let path = std::path::Path::new(".").join(&scene);
+            let options = LoadOptions::default();
+            let scene = py
+                .detach(|| parse_scene_with_meshes(&text, &path, &options, &meshes))
+                .map_err(value_error)?;
+            OpenedScene { scene, is_model: false }
+        }
+    };
     scene.validate().map_err(value_error)?;
     let settings = ResolvedSettings::resolve(&scene, &options);
     let cameras = CameraOptions { size, ..CameraOptions::default() };

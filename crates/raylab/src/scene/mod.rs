@@ -47,6 +47,7 @@ pub use open::{AUTO_FLATTEN_TRIANGLES, Instancing, LoadOptions, OpenError, Opene
 #[cfg(feature = "io")]
 pub use scene_file::{
     SceneFileError, load_scene_file, load_scene_file_with, parse_scene, parse_scene_with,
+    parse_scene_with_meshes,
 };
 
 use crate::accel::Hit;

@@ -75,6 +75,18 @@ pub fn parse_scene_with(
     path: &Path,
     options: &LoadOptions,
 ) -> std::result::Result<Scene, SceneFileError> {
+    parse_scene_with_meshes(text, path, options, &BTreeMap::new())
+}
+
+/// [`parse_scene_with`], where a `mesh` shape whose `file` is a key of `meshes` takes that mesh
+/// instead of reading a file: a scene made in a program (the Python package's `Scene`) whose
+/// meshes are already in memory.
+pub fn parse_scene_with_meshes(
+    text: &str,
+    path: &Path,
+    options: &LoadOptions,
+    meshes: &BTreeMap<String, LoadedMesh>,
+) -> std::result::Result<Scene, SceneFileError> {
     let at = |span: Option<Range<usize>>, message: String| {
         let offset = span.map_or(0, |s| s.start).min(text.len());
         let before = &text[..offset];
@@ -94,6 +106,7 @@ pub fn parse_scene_with(
         options,
         warnings: Default::default(),
         shared_meshes: Default::default(),
+        in_memory: meshes,
     };
     builder.build(document, path)
 }
@@ -193,6 +206,8 @@ struct Builder<'a, F> {
     /// paths as the scene names them: the uses still to come, and the mesh once read. Such a
     /// file is read and parsed once and kept until its last use; a file used once is not kept.
     shared_meshes: std::cell::RefCell<BTreeMap<PathBuf, (usize, Option<LoadedMesh>)>>,
+    /// Meshes given in memory, by the name a shape's `file` gives ([`parse_scene_with_meshes`]).
+    in_memory: &'a BTreeMap<String, LoadedMesh>,
 }
 
 type Result<T> = std::result::Result<T, SceneFileError>;
@@ -383,6 +398,9 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
     /// read on its first use and copied for the others (`shared_meshes`); its warnings are
     /// reported once.
     fn mesh_file(&self, file: &Spanned<String>) -> Result<LoadedMesh> {
+        if let Some(mesh) = self.in_memory.get(file.get_ref()) {
+            return Ok(mesh.clone());
+        }
         let path = self.folder.join(file.get_ref());
         let mut shared = self.shared_meshes.borrow_mut();
         if let Some((uses, kept)) = shared.get_mut(&path) {

@@ -483,3 +483,37 @@ fn a_file_placed_by_several_shapes_is_read_once() {
     let e = load_scene_file(&path).unwrap_err().to_string();
     assert!(e.contains("missing.toml:7:") && e.contains("gone.obj"), "{e}");
 }
+
+#[test]
+fn a_mesh_given_in_memory_takes_the_place_of_its_file() {
+    let triangle = crate::mesh::Mesh {
+        name: "tri".into(),
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        triangles: vec![[0, 1, 2]],
+        ..Default::default()
+    };
+    let loaded = LoadedMesh { mesh: triangle, ..Default::default() };
+    let meshes = BTreeMap::from([("<python mesh 0>".to_string(), loaded)]);
+    let text = r#"
+[materials.white]
+type = "diffuse"
+reflectance = [0.8, 0.8, 0.8]
+
+[[shapes]]
+type = "mesh"
+file = "<python mesh 0>"
+material = "white"
+translate = [0, 0, 2]
+
+[[shapes]]
+type = "mesh"
+file = "<python mesh 0>"
+material = "white"
+"#;
+    let path = Path::new("made-in-python.toml");
+    let scene = parse_scene_with_meshes(text, path, &LoadOptions::default(), &meshes).unwrap();
+    assert_eq!(scene.geometry.len(), 2);
+    // Without the mesh in memory, the name is a file that is not there.
+    let error = parse_scene(text, path).unwrap_err().to_string();
+    assert!(error.contains("<python mesh 0>"), "{error}");
+}
