@@ -179,6 +179,17 @@ impl<'a> Rays<'a> {
         Ok(Ray { origin: Vec3::from(o), direction: Vec3::from(d), t_min: t_min.max(0.0), t_max })
     }
 
+    /// Ray `i`, or what is wrong with it.
+    #[inline(always)]
+    fn get(&self, i: usize) -> Result<Ray, String> {
+        Rays::ray(i, self.origins[i], self.directions[i], self.t_min.get(i), self.t_max.get(i))
+    }
+
+    /// The message for the first bad ray (after a parallel pass found one, maybe a later one).
+    fn first_error(&self) -> String {
+        (0..self.len()).find_map(|i| self.get(i).err()).expect("a bad ray was found")
+    }
+
     /// Every ray's answer, in the rays' order: `answer` run on each in parallel, in chunks; the
     /// first bad ray's message if there is one. (Tracing a large batch sorted by origin and
     /// direction, for the cache, was measured slower: BENCHMARKS.md, "raylab for Python".)
@@ -186,22 +197,8 @@ impl<'a> Rays<'a> {
         &self,
         answer: impl Fn(&Ray) -> T + Sync,
     ) -> Result<Vec<T>, String> {
-        let n = self.len();
-        let ray = |i: usize| {
-            let (o, d) = (self.origins[i], self.directions[i]);
-            Rays::ray(i, o, d, self.t_min.get(i), self.t_max.get(i))
-        };
-        // Every ray checked first, so that the error names the first bad one.
-        let bad = (0..n).into_par_iter().with_min_len(CHUNK).find_first(|&i| ray(i).is_err());
-        if let Some(i) = bad {
-            return Err(ray(i).expect_err("a bad ray"));
-        }
-        let mut out = vec![T::default(); n];
-        out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
-            for (k, slot) in out.iter_mut().enumerate() {
-                *slot = answer(&ray(c * CHUNK + k).expect("checked"));
-            }
-        });
+        let mut out = vec![T::default(); self.len()];
+        self.each(&mut out[..], |o| o.chunks_mut(CHUNK).collect(), |o, k, ray| o[k] = answer(ray))?;
         Ok(out)
     }
 
@@ -214,7 +211,7 @@ impl<'a> Rays<'a> {
         split: impl Fn(O) -> Vec<O> + Sync,
         answer: impl Fn(&mut O, usize, &Ray) + Sync,
     ) -> Result<(), String> {
-        split(out).into_par_iter().enumerate().try_for_each(|(c, mut out)| {
+        let found = split(out).into_par_iter().enumerate().try_for_each(|(c, mut out)| {
             let start = c * CHUNK;
             let end = (start + CHUNK).min(self.len());
             let parts = self.origins[start..end].iter().zip(&self.directions[start..end]);
@@ -223,7 +220,9 @@ impl<'a> Rays<'a> {
                 answer(&mut out, k, &Rays::ray(start + k, o, d, t0, t1)?);
             }
             Ok(())
-        })
+        });
+        // The threads may have met a later bad ray first: name the first one.
+        found.map_err(|_: String| self.first_error())
     }
 }
 
@@ -313,17 +312,26 @@ impl Mesh {
     )> {
         let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
         let bvh = &self.bvh;
-        let hits = run(py, threads, || {
-            rays.answers(|ray| match bvh.closest_hit(ray) {
-                Some(h) => (h.t, i64::from(h.triangle), h.b1, h.b2),
-                None => (f32::INFINITY, -1, 0.0, 0.0),
-            })
+        let n = rays.len();
+        let (mut t, mut triangle) = (vec![0.0f32; n], vec![0i64; n]);
+        let (mut u, mut v) = (vec![0.0f32; n], vec![0.0f32; n]);
+        run(py, threads, || {
+            rays.each(
+                (&mut t[..], &mut triangle[..], &mut u[..], &mut v[..]),
+                |(t, triangle, u, v)| {
+                    let columns = t.chunks_mut(CHUNK).zip(triangle.chunks_mut(CHUNK));
+                    let more = u.chunks_mut(CHUNK).zip(v.chunks_mut(CHUNK));
+                    columns.zip(more).map(|((t, tr), (u, v))| (t, tr, u, v)).collect()
+                },
+                |(t, triangle, u, v), k, ray| {
+                    (t[k], triangle[k], u[k], v[k]) = match bvh.closest_hit(ray) {
+                        Some(h) => (h.t, i64::from(h.triangle), h.b1, h.b2),
+                        None => (f32::INFINITY, -1, 0.0, 0.0),
+                    };
+                },
+            )
         })?
         .map_err(PyValueError::new_err)?;
-        let t = hits.iter().map(|h| h.0).collect::<Vec<_>>();
-        let triangle = hits.iter().map(|h| h.1).collect::<Vec<_>>();
-        let u = hits.iter().map(|h| h.2).collect::<Vec<_>>();
-        let v = hits.iter().map(|h| h.3).collect::<Vec<_>>();
         Ok((t.into_pyarray(py), triangle.into_pyarray(py), u.into_pyarray(py), v.into_pyarray(py)))
     }
 
