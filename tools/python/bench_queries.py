@@ -4,7 +4,8 @@
         [--raylab-bin target/release/raylab]
 
 For each mesh: 1 M rays from a sphere around it toward random points in its box (seed 1), the
-median (min) wall time of `--reps` runs after a warm-up, in one process, one after another:
+median (min) wall time of `--reps` rounds after a warm-up round, in one process, each round
+running every query once in turn:
 - raylab `Mesh.intersect` (t, triangle, u, v) on 1 and 2 threads, and `Mesh.occluded`;
 - embreex `EmbreeScene.run(origins, directions, output=1)` (distances and ids; one thread:
   embreex traces rays one by one in a loop) and `run(...)` for the ids alone;
@@ -39,6 +40,19 @@ def timed(f, reps):
         f()
         times.append(time.perf_counter() - start)
     return statistics.median(times), min(times)
+
+
+def alternating(queries, reps):
+    """Each query's median (min) time over `reps` rounds, every round running each query once
+    in turn (after one warm-up round), so that a noisy minute touches them all alike."""
+    times = {name: [] for name in queries}
+    for round_ in range(reps + 1):
+        for name, query in queries.items():
+            start = time.perf_counter()
+            query()
+            if round_ > 0:
+                times[name].append(time.perf_counter() - start)
+    return {name: (statistics.median(t), min(t)) for name, t in times.items()}
 
 
 def random_rays(vertices, n, seed=1):
@@ -102,20 +116,18 @@ def main():
         build_embree = timed(embree_scene, 3)
         scene = embree_scene()
         origins, directions = random_rays(vertices, args.rays)
-        rows = {}
-        rows["raylab intersect, 1 thread"] = timed(
-            lambda: mesh.intersect(origins, directions, threads=1), args.reps)
-        rows["raylab intersect, 2 threads"] = timed(
-            lambda: mesh.intersect(origins, directions, threads=2), args.reps)
-        rows["raylab occluded, 1 thread"] = timed(
-            lambda: mesh.occluded(origins, directions, threads=1), args.reps)
-        rows["embreex run(output=1)"] = timed(
-            lambda: scene.run(origins, directions, output=1), args.reps)
-        rows["embreex run (ids)"] = timed(lambda: scene.run(origins, directions), args.reps)
         tm = trimesh.Trimesh(vertices, faces, process=False)
         intersector = trimesh.ray.ray_pyembree.RayMeshIntersector(tm)
-        rows["trimesh intersects_first (embreex)"] = timed(
-            lambda: intersector.intersects_first(origins, directions), args.reps)
+        queries = {
+            "raylab intersect, 1 thread": lambda: mesh.intersect(origins, directions, threads=1),
+            "raylab intersect, 2 threads": lambda: mesh.intersect(origins, directions, threads=2),
+            "raylab occluded, 1 thread": lambda: mesh.occluded(origins, directions, threads=1),
+            "embreex run(output=1)": lambda: scene.run(origins, directions, output=1),
+            "embreex run (ids)": lambda: scene.run(origins, directions),
+            "trimesh intersects_first (embreex)": lambda: intersector.intersects_first(
+                origins, directions),
+        }
+        rows = alternating(queries, args.reps)
         ours, theirs = mesh.intersect(origins, directions), scene.run(origins, directions)
         agree = ((ours.triangle >= 0) == (theirs >= 0)).mean()
         print(f"\n{path}: {n} triangles, loaded in {load:.2f} s; {args.rays} rays, "
