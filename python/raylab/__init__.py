@@ -167,7 +167,9 @@ class Mesh:
         return f"raylab.Mesh({len(self)} faces)"
 
     def intersect(self, origins, directions, t_min=0.0, t_max=math.inf, *, threads=None):
-        """The closest hit of each ray `origins[i] + t·directions[i]` with t_min < t < t_max.
+        """The closest hit of each ray `origins[i] + t·directions[i]` with t_min <= t < t_max
+        (and t above zero: a negative t_min counts as 0, and with t_min = 0 a hit must be
+        conservatively past the origin, so a ray does not hit the surface it starts on).
 
         origins, directions: (n, 3) real numbers; directions need not be unit length (t is
             in units of their length) but must be finite and non-zero.
@@ -180,16 +182,17 @@ class Mesh:
         return Hits(*self._mesh.intersect(*rays, threads=_threads(threads)))
 
     def occluded(self, origins, directions, t_min=0.0, t_max=math.inf, *, threads=None):
-        """Whether each ray hits anything with t_min < t < t_max: a bool array (n,).
+        """Whether each ray hits anything with t_min <= t < t_max: a bool array (n,).
 
-        The arguments are those of `intersect`; for a shadow ray toward a point, pass the
-        direction to it and t_max=1 (or a little less, to not count the point's own surface).
+        The arguments are those of `intersect`. For a shadow ray toward a point on a surface,
+        pass the direction to it and t_max a little below 1 (0.999), so that the point's own
+        surface does not block it.
         """
         rays = _rays(origins, directions, t_min, t_max)
         return self._mesh.occluded(*rays, threads=_threads(threads))
 
     def count_hits(self, origins, directions, t_min=0.0, t_max=math.inf, *, threads=None):
-        """How many times each ray crosses the surface with t_min < t < t_max: an int64
+        """How many times each ray crosses the surface with t_min <= t < t_max: an int64
         array (n,).
 
         Every hit counts, not only the closest. A ray through an edge or a vertex that faces

@@ -61,20 +61,29 @@ class RayMeshIntersector:
             raise ValueError("Ray origin and direction don't match!")
         if origins.ndim != 2 or origins.shape[1] != 3:
             raise ValueError(f"rays must have shape (n, 3), not {origins.shape}")
-        length = np.linalg.norm(directions, axis=1)
-        unit = directions / np.where(length > 0, length, 1.0)[:, None]
+        with np.errstate(invalid="ignore", over="ignore"):
+            length = np.linalg.norm(directions, axis=1)
+            unit = directions / np.where(length > 0, length, 1.0)[:, None]
         origin, mesh = self._scene()
-        return origins, unit, origins - origin, mesh
+        shifted = origins - origin
+        # As trimesh's intersectors answer them: a ray with a zero or non-finite direction or
+        # origin hits nothing (raylab.Mesh would refuse it).
+        bad = ~(np.isfinite(shifted).all(axis=1) & np.isfinite(unit).all(axis=1) & (length > 0))
+        t_max = np.where(bad, -1.0, np.inf).astype(np.float32)
+        if bad.any():
+            unit, shifted = unit.copy(), shifted.copy()
+            unit[bad], shifted[bad] = (0.0, 0.0, 1.0), 0.0
+        return origins, unit, shifted, mesh, t_max
 
     def intersects_first(self, ray_origins, ray_directions):
         """The index of the first face each ray hits, -1 for none: int64 (n,)."""
-        _, unit, shifted, mesh = self._rays(ray_origins, ray_directions)
-        return mesh.intersect(shifted, unit, threads=self.threads).triangle
+        _, unit, shifted, mesh, t_max = self._rays(ray_origins, ray_directions)
+        return mesh.intersect(shifted, unit, t_max=t_max, threads=self.threads).triangle
 
     def intersects_any(self, ray_origins, ray_directions):
         """Whether each ray hits the surface: bool (n,)."""
-        _, unit, shifted, mesh = self._rays(ray_origins, ray_directions)
-        return mesh.occluded(shifted, unit, threads=self.threads)
+        _, unit, shifted, mesh, t_max = self._rays(ray_origins, ray_directions)
+        return mesh.occluded(shifted, unit, t_max=t_max, threads=self.threads)
 
     def intersects_id(
         self,
@@ -87,13 +96,15 @@ class RayMeshIntersector:
         """The faces the rays hit: `(index_tri, index_ray)`, and the hit points as a third
         array (m, 3) if `return_locations`. With `multiple_hits`, every crossing of each ray
         (at most `max_hits`), else its first hit only."""
-        origins, unit, shifted, mesh = self._rays(ray_origins, ray_directions)
+        origins, unit, shifted, mesh, t_max = self._rays(ray_origins, ray_directions)
         if multiple_hits:
-            found = mesh.intersect_all(shifted, unit, max_hits=max_hits, threads=self.threads)
+            found = mesh.intersect_all(
+                shifted, unit, t_max=t_max, max_hits=max_hits, threads=self.threads
+            )
             index_ray, index_tri = found.ray, found.triangle
             u, v = found.u, found.v
         else:
-            hits = mesh.intersect(shifted, unit, threads=self.threads)
+            hits = mesh.intersect(shifted, unit, t_max=t_max, threads=self.threads)
             index_ray = np.flatnonzero(hits.triangle >= 0)
             index_tri = hits.triangle[index_ray]
             u, v = hits.u[index_ray], hits.v[index_ray]

@@ -187,7 +187,11 @@ impl<'a> Rays<'a> {
 
     /// The message for the first bad ray (after a parallel pass found one, maybe a later one).
     fn first_error(&self) -> String {
-        (0..self.len()).find_map(|i| self.get(i).err()).expect("a bad ray was found")
+        (0..self.len()).find_map(|i| self.get(i).err()).unwrap_or_else(|| {
+            "a ray was bad while it was traced but is not now: were the arrays changed by \
+             another thread during the query?"
+                .into()
+        })
     }
 
     /// Every ray's answer, in the rays' order: `answer` run on each in parallel, in chunks; the

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 use numpy::{IntoPyArray, PyArray3, PyArrayMethods};
-use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use std::collections::BTreeMap;
@@ -46,6 +46,15 @@ fn open_error(e: OpenError) -> PyErr {
             PyOSError::new_err(e.to_string())
         }
         _ => value_error(e),
+    }
+}
+
+/// Sets its flag when dropped: when the render thread ends, by returning or by a panic.
+struct SetOnDrop<'a>(&'a AtomicBool);
+
+impl Drop for SetOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
     }
 }
 
@@ -159,7 +168,9 @@ pub fn render<'py>(
     let mut interrupted_by_user = false;
     let outcome = std::thread::scope(|s| {
         let render = s.spawn(|| {
-            let result = (|| -> Result<FilmOutcome, SessionError> {
+            // `done` is set however the thread ends, a panic included, so the loop below ends.
+            let _done = SetOnDrop(&done);
+            (|| -> Result<FilmOutcome, SessionError> {
                 let mut job = RenderJob::new(&scene, settings, threads.unwrap_or(0))?;
                 job.aovs = aovs.clone();
                 job.stop_when(&stop);
@@ -170,9 +181,7 @@ pub fn render<'py>(
                 let first = scene.camera.or(scene.keyframes.first().map(|k| k.camera));
                 let camera = cameras.camera(first, &scene, is_model, job.accel()?)?;
                 job.render_film(&camera, &events)
-            })();
-            done.store(true, Ordering::Release);
-            result
+            })()
         });
         while !done.load(Ordering::Acquire) {
             py.detach(|| {
@@ -203,17 +212,31 @@ pub fn render<'py>(
                     rows_done.load(Ordering::Relaxed) as f64 / total as f64
                 };
                 if let Err(error) = callback.call1((fraction.min(1.0),)) {
-                    raised = Some(error);
+                    // Ctrl-C while the callback ran is Ctrl-C: the picture so far is kept.
+                    if error.is_instance_of::<PyKeyboardInterrupt>(py) {
+                        interrupted_by_user = true;
+                    } else {
+                        raised = Some(error);
+                    }
                     stop.store(true, Ordering::Relaxed);
                 }
             }
         }
-        render.join().expect("the render thread does not panic")
+        render.join()
     });
     if let Some(error) = raised {
         return Err(error);
     }
-    let outcome = outcome.map_err(value_error)?;
+    let outcome = match outcome {
+        Err(_) => return Err(PyRuntimeError::new_err("the render failed unexpectedly (a panic)")),
+        // Stopped before the first pass was done: there is no picture to return.
+        Ok(Err(SessionError::NothingRendered)) if interrupted_by_user => {
+            return Err(PyKeyboardInterrupt::new_err(
+                "the render was interrupted before its first pass",
+            ));
+        }
+        Ok(result) => result.map_err(value_error)?,
+    };
     if let Some(callback) = &progress
         && !outcome.interrupted
     {

@@ -70,9 +70,11 @@ def test_the_lab_scene_by_default():
 
 def test_progress_goes_up_to_one():
     seen = []
-    raylab.render(CORNELL, size=(64, 64), spp=64, progress=seen.append)
+    raylab.render(CORNELL, size=(128, 128), spp=96, threads=1, progress=seen.append)
     assert seen and seen[-1] == 1.0
     assert all(0 <= a <= b <= 1 for a, b in zip(seen, seen[1:]))
+    # A render of a second or more reports on its way, not only at the end.
+    assert any(0 < f < 1 for f in seen), seen
 
 
 def test_an_exception_in_the_callback_stops_the_render():

@@ -13,8 +13,6 @@ trimesh makes itself, and with raylab's intersector in place of Embree's. Not po
   started just outside, at the same scales.
 """
 
-import pathlib
-
 import numpy as np
 import pytest
 
@@ -157,4 +155,15 @@ def test_the_answers_are_the_meshs_own():
     mesh.apply_translation([0, 0, 1])
     after = mesh.ray.intersects_location(*ray)[0]
     assert np.allclose(after[:, 2], before[:, 2] + 1)
-    assert isinstance(pathlib.Path(MESHES), pathlib.Path)
+
+
+def test_rays_without_a_direction_hit_nothing():
+    # As trimesh's intersectors answer them, where raylab.Mesh refuses them.
+    mesh = with_raylab(trimesh.creation.box())
+    origins = np.array([[0, 0, -5.0], [0, 0, -5.0], [np.nan, 0, -5.0], [0, 0, -5.0]])
+    directions = np.array([[0, 0, 1.0], [0, 0, 0.0], [0, 0, 1.0], [np.inf, 0, 1.0]])
+    assert mesh.ray.intersects_first(origins, directions).tolist() == [mesh.ray.intersects_first(
+        origins[:1], directions[:1])[0], -1, -1, -1]
+    assert mesh.ray.intersects_any(origins, directions).tolist() == [True, False, False, False]
+    _, index_ray = mesh.ray.intersects_id(origins, directions)
+    assert set(index_ray.tolist()) == {0}

@@ -236,7 +236,12 @@ impl<'s> RenderJob<'s> {
                 output.display()
             )));
         }
-        // The sums and their mean, and each layer's.
+        self.check_film_memory(region)
+    }
+
+    /// Refuses a region whose films (the sums and their mean, and each layer's) need more
+    /// memory than the machine has available.
+    fn check_film_memory(&self, region: Region) -> Result<(), SessionError> {
         let films = 2 * (1 + self.aovs.len() as u64);
         let bytes = Film::bytes_needed(region.width(), region.height()).saturating_mul(films);
         check_memory(bytes, region.width(), region.height())
@@ -501,8 +506,9 @@ impl<'s> RenderJob<'s> {
         camera: &Camera,
         events: &(dyn Fn(Event) + Sync),
     ) -> Result<FilmOutcome, SessionError> {
-        self.accel()?;
         let region = self.region((camera.width, camera.height));
+        self.check_film_memory(region)?;
+        self.accel()?;
         let mut accumulator = Accumulator::for_region(camera.width, camera.height, region)?;
         accumulator.settings = self.settings.samples;
         let mut accumulator = accumulator.with_layers(self.aovs.len(), None)?;
