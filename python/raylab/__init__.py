@@ -50,6 +50,17 @@ float32 (m,), as in `Hits`. Sorted by ray, then t, then triangle.
 """
 
 
+def _positive_int(value, name):
+    """`value` as an int, checked to be a positive integer (None passes)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be a positive integer, not {value!r}")
+    if value < 1:
+        raise ValueError(f"{name} must be at least 1, not {value}")
+    return int(value)
+
+
 def _real_array(value, name, ndim_shape, dtype):
     """`value` as a C-contiguous array of `dtype`, checked to be real numbers of the shape
     described by `ndim_shape` (a tuple whose None entries are free)."""
@@ -111,9 +122,7 @@ def _threads(threads):
         return None
     if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
         raise TypeError(f"threads must be a positive integer or None, not {threads!r}")
-    if threads < 1:
-        raise ValueError(f"threads must be at least 1, not {threads}")
-    return int(threads)
+    return _positive_int(threads, "threads")
 
 
 def _rays(origins, directions, t_min, t_max):
@@ -179,7 +188,7 @@ class Mesh:
         Returns `Hits(t, triangle, u, v)`.
         """
         rays = _rays(origins, directions, t_min, t_max)
-        return Hits(*self._mesh.intersect(*rays, threads=_threads(threads)))
+        return Hits(*self._mesh.intersect(rays, threads=_threads(threads)))
 
     def occluded(self, origins, directions, t_min=0.0, t_max=math.inf, *, threads=None):
         """Whether each ray hits anything with t_min <= t < t_max: a bool array (n,).
@@ -189,7 +198,7 @@ class Mesh:
         surface does not block it.
         """
         rays = _rays(origins, directions, t_min, t_max)
-        return self._mesh.occluded(*rays, threads=_threads(threads))
+        return self._mesh.occluded(rays, threads=_threads(threads))
 
     def count_hits(self, origins, directions, t_min=0.0, t_max=math.inf, *, threads=None):
         """How many times each ray crosses the surface with t_min <= t < t_max: an int64
@@ -201,7 +210,7 @@ class Mesh:
         tells inside from outside. The arguments are those of `intersect`.
         """
         rays = _rays(origins, directions, t_min, t_max)
-        return self._mesh.count_hits(*rays, threads=_threads(threads))
+        return self._mesh.count_hits(rays, threads=_threads(threads))
 
     def intersect_all(
         self, origins, directions, t_min=0.0, t_max=math.inf, *, max_hits=None, threads=None
@@ -219,7 +228,7 @@ class Mesh:
             raise TypeError(f"max_hits must be a non-negative integer or None, not {max_hits!r}")
         elif max_hits < 0:
             raise ValueError(f"max_hits must be at least 0, not {max_hits}")
-        found = self._mesh.all_hits(*rays, int(max_hits), threads=_threads(threads))
+        found = self._mesh.all_hits(rays, int(max_hits), threads=_threads(threads))
         return AllHits(*found)
 
     def contains(self, points, *, threads=None):
@@ -259,16 +268,6 @@ samples: the samples per pixel reached (fewer than asked if interrupted).
 interrupted: whether Ctrl-C or the progress callback stopped it.
 region: (x0, y0, x1, y1), the part of the image rendered.
 """
-
-
-def _positive_int(value, name, allow_none=True):
-    if value is None and allow_none:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be a positive integer, not {value!r}")
-    if value < 1:
-        raise ValueError(f"{name} must be at least 1, not {value}")
-    return int(value)
 
 
 def _name(value, name):

@@ -110,6 +110,11 @@ impl Limits<'_> {
     }
 }
 
+/// A query's rays as the Python layer passes them: one tuple `(origins, directions, t_min,
+/// t_max)`, the arrays C-contiguous `float32`.
+#[derive(FromPyObject)]
+struct RayArgs<'py>(PyReadonlyArray2<'py, f32>, PyReadonlyArray2<'py, f32>, Limit<'py>, Limit<'py>);
+
 /// The rays of a query, checked: finite origins, finite non-zero directions, limits that are
 /// not NaN.
 struct Rays<'a> {
@@ -120,12 +125,7 @@ struct Rays<'a> {
 }
 
 impl<'a> Rays<'a> {
-    fn new(
-        origins: &'a PyReadonlyArray2<'_, f32>,
-        directions: &'a PyReadonlyArray2<'_, f32>,
-        t_min: &'a Limit<'_>,
-        t_max: &'a Limit<'_>,
-    ) -> PyResult<Rays<'a>> {
+    fn new(RayArgs(origins, directions, t_min, t_max): &'a RayArgs<'_>) -> PyResult<Rays<'a>> {
         let origins = rows(origins, "origins")?;
         let n = origins.len();
         let limits = |limit: &'a Limit<'_>, name: &str| -> PyResult<Limits<'a>> {
@@ -298,15 +298,12 @@ impl Mesh {
     }
 
     /// The closest hits: `(t, triangle, u, v)`, `t = inf` and `triangle = -1` for a miss.
-    #[pyo3(signature = (origins, directions, t_min, t_max, threads=None))]
+    #[pyo3(signature = (rays, threads=None))]
     #[allow(clippy::type_complexity)]
     fn intersect<'py>(
         &self,
         py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f32>,
-        directions: PyReadonlyArray2<'py, f32>,
-        t_min: Limit<'py>,
-        t_max: Limit<'py>,
+        rays: RayArgs<'py>,
         threads: Option<usize>,
     ) -> PyResult<(
         Bound<'py, PyArray1<f32>>,
@@ -314,7 +311,7 @@ impl Mesh {
         Bound<'py, PyArray1<f32>>,
         Bound<'py, PyArray1<f32>>,
     )> {
-        let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
+        let rays = Rays::new(&rays)?;
         let bvh = &self.bvh;
         let n = rays.len();
         let (mut t, mut triangle) = (vec![0.0f32; n], vec![0i64; n]);
@@ -340,17 +337,14 @@ impl Mesh {
     }
 
     /// Whether anything is hit between `t_min` and `t_max`, per ray.
-    #[pyo3(signature = (origins, directions, t_min, t_max, threads=None))]
+    #[pyo3(signature = (rays, threads=None))]
     fn occluded<'py>(
         &self,
         py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f32>,
-        directions: PyReadonlyArray2<'py, f32>,
-        t_min: Limit<'py>,
-        t_max: Limit<'py>,
+        rays: RayArgs<'py>,
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
+        let rays = Rays::new(&rays)?;
         let bvh = &self.bvh;
         let blocked = run(py, threads, || rays.answers(|ray| bvh.occluded(ray)))?
             .map_err(PyValueError::new_err)?;
@@ -360,17 +354,14 @@ impl Mesh {
     /// How often each ray crosses the surface between `t_min` and `t_max` (every hit, not
     /// only the closest, a shared edge or vertex counted once where the surface goes on
     /// across it: `Bvh::crossings`).
-    #[pyo3(signature = (origins, directions, t_min, t_max, threads=None))]
+    #[pyo3(signature = (rays, threads=None))]
     fn count_hits<'py>(
         &self,
         py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f32>,
-        directions: PyReadonlyArray2<'py, f32>,
-        t_min: Limit<'py>,
-        t_max: Limit<'py>,
+        rays: RayArgs<'py>,
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
+        let rays = Rays::new(&rays)?;
         let bvh = &self.bvh;
         let counts = run(py, threads, || rays.answers(|ray| i64::from(bvh.count_crossings(ray))))?
             .map_err(PyValueError::new_err)?;
@@ -380,15 +371,12 @@ impl Mesh {
     /// Every crossing of every ray (as [`count_hits`](Self::count_hits) counts them), at most
     /// `max_hits` per ray (its nearest): `(ray, triangle, t, u, v)`, sorted by ray, then `t`,
     /// then triangle.
-    #[pyo3(signature = (origins, directions, t_min, t_max, max_hits, threads=None))]
+    #[pyo3(signature = (rays, max_hits, threads=None))]
     #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn all_hits<'py>(
         &self,
         py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f32>,
-        directions: PyReadonlyArray2<'py, f32>,
-        t_min: Limit<'py>,
-        t_max: Limit<'py>,
+        rays: RayArgs<'py>,
         max_hits: usize,
         threads: Option<usize>,
     ) -> PyResult<(
@@ -398,7 +386,7 @@ impl Mesh {
         Bound<'py, PyArray1<f32>>,
         Bound<'py, PyArray1<f32>>,
     )> {
-        let rays = Rays::new(&origins, &directions, &t_min, &t_max)?;
+        let rays = Rays::new(&rays)?;
         let bvh = &self.bvh;
         // Each chunk's hits, in ray order; the chunks then joined in order.
         let chunks = rays.len().div_ceil(CHUNK);
