@@ -71,16 +71,12 @@ fn venv(python: &str, target: &Path, requirements: &Path) -> Result<PathBuf, Str
     Ok(venv_python)
 }
 
-/// A small deterministic generator (SplitMix64): the same rays on every machine.
-struct Numbers(u64);
+/// Deterministic numbers (the library's PCG32): the same rays on every machine.
+struct Numbers(raylab::sampling::Pcg32);
 
 impl Numbers {
     fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        self.0.next_f32()
     }
 
     fn vec(&mut self) -> Vec3 {
@@ -110,7 +106,7 @@ fn rust_answers(mesh_path: &Path, dir: &Path) {
             (lo.min(p), hi.max(p))
         });
     let size = hi - lo;
-    let mut numbers = Numbers(27);
+    let mut numbers = Numbers(raylab::sampling::Pcg32::new(27, 0));
     let mut rays = Vec::new();
     for i in 0..20_000 {
         let target = lo + numbers.vec() * size;

@@ -18,14 +18,9 @@ REPOSITORY = pathlib.Path(
 CORNELL = REPOSITORY / "scenes/cornell-mitsuba.toml"
 
 
-def read_pfm(path):
-    data = pathlib.Path(path).read_bytes()
-    header, rest = data.split(b"\n", 3)[:3], data.split(b"\n", 3)[3]
-    assert header[0] == b"PF"
-    width, height = map(int, header[1].split())
-    assert float(header[2]) < 0, "little-endian"
-    pixels = np.frombuffer(rest, dtype="<f4").reshape(height, width, 3)
-    return pixels[::-1]  # rows from the bottom up
+# The repository's PFM reader (rows from the top, as raylab's arrays have them).
+sys.path.insert(0, str(REPOSITORY / "tools/mitsuba"))
+from pfm import read_pfm  # noqa: E402
 
 
 @pytest.mark.skipif("RAYLAB_BIN" not in os.environ, reason="needs the raylab command")

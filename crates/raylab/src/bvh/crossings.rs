@@ -15,7 +15,7 @@
 use super::Bvh;
 use super::bounds::{FAR_SCALE, RayBoxTest};
 use super::node::{Child, EMPTY, WIDTH, decode};
-use super::traverse::can_hit;
+use super::traverse::{Stack, can_hit};
 use crate::accel::Hit;
 use crate::ray::Ray;
 use crate::triangle::WatertightRay;
@@ -34,7 +34,9 @@ impl Bvh {
         let margin = box_ray.margin(&wide.root);
         let triangle_ray = WatertightRay::new(ray);
         let limit = ray.t_max * FAR_SCALE;
-        let mut stack = vec![0u32];
+        // The single-ray traversals' stack, on the call stack: no allocation per ray.
+        let mut stack = Stack::<u32>::new();
+        stack.push(0);
         while let Some(child) = stack.pop() {
             match decode(child) {
                 Child::Node(index) => {
@@ -130,13 +132,10 @@ mod tests {
         ids
     }
 
-    /// A small deterministic stream of numbers in [0, 1).
+    /// A deterministic stream of numbers in [0, 1).
     fn numbers(seed: u64) -> impl FnMut() -> f32 {
-        let mut state = seed;
-        move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        }
+        let mut pcg = crate::sampling::Pcg32::new(seed, 0);
+        move || pcg.next_f32()
     }
 
     #[test]
