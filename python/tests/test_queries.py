@@ -187,3 +187,66 @@ def test_contains_a_closed_cube_and_the_bunny(bunny):
     np.testing.assert_array_equal(parity[0], parity[2])
     np.testing.assert_array_equal(bunny.contains(points), parity[0] == 1)
     assert 0.05 < bunny.contains(points).mean() < 0.95
+
+
+def bumpy_sphere(n):
+    """A closed sphere of `2·n·(n − 1)` triangles with bumps: a tree of several megabytes."""
+    theta = np.linspace(0, np.pi, n + 1)[1:-1]
+    phi = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    th, ph = np.meshgrid(theta, phi, indexing="ij")
+    r = 1 + 0.05 * np.sin(7 * th) * np.cos(11 * ph)
+    ring = np.stack([r * np.sin(th) * np.cos(ph), r * np.sin(th) * np.sin(ph), r * np.cos(th)], -1)
+    vertices = np.concatenate([[[0, 0, 1]], ring.reshape(-1, 3), [[0, 0, -1]]])
+    rows, cols = n - 1, n
+    at = lambda i, j: 1 + i * cols + j % cols  # noqa: E731
+    faces = [[0, at(0, j), at(0, j + 1)] for j in range(cols)]
+    faces += [[len(vertices) - 1, at(rows - 1, j + 1), at(rows - 1, j)] for j in range(cols)]
+    for i in range(rows - 1):
+        for j in range(cols):
+            faces += [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
+    return raylab.Mesh(vertices, faces)
+
+
+def test_a_large_batch_in_the_trees_order_gives_every_rays_own_answer():
+    """A large batch on a large tree is traced sorted by where its rays run through the tree
+    (`raylab::bvh::order`); small batches are traced as given, and those are the Rust library's
+    answers (the test above). Both must give every ray the same answer, bit for bit."""
+    from raylab import _raylab
+
+    mesh = bumpy_sphere(300)
+    assert mesh.bvh_bytes >= _raylab.ORDER_MIN_TREE_BYTES, "the tree must be large enough"
+    n = 3 * _raylab.ORDER_MIN_RAYS
+    origins, directions = random_rays(mesh, n, seed=9)
+    # Some rays start inside the sphere, some are segments that end early.
+    origins[::7] *= np.float32(0.01)
+    t_max = np.where(np.arange(n) % 5 == 0, np.float32(0.8), np.float32(np.inf)).astype(np.float32)
+    small = _raylab.ORDER_MIN_RAYS // 2
+
+    def in_small_batches(query):
+        parts = [query(origins[s : s + small], directions[s : s + small], t_max=t_max[s : s + small])
+                 for s in range(0, n, small)]
+        return [np.concatenate(p) for p in zip(*parts)] if isinstance(parts[0], tuple) else np.concatenate(parts)
+
+    for threads in (1, 2):
+        whole = mesh.intersect(origins, directions, t_max=t_max, threads=threads)
+        given = in_small_batches(lambda o, d, t_max: mesh.intersect(o, d, t_max=t_max, threads=threads))
+        for name, a, b in zip(("t", "triangle", "u", "v"), whole, given):
+            np.testing.assert_array_equal(a.view(np.uint32) if a.dtype == np.float32 else a,
+                                          b.view(np.uint32) if b.dtype == np.float32 else b, err_msg=name)
+        assert 0.3 < (whole.triangle >= 0).mean() < 0.95
+        for query in (mesh.occluded, mesh.count_hits):
+            whole = query(origins, directions, t_max=t_max, threads=threads)
+            given = in_small_batches(lambda o, d, t_max: query(o, d, t_max=t_max, threads=threads))
+            np.testing.assert_array_equal(whole, given)
+    # Inside or outside, for points inside the sphere and beyond it.
+    points = np.random.default_rng(10).uniform(-1.2, 1.2, (n, 3))
+    inside = np.linalg.norm(points, axis=1) < 0.9
+    outside = np.linalg.norm(points, axis=1) > 1.1
+    contained = mesh.contains(points)
+    assert contained[inside].all() and not contained[outside].any()
+    # A bad ray in such a batch is named as in any other: the first one.
+    directions[2 * small + 1] = np.nan
+    directions[small + 3] = 0
+    for query in (mesh.intersect, mesh.occluded, mesh.count_hits):
+        with pytest.raises(ValueError, match=rf"directions\[{small + 3}\]"):
+            query(origins, directions, threads=2)
