@@ -37,12 +37,12 @@ const CHUNK: usize = 2048;
 /// dragon, one thread, random rays: 16k rays took 625 ns each in that order against 728 as
 /// given, 256k rays 505 against 717.)
 const ORDER_MIN_RAYS: usize = 1 << 14;
-/// ... on trees of at least this many bytes. Smaller trees lose: the order's own cost (the keys,
-/// the sort, and the answers put back: about 27 ms for 1 M rays on one thread, 23 on two) is
-/// more than the cache gives back. 1 M random rays, median of seven alternating runs, given
-/// order against sorted: the teapot 0.150 against 0.177 s, the bunny (a 2.4 MB tree) 0.279
-/// against 0.299 s and on two threads 0.134 against 0.163 s; `dragon_res2` (6.2 MB) 0.396
-/// against 0.313 s; the dragon (28 MB) 0.761 against 0.457 s.
+/// ... on trees of at least this many bytes. On smaller ones the order's own cost (the keys,
+/// the sort, the answers put back: 30–50 ms for 1 M rays) is about what the cache gives back.
+/// 1 M random rays, one thread, medians of seven alternating rounds in one process, as given
+/// against sorted: the teapot 0.150 against 0.177 s, the bunny (a 2.4 MB tree) 0.266 against
+/// 0.268 s (two threads 0.133 against 0.163 s), `dragon_res2` (6.2 MB) 0.347 against 0.302 s,
+/// the dragon (28 MB) 0.696 against 0.417 s. (BENCHMARKS.md, "raylab for Python".)
 const ORDER_MIN_TREE_BYTES: usize = 4 << 20;
 
 /// How many rays ahead of the one traced the ordered trace asks the cache for.
@@ -187,15 +187,23 @@ impl<'a> Rays<'a> {
         let finite = |v: [f32; 3]| v[0].is_finite() & v[1].is_finite() & v[2].is_finite();
         let good = finite(o) & finite(d) & (d != [0.0; 3]) & !t_min.is_nan() & !t_max.is_nan();
         if !good {
-            return Err(if !finite(o) {
-                format!("origins[{i}] = {o:?} is not finite")
-            } else if !finite(d) || d == [0.0; 3] {
-                format!("directions[{i}] = {d:?} is not a finite, non-zero direction")
-            } else {
-                format!("ray {i}: t_min = {t_min}, t_max = {t_max}: NaN")
-            });
+            return Err(Rays::fault(i, o, d, t_min, t_max));
         }
         Ok(Ray { origin: Vec3::from(o), direction: Vec3::from(d), t_min: t_min.max(0.0), t_max })
+    }
+
+    /// What is wrong with a bad ray (out of the traces' loops).
+    #[cold]
+    #[inline(never)]
+    fn fault(i: usize, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32) -> String {
+        let finite = |v: [f32; 3]| v.iter().all(|x| x.is_finite());
+        if !finite(o) {
+            format!("origins[{i}] = {o:?} is not finite")
+        } else if !finite(d) || d == [0.0; 3] {
+            format!("directions[{i}] = {d:?} is not a finite, non-zero direction")
+        } else {
+            format!("ray {i}: t_min = {t_min}, t_max = {t_max}: NaN")
+        }
     }
 
     /// Ray `i`, or what is wrong with it.
