@@ -85,10 +85,15 @@ class Scene:
         "mesh" with `file`, "cornell"), `material`, `emission`, and its placement."""
         self._shapes.append(parameters)
 
-    def mesh(self, vertices, faces, **parameters):
+    def mesh(self, vertices, faces, normals=None, uvs=None, **parameters):
         """Adds a triangle mesh from arrays (as `raylab.Mesh` takes them), with a shape's
-        other keys (`material`, `emission`, `scale`, `rotate`, `translate`, ...)."""
-        from . import _faces, _points  # the checks of raylab.Mesh
+        other keys (`material`, `emission`, `scale`, `rotate`, `translate`, ...).
+
+        normals: optional (n, 3) shading normals, one per vertex (interpolated across each
+            face, as a PLY file's `nx ny nz`; a zero normal means none).
+        uvs: optional (n, 2) texture coordinates, one per vertex (`v` up from an image's
+            bottom row, as in OBJ and Mitsuba), for image textures."""
+        from . import _faces, _points, _real_array  # the checks of raylab.Mesh
 
         name = f"<python mesh {len(self._meshes)}>"
         vertices, faces = _points(vertices, "vertices"), _faces(faces)
@@ -96,10 +101,16 @@ class Scene:
             row = int(np.argwhere(faces >= len(vertices))[0][0])
             raise ValueError(f"faces[{row}] = {faces[row].tolist()} indexes past the "
                              f"{len(vertices)} vertices")
-        if not np.isfinite(vertices).all():
-            row = int(np.argwhere(~np.isfinite(vertices).all(axis=1))[0][0])
-            raise ValueError(f"vertices[{row}] = {vertices[row].tolist()} is not finite")
-        self._meshes[name] = (vertices, faces)
+        arrays = {"vertices": vertices}
+        if normals is not None:
+            arrays["normals"] = _real_array(normals, "normals", (len(vertices), 3), np.float32)
+        if uvs is not None:
+            arrays["uvs"] = _real_array(uvs, "uvs", (len(vertices), 2), np.float32)
+        for what, array in arrays.items():
+            if not np.isfinite(array).all():
+                row = int(np.argwhere(~np.isfinite(array).all(axis=1))[0][0])
+                raise ValueError(f"{what}[{row}] = {array[row].tolist()} is not finite")
+        self._meshes[name] = (vertices, faces, arrays.get("normals"), arrays.get("uvs"))
         self._shapes.append(dict(type="mesh", file=name, **parameters))
 
     def light(self, **parameters):
@@ -127,7 +138,7 @@ class Scene:
         return "\n\n".join(parts) + "\n"
 
     def _arrays(self):
-        return [(name, v, f) for name, (v, f) in self._meshes.items()]
+        return [(name, *arrays) for name, arrays in self._meshes.items()]
 
     def __repr__(self):
         return (f"raylab.Scene({len(self._materials)} materials, {len(self._shapes)} shapes, "

@@ -20,6 +20,7 @@ use std::collections::BTreeMap;
 
 use numpy::PyReadonlyArray2;
 use raylab::LoadedMesh;
+use raylab::mesh::CornerAttribute;
 use raylab::scene::{LoadOptions, OpenError, OpenedScene, parse_scene_with_meshes};
 use raylab::session::{CameraOptions, Event, FilmOutcome, RenderJob, RenderOptions};
 use raylab::session::{ResolvedSettings, SessionError};
@@ -58,12 +59,21 @@ impl Drop for SetOnDrop<'_> {
     }
 }
 
-/// A `raylab.Scene`'s meshes, by the names its text gives them.
-fn in_memory(
-    meshes: &[(String, PyReadonlyArray2<'_, f32>, PyReadonlyArray2<'_, u32>)],
-) -> PyResult<BTreeMap<String, LoadedMesh>> {
+/// A `raylab.Scene` mesh as the Python layer passes it: name, vertices, faces, and optional
+/// per-vertex normals and texture coordinates.
+type ArrayMesh<'py> = (
+    String,
+    PyReadonlyArray2<'py, f32>,
+    PyReadonlyArray2<'py, u32>,
+    Option<PyReadonlyArray2<'py, f32>>,
+    Option<PyReadonlyArray2<'py, f32>>,
+);
+
+/// A `raylab.Scene`'s meshes, by the names its text gives them. Normals and texture
+/// coordinates are per vertex, so their corners are the faces' (as a PLY file's).
+fn in_memory(meshes: &[ArrayMesh<'_>]) -> PyResult<BTreeMap<String, LoadedMesh>> {
     let mut out = BTreeMap::new();
-    for (name, vertices, faces) in meshes {
+    for (name, vertices, faces, normals, uvs) in meshes {
         let (vertices, faces) = (vertices.as_array(), faces.as_array());
         if vertices.ncols() != 3 || faces.ncols() != 3 {
             return Err(PyValueError::new_err(format!(
@@ -81,10 +91,52 @@ fn in_memory(
                 "{name}: faces[{i}] indexes past the vertices"
             )));
         }
-        let mesh = raylab::Mesh { name: name.clone(), positions, triangles, ..Default::default() };
+        // Per vertex: each corner's index is its vertex's.
+        let normals = per_vertex::<3>(name, normals, "normals", positions.len())?.map(|rows| {
+            CornerAttribute {
+                values: rows.map(glam::Vec3::from).collect(),
+                triangles: triangles.clone(),
+            }
+        });
+        let uvs = per_vertex::<2>(name, uvs, "uvs", positions.len())?.map(|rows| CornerAttribute {
+            values: rows.map(glam::Vec2::from).collect(),
+            triangles: triangles.clone(),
+        });
+        let mesh = raylab::Mesh {
+            name: name.clone(),
+            positions,
+            triangles,
+            normals,
+            uvs,
+            ..Default::default()
+        };
         out.insert(name.clone(), LoadedMesh { mesh, ..Default::default() });
     }
     Ok(out)
+}
+
+/// Per-vertex values of mesh `name` (`what`: "normals", "uvs"), checked: one row of `N`
+/// finite numbers per vertex.
+fn per_vertex<const N: usize>(
+    name: &str,
+    values: &Option<PyReadonlyArray2<'_, f32>>,
+    what: &str,
+    vertices: usize,
+) -> PyResult<Option<std::vec::IntoIter<[f32; N]>>> {
+    let Some(values) = values else { return Ok(None) };
+    let values = values.as_array();
+    if values.ncols() != N || values.nrows() != vertices {
+        return Err(PyValueError::new_err(format!(
+            "{name}: {what} must have shape ({vertices}, {N}), not {:?}",
+            values.shape()
+        )));
+    }
+    let rows: Vec<[f32; N]> =
+        values.rows().into_iter().map(|r| std::array::from_fn(|k| r[k])).collect();
+    if let Some(i) = rows.iter().position(|r| !r.iter().all(|x| x.is_finite())) {
+        return Err(PyValueError::new_err(format!("{name}: {what}[{i}] is not finite")));
+    }
+    Ok(Some(rows.into_iter()))
 }
 
 /// What [`render`] returns to the Python layer: the picture, the AOV layers by name, the
@@ -122,7 +174,7 @@ pub fn render<'py>(
     threads: Option<usize>,
     progress: Option<Bound<'py, PyAny>>,
     scene_text: Option<String>,
-    meshes: Vec<(String, PyReadonlyArray2<'py, f32>, PyReadonlyArray2<'py, u32>)>,
+    meshes: Vec<ArrayMesh<'py>>,
 ) -> PyResult<Rendered<'py>> {
     let options = RenderOptions {
         integrator: integrator
