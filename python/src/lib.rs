@@ -5,11 +5,12 @@
 //! arrays of shape `(n, 3)` for points and directions, `uint32` of shape `(m, 3)` for faces,
 //! `float32` of shape `(n,)` for ray limits. This module checks them again (a wrong layout is
 //! a `ValueError`, never a crash), checks the values (non-finite points, zero directions,
-//! faces out of range), and answers with the library's own single-ray queries
-//! ([`Accelerator::closest_hit`], [`Accelerator::occluded`], [`Bvh::crossings`]), chunk by chunk
-//! on rayon's threads, the GIL released. A large batch on a large tree is traced in the order of
-//! [`raylab::bvh::order`] (rays through the same part of the tree one after the other, for the
-//! cache) and its answers put back in the rays' order. The answers are the library's, bit for
+//! faces out of range; a ray's values as it is traced), and answers with the library's own
+//! single-ray queries ([`Accelerator::closest_hit`], [`Accelerator::occluded`],
+//! [`Bvh::count_crossings`], [`Bvh::crossings`]), chunk by chunk on rayon's threads, the GIL
+//! released. A large batch on a large tree is traced in the order of [`raylab::bvh::order`]
+//! (rays through the same part of the tree one after the other, for the cache) and its answers
+//! put back in the rays' order (all but `all_hits`, which traces as given). The answers are the library's, bit for
 //! bit, in any order (`tests/test_queries.py` checks them against answers written by the Rust
 //! library in `tests/python_suite.rs`).
 
@@ -42,7 +43,8 @@ const ORDER_MIN_RAYS: usize = 1 << 14;
 /// 1 M random rays, one thread, medians of seven alternating rounds in one process, as given
 /// against sorted: the teapot 0.150 against 0.177 s, the bunny (a 2.4 MB tree) 0.266 against
 /// 0.268 s (two threads 0.133 against 0.163 s), `dragon_res2` (6.2 MB) 0.347 against 0.302 s,
-/// the dragon (28 MB) 0.696 against 0.417 s. (BENCHMARKS.md, "raylab for Python".)
+/// the dragon (28 MB) 0.696 against 0.417 s. (BENCHMARKS.md, "Large batches in the tree's
+/// order".)
 const ORDER_MIN_TREE_BYTES: usize = 4 << 20;
 
 /// How many rays ahead of the one traced the ordered trace asks the cache for.
@@ -134,8 +136,8 @@ impl Limits<'_> {
 #[derive(FromPyObject)]
 struct RayArgs<'py>(PyReadonlyArray2<'py, f32>, PyReadonlyArray2<'py, f32>, Limit<'py>, Limit<'py>);
 
-/// The rays of a query, checked: finite origins, finite non-zero directions, limits that are
-/// not NaN.
+/// The rays of a query, their layouts checked; each ray's values (finite origin, finite
+/// non-zero direction, limits that are not NaN) are checked as it is traced ([`get`](Self::get)).
 struct Rays<'a> {
     origins: &'a [[f32; 3]],
     directions: &'a [[f32; 3]],
@@ -212,6 +214,13 @@ impl<'a> Rays<'a> {
         Rays::ray(i, self.origins[i], self.directions[i], self.t_min.get(i), self.t_max.get(i))
     }
 
+    /// Ray `i` as it is, unchecked (NaN and all).
+    #[inline(always)]
+    fn unchecked(&self, i: usize) -> Ray {
+        let (origin, direction) = (Vec3::from(self.origins[i]), Vec3::from(self.directions[i]));
+        Ray { origin, direction, t_min: self.t_min.get(i), t_max: self.t_max.get(i) }
+    }
+
     /// The message for the first bad ray (after a parallel pass found one, maybe a later one).
     fn first_error(&self) -> String {
         (0..self.len()).find_map(|i| self.get(i).err()).unwrap_or_else(|| {
@@ -224,7 +233,7 @@ impl<'a> Rays<'a> {
     /// The order to trace the rays in against `bvh` ([`raylab::bvh::order`]), `None` to trace
     /// them as they come (a small batch or a small tree). The rays are not checked here: a bad
     /// one gets some key, and the trace names it.
-    fn order(&self, bvh: &Bvh) -> Option<Vec<u32>> {
+    fn trace_order(&self, bvh: &Bvh) -> Option<Vec<u32>> {
         let n = self.len();
         if n < ORDER_MIN_RAYS
             || bvh.stats().bytes() < ORDER_MIN_TREE_BYTES
@@ -236,21 +245,14 @@ impl<'a> Rays<'a> {
         let mut keys = vec![0u32; n];
         keys.par_chunks_mut(CHUNK).enumerate().for_each(|(c, keys)| {
             for (k, key) in keys.iter_mut().enumerate() {
-                let i = c * CHUNK + k;
-                let ray = Ray {
-                    origin: Vec3::from(self.origins[i]),
-                    direction: Vec3::from(self.directions[i]),
-                    t_min: self.t_min.get(i),
-                    t_max: self.t_max.get(i),
-                };
-                *key = order::segment_key(&bounds, &ray);
+                *key = order::segment_key(&bounds, &self.unchecked(c * CHUNK + k));
             }
         });
         Some(order::order_by_key(&keys))
     }
 
     /// `answer` for the rays `order` names, in that order (a permutation of the rays, from
-    /// [`order`](Self::order)), in parallel, in chunks; the rays a few places ahead are asked
+    /// [`trace_order`](Self::trace_order)), in parallel, in chunks; the rays a few places ahead are asked
     /// of the cache while one is traced. The first bad ray's message if there is one.
     fn in_order<T: Send + Copy + Default>(
         &self,
@@ -297,7 +299,7 @@ impl<'a> Rays<'a> {
     }
 
     /// Every ray's answer from `bvh`, in the rays' order: `answer` run on each in parallel, in
-    /// chunks (in [`order`](Self::order)'s order where it gives one); the first bad ray's
+    /// chunks (in [`trace_order`](Self::trace_order)'s order where it gives one); the first bad ray's
     /// message if there is one.
     fn answers<T: Send + Copy + Default>(
         &self,
@@ -305,7 +307,7 @@ impl<'a> Rays<'a> {
         answer: impl Fn(&Ray) -> T + Sync,
     ) -> Result<Vec<T>, String> {
         let mut out = vec![T::default(); self.len()];
-        match self.order(bvh) {
+        match self.trace_order(bvh) {
             Some(order) => {
                 let sorted = self.in_order(&order, answer)?;
                 for (&i, &x) in order.iter().zip(&sorted) {
@@ -342,6 +344,15 @@ impl<'a> Rays<'a> {
         });
         // The threads may have met a later bad ray first: name the first one.
         found.map_err(|_: String| self.first_error())
+    }
+}
+
+/// A closest hit as `intersect`'s columns: `(t, triangle, u, v)`, `(inf, -1, 0, 0)` for a miss.
+#[inline(always)]
+fn hit_row(hit: Option<Hit>) -> (f32, i64, f32, f32) {
+    match hit {
+        Some(h) => (h.t, i64::from(h.triangle), h.b1, h.b2),
+        None => (f32::INFINITY, -1, 0.0, 0.0),
     }
 }
 
@@ -432,14 +443,11 @@ impl Mesh {
         let (mut t, mut triangle) = (vec![0.0f32; n], vec![0i64; n]);
         let (mut u, mut v) = (vec![0.0f32; n], vec![0.0f32; n]);
         run(py, threads, || -> Result<(), String> {
-            if let Some(order) = rays.order(bvh) {
+            if let Some(order) = rays.trace_order(bvh) {
                 let hits = rays.in_order(&order, |ray| bvh.closest_hit(ray))?;
                 for (&i, hit) in order.iter().zip(hits) {
                     let i = i as usize;
-                    (t[i], triangle[i], u[i], v[i]) = match hit {
-                        Some(h) => (h.t, i64::from(h.triangle), h.b1, h.b2),
-                        None => (f32::INFINITY, -1, 0.0, 0.0),
-                    };
+                    (t[i], triangle[i], u[i], v[i]) = hit_row(hit);
                 }
                 return Ok(());
             }
@@ -451,10 +459,7 @@ impl Mesh {
                     columns.zip(more).map(|((t, tr), (u, v))| (t, tr, u, v)).collect()
                 },
                 |(t, triangle, u, v), k, ray| {
-                    (t[k], triangle[k], u[k], v[k]) = match bvh.closest_hit(ray) {
-                        Some(h) => (h.t, i64::from(h.triangle), h.b1, h.b2),
-                        None => (f32::INFINITY, -1, 0.0, 0.0),
-                    };
+                    (t[k], triangle[k], u[k], v[k]) = hit_row(bvh.closest_hit(ray));
                 },
             )
         })?

@@ -91,16 +91,17 @@ fn in_memory(meshes: &[ArrayMesh<'_>]) -> PyResult<BTreeMap<String, LoadedMesh>>
                 "{name}: faces[{i}] indexes past the vertices"
             )));
         }
-        // Per vertex: each corner's index is its vertex's.
         let normals = per_vertex::<3>(name, normals, "normals", positions.len())?.map(|rows| {
-            CornerAttribute {
-                values: rows.map(glam::Vec3::from).collect(),
-                triangles: triangles.clone(),
-            }
+            CornerAttribute::per_vertex(
+                rows.into_iter().map(glam::Vec3::from).collect(),
+                &triangles,
+            )
         });
-        let uvs = per_vertex::<2>(name, uvs, "uvs", positions.len())?.map(|rows| CornerAttribute {
-            values: rows.map(glam::Vec2::from).collect(),
-            triangles: triangles.clone(),
+        let uvs = per_vertex::<2>(name, uvs, "uvs", positions.len())?.map(|rows| {
+            CornerAttribute::per_vertex(
+                rows.into_iter().map(glam::Vec2::from).collect(),
+                &triangles,
+            )
         });
         let mesh = raylab::Mesh {
             name: name.clone(),
@@ -122,7 +123,7 @@ fn per_vertex<const N: usize>(
     values: &Option<PyReadonlyArray2<'_, f32>>,
     what: &str,
     vertices: usize,
-) -> PyResult<Option<std::vec::IntoIter<[f32; N]>>> {
+) -> PyResult<Option<Vec<[f32; N]>>> {
     let Some(values) = values else { return Ok(None) };
     let values = values.as_array();
     if values.ncols() != N || values.nrows() != vertices {
@@ -136,7 +137,7 @@ fn per_vertex<const N: usize>(
     if let Some(i) = rows.iter().position(|r| !r.iter().all(|x| x.is_finite())) {
         return Err(PyValueError::new_err(format!("{name}: {what}[{i}] is not finite")));
     }
-    Ok(Some(rows.into_iter()))
+    Ok(Some(rows))
 }
 
 /// What [`render`] returns to the Python layer: the picture, the AOV layers by name, the

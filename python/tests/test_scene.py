@@ -91,7 +91,7 @@ def uv_sphere(n=12):
     return rows[:, :3], np.array(faces), rows[:, :3].copy(), rows[:, 3:].copy()
 
 
-def test_mesh_normals_and_uvs_render_as_a_ply_files(tmp_path):
+def test_mesh_normals_and_uvs_render_as_a_ply_file(tmp_path):
     vertices, faces, normals, uvs = uv_sphere()
     # A texture of four coloured quadrants, read through the coordinates: red, green (top),
     # blue, violet (bottom).

@@ -12,8 +12,8 @@ running every query once in turn:
 - trimesh's `ray.intersects_first` with its embreex intersector;
 - with `--raylab-bin`, `raylab bench MESH --rays DIR` on the very same rays (written as
   `diffuse.rays`), the binding's overhead being the difference;
-- mesh build time (raylab.Mesh against an embreex scene), import time, and the BVH's bytes
-  per triangle.
+- mesh build time (raylab.Mesh against an embreex scene), import time, the BVH's bytes
+  per triangle, and what a call with one ray costs (raylab on 1, 2 and all threads; embreex).
 
 Needs numpy, raylab (`pip install ./python`), embreex and trimesh.
 """
@@ -128,6 +128,14 @@ def main():
                 origins, directions),
         }
         rows = alternating(queries, args.reps)
+        # What a call costs besides its rays: one ray per call.
+        one_o, one_d = origins[:1].copy(), directions[:1].copy()
+        calls = {
+            f"threads={threads}": timed(lambda t=threads: [mesh.intersect(one_o, one_d, threads=t)
+                                                           for _ in range(1000)], 5)[0] / 1000
+            for threads in (1, 2, None)
+        } | {"embreex": timed(lambda: [scene.run(one_o, one_d, output=1)
+                                       for _ in range(1000)], 5)[0] / 1000}
         ours, theirs = mesh.intersect(origins, directions), scene.run(origins, directions)
         agree = ((ours.triangle >= 0) == (theirs >= 0)).mean()
         print(f"\n{path}: {n} triangles, loaded in {load:.2f} s; {args.rays} rays, "
@@ -135,6 +143,8 @@ def main():
         print(f"build: raylab.Mesh {build_raylab[0] * 1e3:.0f} ms, embreex scene "
               f"{build_embree[0] * 1e3:.0f} ms; raylab BVH {mesh.bvh_bytes / n:.1f} bytes "
               f"per triangle (+{(12 + 12 * len(vertices) / n):.1f} for the vertices and faces)")
+        print("a call with one ray: " + ", ".join(f"{name} {t * 1e6:.0f} µs"
+                                                   for name, t in calls.items()))
         base = rows["embreex run(output=1)"][0]
         print(f"{'':38} {'median (min) s':>16} {'Mrays/s':>8} {'vs embreex':>10}")
         for name, (median, least) in rows.items():

@@ -49,7 +49,8 @@ def morton6(cells, bits):
 
 
 def segment_keys(o, d, lo, hi, bits=4):
-    """`raylab::bvh::order::segment_key` in numpy (rounding aside)."""
+    """`raylab::bvh::order::segment_key` in numpy, near enough: the vertices' box for the
+    tree's, rays without limits, and cell boundaries rounded differently."""
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = 1.0 / d
         t0, t1 = (lo - o) * inv, (hi - o) * inv
@@ -57,7 +58,7 @@ def segment_keys(o, d, lo, hi, bits=4):
     far = np.maximum(t0, t1).min(1)
     top = (1 << bits) - 1
     ends = [(o + d * t[:, None] - lo) / (hi - lo) for t in (near, far)]
-    cells = np.clip(np.rint(np.concatenate(ends, 1) * top), 0, top).astype(np.uint64)
+    cells = np.clip(np.floor(np.concatenate(ends, 1) * (top + 1)), 0, top).astype(np.uint64)
     key = morton6(cells, bits)
     key[~(near <= far)] = np.uint64((1 << (6 * bits)) - 1)
     return key

@@ -22,6 +22,13 @@ pub struct CornerAttribute<T> {
     pub triangles: Vec<[u32; 3]>,
 }
 
+impl<T> CornerAttribute<T> {
+    /// One value per vertex: each corner's index is its vertex's (as PLY and glTF store them).
+    pub fn per_vertex(values: Vec<T>, triangles: &[[u32; 3]]) -> CornerAttribute<T> {
+        CornerAttribute { values, triangles: triangles.to_vec() }
+    }
+}
+
 /// A surface description from an MTL file (or a default).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshMaterial {

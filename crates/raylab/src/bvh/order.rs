@@ -4,18 +4,19 @@
 //! Two rays visit the same nodes when they run through the same part of the tree's box. A ray's
 //! segment inside the box (from where it enters, or starts, to where it leaves, or ends) is
 //! given by its two end points, so the order sorts rays by a Morton code of those six
-//! coordinates ([`segment_key`]): four bits each, quantized over the box, the bits of the six
-//! interleaved into 24. Rays whose segments miss the box get the largest key and come last.
+//! coordinates ([`segment_key`]): four bits each (sixteen cells across the box), the bits of
+//! the six interleaved into 24. Rays whose segments miss the box get the largest key and come last.
 //! [`order_by_key`] sorts the keys with a stable radix sort, so the order depends on the rays
 //! alone, never on a thread count.
 //!
 //! The order changes nothing in the answers, only their speed; each ray's answer is the same
 //! in any order. Garanzha and Loop sort rays by a hash of origin and direction ("Fast ray
-//! sorting and breadth-first packet traversal for GPU ray tracing", Eurographics 2010); on 1 M
-//! random rays toward the dragon (871k triangles, a 28 MB tree, one thread) a Morton code of
-//! origin and direction brought the trace from 0.62 to 0.45 s, this segment key to 0.34 s, the
-//! bunny's (2.4 MB) from 0.24 to 0.19 s (BENCHMARKS.md, "raylab for Python"). Small batches
-//! or trees that fit the cache gain nothing and pay for the sort.
+//! sorting and breadth-first packet traversal for GPU ray tracing", Eurographics 2010). On 1 M
+//! random rays toward the dragon (871k triangles, a 28 MB tree, one thread), traced pre-sorted,
+//! a Morton code of origin and direction brought the trace from 0.614 to 0.447 s, this segment
+//! key to 0.361 s; the bunny's (2.4 MB) went from 0.303 to 0.263 and 0.227 s (BENCHMARKS.md,
+//! "Large batches in the tree's order"). Small batches, or trees that fit the caches, gain
+//! less than the sort costs.
 //!
 //! ```
 //! use raylab::bvh::{Bvh, order};
@@ -63,8 +64,10 @@ const SPREAD: [u32; 1 << BITS] = {
 
 /// A key that sorts rays running through the same part of `bounds` (a tree's box,
 /// [`Bvh::bounds`](super::Bvh::bounds)) next to each other: the Morton code of the ray's segment
-/// inside the box, its entry point (or origin) and its exit point (or end), four bits per
-/// coordinate, 24 bits in all; [`MISS`] where the segment `[t_min, t_max]` misses the box, or for an empty box.
+/// inside the box, its entry point (or origin) and its exit point (or end), each coordinate
+/// one of sixteen equal cells across the box (four bits; a point on the boundary of two cells
+/// goes to either), 24 bits in all. [`MISS`] where the segment `[t_min, t_max]` misses the box,
+/// or for an empty box (a segment inside the box's last corner cell has that key too).
 ///
 /// Any ray gets a key, also one with a zero or non-finite direction (the key is then some
 /// number, for a caller that has not checked its rays yet): it never panics.
@@ -74,20 +77,28 @@ pub fn segment_key(bounds: &Bounds, ray: &Ray) -> u32 {
     let (origin, direction) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction));
     let inverse = direction.recip();
     let (t0, t1) = ((min - origin) * inverse, (max - origin) * inverse);
-    // A NaN (a zero direction's 0·∞) may make `near` or `far` NaN: the key is then `MISS`.
-    let near = t0.min(t1).max_element().max(ray.t_min.max(0.0));
-    let far = t0.max(t1).min_element().min(ray.t_max);
-    // Also false for a NaN.
+    // A NaN (0·∞: a zero direction with the origin on that slab's plane) does not limit the
+    // segment along that axis.
+    let unlimited = t0.is_nan_mask() | t1.is_nan_mask();
+    let t_enter = Vec3A::select(unlimited, Vec3A::NEG_INFINITY, t0.min(t1));
+    let t_leave = Vec3A::select(unlimited, Vec3A::INFINITY, t0.max(t1));
+    let near = t_enter.max_element().max(ray.t_min.max(0.0));
+    let far = t_leave.min_element().min(ray.t_max);
+    // Also false for a NaN limit.
     let crosses = near <= far;
     if !crosses || bounds.is_empty() {
         return MISS;
     }
+    // Sixteen cells per axis; a flat axis is all in cell 0.
+    let extent = max - min;
+    let cells_per_length =
+        Vec3A::select(extent.cmpgt(Vec3A::ZERO), (1 << BITS) as f32 / extent, Vec3A::ZERO);
     let top = ((1 << BITS) - 1) as f32;
-    let scale = top / (max - min).max(Vec3A::splat(f32::MIN_POSITIVE));
     let cells = |t: f32| {
-        let p = ((origin + t * direction - min) * scale).clamp(Vec3A::ZERO, Vec3A::splat(top));
-        // Rounded to the nearest integer by adding 2²³: the cell is then the low bits (any
-        // bits for a NaN, which `clamp` may keep; still a cell in range).
+        let p = (origin + t * direction - min) * cells_per_length - 0.5;
+        let p = p.clamp(Vec3A::ZERO, Vec3A::splat(top));
+        // Rounded to the nearest integer by adding 2²³ (so `p − ½` to its cell): the cell is
+        // then the low bits (any bits for a NaN, which `clamp` may keep; still a cell in range).
         (p + Vec3A::splat(8_388_608.0)).to_array().map(|x| (x.to_bits() & top as u32) as usize)
     };
     let ([x0, y0, z0], [x1, y1, z1]) = (cells(near), cells(far));
@@ -155,7 +166,7 @@ mod tests {
         for n in [0, 1, 2, 100, 5000] {
             // Few distinct keys (ties), keys in one digit, and keys over all 32 bits.
             for spread in [3u32, 2000, u32::MAX] {
-                let keys: Vec<u32> = (0..n).map(|_| rng.next_u32() % spread.max(1)).collect();
+                let keys: Vec<u32> = (0..n).map(|_| rng.next_u32() % spread).collect();
                 let mut expected: Vec<u32> = (0..n as u32).collect();
                 expected.sort_by_key(|&i| keys[i as usize]);
                 assert_eq!(order_by_key(&keys), expected, "{n} keys below {spread}");
@@ -166,7 +177,8 @@ mod tests {
     #[test]
     fn a_key_is_the_morton_code_of_the_segment_in_the_box() {
         // Along x through the middle of the box: enters at (0, ½, ½), leaves at (1, ½, ½).
-        // Cells: entry (0, 8, 8), exit (15, 8, 8) (½·15 = 7.5, rounded to even).
+        // Cells: entry (0, 8, 8), exit (15, 8, 8) (½ is the boundary of cells 7 and 8:
+        // ½·16 − ½ = 7.5, rounded to even).
         let ray = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
         let expected = (SPREAD[0] << 5)
             | (SPREAD[8] << 4)
@@ -193,6 +205,25 @@ mod tests {
         // Starting beyond the box's far side: t_min past the exit.
         let late = Ray { t_min: 3.0, ..Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X) };
         assert_eq!(segment_key(&b, &late), MISS);
+    }
+
+    #[test]
+    fn a_ray_in_a_face_of_the_box_and_a_flat_box_get_their_cells() {
+        // Along x in the box's face z = 0: the z slab does not limit it (0·∞ there).
+        let ray = Ray::new(Vec3::new(-1.0, 0.5, 0.0), Vec3::X);
+        let key = segment_key(&unit_box(), &ray);
+        let expected = (SPREAD[0] << 5)
+            | (SPREAD[8] << 4)
+            | (SPREAD[0] << 3)
+            | (SPREAD[15] << 2)
+            | (SPREAD[8] << 1)
+            | SPREAD[0];
+        assert_eq!(key, expected);
+        // A flat box (a square in z = 0): z is cell 0 at both ends.
+        let flat = Bounds { min: Vec3::ZERO, max: Vec3::new(1.0, 1.0, 0.0) };
+        let down = Ray::new(Vec3::new(0.9, 0.1, 1.0), -Vec3::Z);
+        let cells = (SPREAD[14] << 5) | (SPREAD[1] << 4) | (SPREAD[14] << 2) | (SPREAD[1] << 1);
+        assert_eq!(segment_key(&flat, &down), cells);
     }
 
     #[test]

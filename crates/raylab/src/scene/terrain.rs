@@ -117,7 +117,7 @@ pub fn terrain(side: u32, seed: u64) -> Scene {
         textures: MaterialTextures::default(),
         pbr: Some(PbrParameters { metallic: 0.0, roughness: 0.15, transmission: 0.0, ior: 1.33 }),
     };
-    let normals = CornerAttribute { values: normals, triangles: triangles.clone() };
+    let normals = CornerAttribute::per_vertex(normals, &triangles);
     let mesh = Mesh {
         name: "terrain".into(),
         positions,

@@ -237,9 +237,9 @@ impl Builder {
     fn finish(self, name: String) -> Mesh {
         // Per-vertex attributes: their corners are the positions' corners.
         let normals = (!self.normals.is_empty())
-            .then(|| CornerAttribute { values: self.normals, triangles: self.triangles.clone() });
-        let uvs = (!self.uvs.is_empty())
-            .then(|| CornerAttribute { values: self.uvs, triangles: self.triangles.clone() });
+            .then(|| CornerAttribute::per_vertex(self.normals, &self.triangles));
+        let uvs =
+            (!self.uvs.is_empty()).then(|| CornerAttribute::per_vertex(self.uvs, &self.triangles));
         Mesh {
             name,
             positions: self.positions,

@@ -66,8 +66,7 @@ pub(super) fn sphere(centre: Vec3, radius: f32) -> Mesh {
             }
         }
     }
-    let normals =
-        crate::mesh::CornerAttribute { values: positions.clone(), triangles: triangles.clone() };
+    let normals = crate::mesh::CornerAttribute::per_vertex(positions.clone(), &triangles);
     Mesh {
         positions: positions.iter().map(|&p| centre + radius * p).collect(),
         triangles,
