@@ -12,6 +12,7 @@
 
 mod multijitter;
 mod pcg;
+mod piecewise;
 mod sampler;
 mod sobol;
 
@@ -24,6 +25,7 @@ use glam::{DVec3, Vec2, Vec3};
 
 pub use multijitter::Grid;
 pub use pcg::{Pcg32, mix64};
+pub use piecewise::{PiecewiseConstant1D, PiecewiseConstant2D};
 pub use sampler::{Sampler, SamplerKind, VertexNumbers};
 
 /// Where sample `index` of pixel `(x, y)` goes through the pixel, in `[0, 1)²` from its top-left

@@ -7,7 +7,7 @@ use super::*;
 
 const ATTEMPTS: usize = 400_000;
 /// Warp tests in this file (for the Šidák correction).
-const TESTS: usize = 8;
+const TESTS: usize = 10;
 
 fn uniform(rng: &mut Pcg32) -> Vec2 {
     Vec2::new(rng.next_f32(), rng.next_f32())
@@ -335,4 +335,84 @@ fn sin_cos_within_quarter_pi_is_accurate() {
     }
     assert!(worst.0 <= 2e-7, "worst error {:e} at {}", worst.0, worst.1);
     assert_eq!(sin_cos_within_quarter_pi(0.0), (0.0, 1.0));
+}
+
+/// A table with an empty row, an empty column, negative and NaN values, a bright spot (a sun)
+/// and a smooth rest: `width × height` values.
+fn sky_table(width: usize, height: usize) -> Vec<f32> {
+    let mut rng = Pcg32::new(11, 3);
+    let mut values: Vec<f32> = (0..width * height).map(|_| 0.2 + rng.next_f32()).collect();
+    if height > 2 {
+        values[2 * width..3 * width].fill(0.0);
+    }
+    for row in 0..height {
+        values[row * width + 5] = 0.0;
+    }
+    values[7] = -1.0;
+    values[8] = f32::NAN;
+    values[(height - 1).min(4) * width + 9] = 60.0;
+    values
+}
+
+#[test]
+fn piecewise_1d_fits_its_density() {
+    let table = sky_table(12, 1);
+    let density = PiecewiseConstant1D::new(&table);
+    chi2::run(
+        &Rectangle(Vec2::ZERO, Vec2::ONE),
+        (24, 1),
+        ATTEMPTS,
+        21,
+        |r| Some(Vec3::new(density.sample(r.next_f32()).0, 0.5, 0.0)),
+        |p| density.pdf(p.x),
+    )
+    .assert_fits("piecewise-constant 1D", TESTS, 1e-4);
+    // The density is the table's, normalized: the empty and negative bins are never sampled.
+    let mean = table.iter().map(|&f| if f > 0.0 { f as f64 } else { 0.0 }).sum::<f64>() / 12.0;
+    assert!((density.integral() - mean).abs() < 1e-6);
+    for (i, &f) in table.iter().enumerate() {
+        let want = if f > 0.0 { f as f64 / mean } else { 0.0 };
+        let got = density.pdf((i as f32 + 0.5) / 12.0) as f64;
+        assert!((got - want).abs() < 1e-5 * want.max(1.0), "bin {i}: {got} against {want}");
+    }
+    let mut rng = Pcg32::new(5, 5);
+    for _ in 0..10_000 {
+        let (x, pdf, bin) = density.sample(rng.next_f32());
+        assert!((0.0..1.0).contains(&x) && bin == (x * 12.0) as usize && pdf > 0.0, "{x} {bin}");
+    }
+}
+
+#[test]
+fn piecewise_2d_fits_its_density() {
+    let (width, height) = (12, 9);
+    let density = PiecewiseConstant2D::new(&sky_table(width, height), width, height);
+    assert_eq!(density.size(), (12, 9));
+    chi2::run(
+        &Rectangle(Vec2::ZERO, Vec2::ONE),
+        (24, 18),
+        ATTEMPTS,
+        22,
+        |r| {
+            let (p, pdf) = density.sample(uniform(r));
+            assert!((pdf - density.pdf(p)).abs() <= 1e-5 * pdf, "sampled density {pdf} at {p}");
+            Some(Vec3::new(p.x, p.y, 0.0))
+        },
+        |p| density.pdf(Vec2::new(p.x, p.y)),
+    )
+    .assert_fits("piecewise-constant 2D", TESTS, 1e-4);
+}
+
+#[test]
+fn piecewise_tables_of_zeros_are_uniform() {
+    let flat = PiecewiseConstant2D::new(&[0.0, -1.0, f32::NAN, 0.0, 0.0, 0.0], 3, 2);
+    assert_eq!(flat.integral(), 0.0);
+    let mut rng = Pcg32::new(9, 9);
+    for _ in 0..1000 {
+        let (p, pdf) = flat.sample(uniform(&mut rng));
+        assert!((pdf - 1.0).abs() < 1e-6 && (flat.pdf(p) - 1.0).abs() < 1e-6);
+    }
+    // One value: its bin is the whole interval.
+    let one = PiecewiseConstant1D::new(&[3.0]);
+    assert_eq!(one.sample(0.25), (0.25, 1.0, 0));
+    assert_eq!(one.integral(), 3.0);
 }

@@ -1,0 +1,153 @@
+//! Piecewise-constant densities on `[0, 1)` and `[0, 1)²`: sampling a tabulated function in
+//! proportion to its values, as an environment map is sampled in proportion to its luminance.
+//!
+//! A 1D table of `n` non-negative values `f₀ … fₙ₋₁` defines the density
+//! `p(x) = fᵢ / (Σⱼ fⱼ / n)` for `x ∈ [i/n, (i+1)/n)`. Sampling inverts its cumulative
+//! distribution: the bin `i` whose CDF interval holds `u`, then `x = (i + (u − cᵢ)/(cᵢ₊₁ − cᵢ))/n`,
+//! linear within the bin (PBR 4th ed., §A.4.1 "Piecewise-constant 1D functions"). A 2D table
+//! (rows of `width` values, `height` rows, row 0 at `v ∈ [0, 1/height)`) is a marginal density
+//! over rows, the sums of each row, and a conditional density over each row (§A.4.2,
+//! "Piecewise-constant 2D distributions"; Mitsuba 3's `DiscreteDistribution2D` samples the
+//! same density). `p(u, v) = p(v) · p(u | v)`.
+//!
+//! The tables keep only their cumulative distributions, in `f32`, summed in `f64`; a density is
+//! read from the CDF's steps, so that the density reported is exactly the one sampled, and a
+//! 2D table of `w × h` values takes `(w + 1)·h + h + 1` floats (an 8k × 4k environment map:
+//! 128 MiB). Negative and NaN values count as zero; a table of zeros is uniform.
+//!
+//! Tests: `sampling::tests::piecewise_*` (chi-square goodness of fit in 1D and 2D, against a
+//! table with empty rows and columns and a bright spot; densities integrating to one;
+//! uniform fallbacks).
+
+use glam::Vec2;
+
+use super::ONE_MINUS_EPSILON;
+
+/// A piecewise-constant density on `[0, 1)` from `n` bins.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PiecewiseConstant1D {
+    /// `cdf[i]`: the probability of `[0, i/n)`; `cdf[0] = 0`, `cdf[n] = 1`.
+    cdf: Vec<f32>,
+    /// The mean of the values (`Σ fᵢ / n`), `0` for a table of zeros.
+    integral: f64,
+}
+
+impl PiecewiseConstant1D {
+    /// The density of `values` (at least one); negative and NaN values count as zero, and a
+    /// table of zeros (or one whose sum is not finite) is uniform.
+    ///
+    /// # Panics
+    /// With no values.
+    pub fn new(values: &[f32]) -> PiecewiseConstant1D {
+        assert!(!values.is_empty(), "a piecewise-constant density needs a value");
+        let n = values.len();
+        let value = |f: f32| if f > 0.0 { f as f64 } else { 0.0 };
+        let total: f64 = values.iter().map(|&f| value(f)).sum();
+        let uniform = !(total > 0.0 && total.is_finite());
+        let mut cdf = Vec::with_capacity(n + 1);
+        let mut sum = 0.0f64;
+        cdf.push(0.0);
+        for (i, &f) in values.iter().enumerate() {
+            sum += if uniform { 1.0 } else { value(f) };
+            let total = if uniform { n as f64 } else { total };
+            cdf.push(if i + 1 == n { 1.0 } else { (sum / total) as f32 });
+        }
+        PiecewiseConstant1D { cdf, integral: if uniform { 0.0 } else { total / n as f64 } }
+    }
+
+    /// The number of bins.
+    pub fn len(&self) -> usize {
+        self.cdf.len() - 1
+    }
+
+    /// Always false: a density has at least one bin.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The mean of the values (the integral of the tabulated function over `[0, 1)`); `0`
+    /// for a table of zeros.
+    pub fn integral(&self) -> f64 {
+        self.integral
+    }
+
+    /// The probability of bin `i`.
+    #[inline]
+    pub fn probability(&self, i: usize) -> f32 {
+        self.cdf[i + 1] - self.cdf[i]
+    }
+
+    /// The density at `x ∈ [0, 1)` (outside: the nearest bin's).
+    #[inline]
+    pub fn pdf(&self, x: f32) -> f32 {
+        let n = self.len();
+        let i = ((x * n as f32) as usize).min(n - 1);
+        self.probability(i) * n as f32
+    }
+
+    /// The point that `u ∈ [0, 1)` picks, its density, and its bin.
+    #[inline]
+    pub fn sample(&self, u: f32) -> (f32, f32, usize) {
+        let n = self.len();
+        // The last bin whose interval starts at or below u: never one of probability zero
+        // (its successor starts at the same place), but the last bin at worst.
+        let i = (self.cdf.partition_point(|&c| c <= u).max(1) - 1).min(n - 1);
+        let p = self.probability(i);
+        let within =
+            if p > 0.0 { ((u - self.cdf[i]) / p).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 };
+        let x = ((i as f32 + within) / n as f32).min(ONE_MINUS_EPSILON);
+        (x, p * n as f32, i)
+    }
+}
+
+/// A piecewise-constant density on `[0, 1)²` from a table of `width × height` values, row by
+/// row (`u` along a row, `v` across rows).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PiecewiseConstant2D {
+    /// Each row's density over `u`.
+    rows: Vec<PiecewiseConstant1D>,
+    /// The density over rows (`v`), from the rows' sums.
+    marginal: PiecewiseConstant1D,
+}
+
+impl PiecewiseConstant2D {
+    /// The density of `values` (`width × height` of them, row by row); negative and NaN values
+    /// count as zero; a table of zeros is uniform, and so is a row of zeros within its row.
+    ///
+    /// # Panics
+    /// If `values` does not hold `width × height` values, or either is zero.
+    pub fn new(values: &[f32], width: usize, height: usize) -> PiecewiseConstant2D {
+        assert!(width > 0 && height > 0, "a 2D density needs a value");
+        assert_eq!(values.len(), width * height, "{width} × {height} values");
+        let rows: Vec<PiecewiseConstant1D> =
+            values.chunks_exact(width).map(PiecewiseConstant1D::new).collect();
+        let sums: Vec<f32> = rows.iter().map(|r| r.integral() as f32).collect();
+        PiecewiseConstant2D { marginal: PiecewiseConstant1D::new(&sums), rows }
+    }
+
+    /// The table's width and height.
+    pub fn size(&self) -> (usize, usize) {
+        (self.rows[0].len(), self.rows.len())
+    }
+
+    /// The mean of the values; `0` for a table of zeros.
+    pub fn integral(&self) -> f64 {
+        self.marginal.integral()
+    }
+
+    /// The point that `u ∈ [0, 1)²` picks (`u.y` the row, then `u.x` within it) and its density.
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> (Vec2, f32) {
+        let (v, pdf_v, row) = self.marginal.sample(u.y);
+        let (x, pdf_u, _) = self.rows[row].sample(u.x);
+        (Vec2::new(x, v), pdf_v * pdf_u)
+    }
+
+    /// The density at `p ∈ [0, 1)²`.
+    #[inline]
+    pub fn pdf(&self, p: Vec2) -> f32 {
+        let height = self.rows.len();
+        let row = ((p.y * height as f32) as usize).min(height - 1);
+        self.marginal.probability(row) * height as f32 * self.rows[row].pdf(p.x)
+    }
+}
