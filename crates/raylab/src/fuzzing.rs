@@ -74,3 +74,10 @@ pub fn exr_part(data: &[u8]) {
         let _ = crate::parts::merge(vec![part]);
     }
 }
+
+/// A Radiance HDR image, as an environment map's file is read.
+pub fn hdr_image(data: &[u8]) {
+    if let Ok(film) = crate::image_io::parse_hdr(data) {
+        let _ = film.pixel(0, 0);
+    }
+}

@@ -77,6 +77,11 @@ fn scene_file_inputs() {
 }
 
 #[test]
+fn hdr_image_inputs() {
+    run_all("hdr_image", raylab::fuzzing::hdr_image);
+}
+
+#[test]
 fn exr_part_inputs() {
     run_all("exr_part", raylab::fuzzing::exr_part);
 }

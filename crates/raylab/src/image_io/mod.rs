@@ -210,10 +210,28 @@ pub fn save_film(path: &Path, film: &Film, display: &Display) -> Result<(), Imag
     }
 }
 
-/// Reads a float image, `.pfm` or `.exr` (its first RGB layer), as a film.
+/// The most pixels a float image read from a file may declare (an environment map of
+/// 16k × 8k is 2²⁷): refused before anything is allocated for them.
+pub const MAX_FLOAT_IMAGE_PIXELS: u64 = 1 << 28;
+
+/// Whether `path` names a Radiance HDR (RGBE) file, `.hdr` (case-insensitive).
+fn is_hdr(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("hdr"))
+}
+
+/// Reads a float image, `.pfm`, `.exr` (its first RGB layer) or `.hdr` (Radiance RGBE, the
+/// format most HDRI libraries publish), as a film.
 pub fn load_film(path: &Path) -> Result<Film, ImageIoError> {
     let error =
         |message: String| ImageIoError::Float { action: "read", path: path.to_path_buf(), message };
+    if is_hdr(path) {
+        let bytes = fs::read(path).map_err(|source| ImageIoError::Io {
+            action: "read",
+            path: path.to_path_buf(),
+            source,
+        })?;
+        return parse_hdr(&bytes).map_err(error);
+    }
     match ImageFormat::from_path(path) {
         Ok(ImageFormat::Exr) => {
             use exr::prelude::*;
@@ -239,8 +257,32 @@ pub fn load_film(path: &Path) -> Result<Film, ImageIoError> {
             })?;
             parse_pfm(&bytes).map_err(error)
         }
-        _ => Err(error("not a float image: expected .pfm or .exr".into())),
+        _ => Err(error("not a float image: expected .pfm, .exr or .hdr".into())),
     }
+}
+
+/// Parses a Radiance HDR file (RGBE, flat or run-length encoded; top row first, as films are).
+/// Its size is checked against [`MAX_FLOAT_IMAGE_PIXELS`] before the pixels are read.
+pub fn parse_hdr(bytes: &[u8]) -> Result<Film, String> {
+    use image::ImageDecoder;
+    let decoder = image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes))
+        .map_err(|e| format!("not a Radiance HDR file: {e}"))?;
+    let (width, height) = decoder.dimensions();
+    let pixels = u64::from(width) * u64::from(height);
+    if pixels > MAX_FLOAT_IMAGE_PIXELS {
+        return Err(format!(
+            "it declares {width}×{height} pixels, more than an image may have ({MAX_FLOAT_IMAGE_PIXELS})"
+        ));
+    }
+    if pixels == 0 {
+        return Err(format!("it declares {width}×{height} pixels: no image"));
+    }
+    let mut data = vec![0u8; decoder.total_bytes() as usize];
+    decoder.read_image(&mut data).map_err(|e| format!("damaged pixel data: {e}"))?;
+    let floats: Vec<f32> =
+        data.chunks_exact(4).map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]])).collect();
+    let pixels = floats.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    Ok(Film::from_pixels(width, height, pixels))
 }
 
 /// Parses a colour Portable Float Map.
@@ -395,6 +437,66 @@ mod tests {
         assert_eq!(&bytes[11..], test_image().as_raw().as_slice());
         // Nothing but the two images is left in the folder.
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    /// A Radiance HDR file of `pixels` (`width` wide, top row first), by the `image` crate's
+    /// encoder (run-length encoded rows).
+    fn hdr_file(pixels: &[Vec3], width: usize) -> Vec<u8> {
+        let rgb: Vec<image::Rgb<f32>> = pixels.iter().map(|p| image::Rgb(p.to_array())).collect();
+        let mut bytes = Vec::new();
+        image::codecs::hdr::HdrEncoder::new(&mut bytes)
+            .encode(&rgb, width, pixels.len() / width)
+            .unwrap();
+        bytes
+    }
+
+    #[test]
+    fn hdr_files_are_read_top_row_first_to_rgbe_precision() {
+        let dir = tempfile::tempdir().unwrap();
+        // Wide enough (≥ 8) that the encoder run-length encodes its rows.
+        let (width, height) = (40, 3);
+        let pixels: Vec<Vec3> = (0..width * height)
+            .map(|i| Vec3::new(i as f32 * 0.37 + 0.01, 1000.0 / (i as f32 + 1.0), (i % 7) as f32))
+            .collect();
+        let path = dir.path().join("sky.HDR");
+        fs::write(&path, hdr_file(&pixels, width)).unwrap();
+        let film = load_film(&path).unwrap();
+        assert_eq!((film.width(), film.height()), (width as u32, height as u32));
+        for y in 0..height {
+            for x in 0..width {
+                let (want, got) = (pixels[y * width + x], film.pixel(x as u32, y as u32));
+                // RGBE keeps 8 bits of mantissa under the largest channel's exponent.
+                let tolerance = want.max_element() / 128.0;
+                assert!(
+                    (want - got).abs().max_element() <= tolerance,
+                    "({x}, {y}): {got} for {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn damaged_hdr_files_are_one_line_errors_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let pixels: Vec<Vec3> = (0..64 * 32).map(|i| Vec3::splat((i % 97) as f32 + 0.5)).collect();
+        let whole = hdr_file(&pixels, 64);
+        let cases: [(&str, Vec<u8>, &str); 4] = [
+            ("truncated.hdr", whole[..whole.len() / 2].to_vec(), "damaged pixel data"),
+            ("garbage.hdr", b"#?RADIANCE\nthis is no header\n".to_vec(), "not a Radiance HDR"),
+            ("empty.hdr", Vec::new(), "not a Radiance HDR"),
+            (
+                "huge.hdr",
+                b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n".to_vec(),
+                "declares 100000×100000 pixels, more than an image may have",
+            ),
+        ];
+        for (name, bytes, words) in cases {
+            let path = dir.path().join(name);
+            fs::write(&path, bytes).unwrap();
+            let message = load_film(&path).unwrap_err().to_string();
+            assert!(message.contains(name) && message.contains(words), "{name}: {message}");
+            assert!(!message.contains('\n'), "{name}: one line: {message}");
+        }
     }
 
     #[test]
