@@ -81,3 +81,10 @@ pub fn hdr_image(data: &[u8]) {
         let _ = film.pixel(0, 0);
     }
 }
+
+/// An OpenEXR image, as `load_film` (and an environment map's file) reads it.
+pub fn exr_image(data: &[u8]) {
+    if let Ok(film) = crate::image_io::openexr::read_exr_film(data) {
+        let _ = film.pixel(0, 0);
+    }
+}

@@ -81,6 +81,12 @@ fn hdr_image_inputs() {
     run_all("hdr_image", raylab::fuzzing::hdr_image);
 }
 
+/// The parts' inputs, read as plain images (the same decoder, another entry point).
+#[test]
+fn exr_image_inputs() {
+    run_all("exr_part", raylab::fuzzing::exr_image);
+}
+
 #[test]
 fn exr_part_inputs() {
     run_all("exr_part", raylab::fuzzing::exr_part);

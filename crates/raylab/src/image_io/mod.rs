@@ -234,20 +234,12 @@ pub fn load_film(path: &Path) -> Result<Film, ImageIoError> {
     }
     match ImageFormat::from_path(path) {
         Ok(ImageFormat::Exr) => {
-            use exr::prelude::*;
-            let image = read_first_rgba_layer_from_file(
-                path,
-                |resolution, _| {
-                    (resolution.width(), vec![Vec3::ZERO; resolution.width() * resolution.height()])
-                },
-                |(width, pixels), position, (r, g, b, _a): (f32, f32, f32, f32)| {
-                    pixels[position.y() * *width + position.x()] = Vec3::new(r, g, b);
-                },
-            )
-            .map_err(|e| error(e.to_string()))?;
-            let size = image.layer_data.size;
-            let (_, pixels) = image.layer_data.channel_data.pixels;
-            Ok(Film::from_pixels(size.width() as u32, size.height() as u32, pixels))
+            let bytes = fs::read(path).map_err(|source| ImageIoError::Io {
+                action: "read",
+                path: path.to_path_buf(),
+                source,
+            })?;
+            openexr::read_exr_film(&bytes).map_err(error)
         }
         Ok(ImageFormat::Pfm) => {
             let bytes = fs::read(path).map_err(|source| ImageIoError::Io {
@@ -497,6 +489,19 @@ mod tests {
             assert!(message.contains(name) && message.contains(words), "{name}: {message}");
             assert!(!message.contains('\n'), "{name}: one line: {message}");
         }
+    }
+
+    #[test]
+    fn hostile_exr_images_are_refused_with_their_reason() {
+        let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/exr_part");
+        let error = |name: &str| load_film(&folder.join(name)).unwrap_err().to_string();
+        let huge = error("huge-data-window.exr");
+        assert!(
+            huge.contains("huge-data-window.exr") && huge.contains("declares 100000×100000"),
+            "{huge}"
+        );
+        let truncated = error("truncated.exr");
+        assert!(truncated.contains("truncated.exr") && !truncated.contains('\n'), "{truncated}");
     }
 
     #[test]

@@ -144,3 +144,59 @@ pub fn load_exr_channels(path: &Path) -> Result<Vec<Channel>, ImageIoError> {
         .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
         .collect())
 }
+
+/// Runs an OpenEXR decoding step, turning a panic inside the decoder (a damaged file it does
+/// not expect) into an error.
+///
+/// The panic is not printed: the caller reports the error in one line. (Decoding runs on this
+/// thread only, `non_parallel`, so the hook's per-thread switch covers it.)
+pub(crate) fn guarded<T>(decode: impl FnOnce() -> exr::error::Result<T>) -> Result<T, String> {
+    match crate::quiet_panic::catch_quietly(decode) {
+        Some(result) => result.map_err(|e| e.to_string()),
+        None => Err("damaged beyond what the OpenEXR decoder can read".into()),
+    }
+}
+
+/// Reads an OpenEXR file's first RGB layer as a film (`load_film`'s `.exr`): its headers are
+/// read and checked against [`MAX_FLOAT_IMAGE_PIXELS`](super::MAX_FLOAT_IMAGE_PIXELS) before
+/// any pixel is decoded, and a decoder that fails in any way gives an error, never a panic.
+pub fn read_exr_film(bytes: &[u8]) -> Result<Film, String> {
+    let meta =
+        guarded(|| exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false))?;
+    if let Some(header) = meta.headers.iter().find(|h| {
+        (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64)
+            > super::MAX_FLOAT_IMAGE_PIXELS
+    }) {
+        return Err(format!(
+            "it declares {}×{} pixels, more than an image may have ({})",
+            header.layer_size.0,
+            header.layer_size.1,
+            super::MAX_FLOAT_IMAGE_PIXELS
+        ));
+    }
+    let image = guarded(|| {
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgba_channels(
+                |resolution, _| {
+                    (
+                        resolution.width(),
+                        vec![glam::Vec3::ZERO; resolution.width() * resolution.height()],
+                    )
+                },
+                |(width, pixels): &mut (usize, Vec<glam::Vec3>),
+                 position,
+                 (r, g, b, _a): (f32, f32, f32, f32)| {
+                    pixels[position.y() * *width + position.x()] = glam::Vec3::new(r, g, b);
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .non_parallel()
+            .from_buffered(std::io::Cursor::new(bytes))
+    })?;
+    let size = image.layer_data.size;
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    Ok(Film::from_pixels(size.width() as u32, size.height() as u32, pixels))
+}

@@ -30,6 +30,7 @@ use std::result::Result;
 
 use crate::image_io::ImageIoError;
 use crate::image_io::openexr as exr_file;
+use crate::image_io::openexr::guarded;
 pub use crate::image_io::openexr::{Channel, Compression, beauty, film_channels};
 use crate::region::Region;
 
@@ -313,18 +314,6 @@ pub fn read_part_from(
         command,
     };
     Ok(Part { path: path.to_path_buf(), header, channels })
-}
-
-/// Runs an OpenEXR decoding step, turning a panic inside the decoder (a damaged file it does
-/// not expect) into an error.
-///
-/// The panic is not printed: the caller reports the error in one line. (Decoding runs on this
-/// thread only, `non_parallel`, so the hook's per-thread switch covers it.)
-fn guarded<T>(decode: impl FnOnce() -> exr::error::Result<T>) -> Result<T, String> {
-    match crate::quiet_panic::catch_quietly(decode) {
-        Some(result) => result.map_err(|e| e.to_string()),
-        None => Err("damaged beyond what the OpenEXR decoder can read".into()),
-    }
 }
 
 /// Puts parts together into the whole image's channels (row by row over the image), checking
