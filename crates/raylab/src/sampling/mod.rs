@@ -390,9 +390,10 @@ const SMALL_DISTRIBUTION: usize = 16;
 /// items).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DiscreteDistribution {
-    /// `cdf[i]` = the sum of the weights before item `i`, normalized; `cdf[n] = 1`.
+    /// `cdf[i]` = the sum of the weights before item `i`, normalized; `cdf[n] = 1`. Item `i`'s
+    /// probability is the step `cdf[i + 1] − cdf[i]`: exactly what sampling gives it, and no
+    /// second table (an environment map's rows hold millions of items).
     cdf: Vec<f32>,
-    pmf: Vec<f32>,
 }
 
 impl DiscreteDistribution {
@@ -410,14 +411,12 @@ impl DiscreteDistribution {
             cdf.push((sum / total) as f32);
         }
         *cdf.last_mut().expect("pushed") = 1.0;
-        // The probabilities that sampling really has: the steps of the f32 CDF.
-        let pmf = cdf.windows(2).map(|c| c[1] - c[0]).collect();
-        Some(DiscreteDistribution { cdf, pmf })
+        Some(DiscreteDistribution { cdf })
     }
 
     /// The number of items.
     pub fn len(&self) -> usize {
-        self.pmf.len()
+        self.cdf.len().saturating_sub(1)
     }
 
     /// How many entries of the CDF are at most `u` (it ascends, so they lead): a binary search,
@@ -434,13 +433,13 @@ impl DiscreteDistribution {
 
     /// Whether there are no items.
     pub fn is_empty(&self) -> bool {
-        self.pmf.is_empty()
+        self.len() == 0
     }
 
     /// The probability of item `i`.
     #[inline]
     pub fn pmf(&self, i: usize) -> f32 {
-        self.pmf[i]
+        self.cdf[i + 1] - self.cdf[i]
     }
 
     /// The item that `u ∈ [0, 1)` picks, its probability, and `u` rescaled to `[0, 1)` within the
@@ -457,8 +456,8 @@ impl DiscreteDistribution {
     #[inline]
     pub fn pick(&self, u: f32) -> (usize, f32, f32) {
         // The last i with cdf[i] <= u, skipping items of probability zero.
-        let i = (self.below_or_at(u).max(1) - 1).min(self.pmf.len() - 1);
-        (i, self.pmf[i], self.cdf[i])
+        let i = (self.below_or_at(u).max(1) - 1).min(self.len() - 1);
+        (i, self.pmf(i), self.cdf[i])
     }
 }
 

@@ -10,8 +10,8 @@
 //! "Piecewise-constant 2D distributions"; Mitsuba 3's `DiscreteDistribution2D` samples the
 //! same density). `p(u, v) = p(v) · p(u | v)`.
 //!
-//! The tables keep only their cumulative distributions, in `f32`, summed in `f64`; a density is
-//! read from the CDF's steps, so that the density reported is exactly the one sampled, and a
+//! Each row is a [`DiscreteDistribution`] (the bins' cumulative distribution, in `f32`,
+//! summed in `f64`, and nothing else); a density is read from the CDF's steps, so that the density reported is exactly the one sampled, and a
 //! 2D table of `w × h` values takes `(w + 1)·h + h + 1` floats (an 8k × 4k environment map:
 //! 128 MiB). Negative and NaN values count as zero; a table of zeros is uniform.
 //!
@@ -21,13 +21,13 @@
 
 use glam::Vec2;
 
-use super::ONE_MINUS_EPSILON;
+use super::{DiscreteDistribution, ONE_MINUS_EPSILON, rescaled};
 
-/// A piecewise-constant density on `[0, 1)` from `n` bins.
+/// A piecewise-constant density on `[0, 1)` from `n` bins: a [`DiscreteDistribution`] over
+/// the bins (the bin that `u` picks, and `u` rescaled within it), spread evenly across each.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PiecewiseConstant1D {
-    /// `cdf[i]`: the probability of `[0, i/n)`; `cdf[0] = 0`, `cdf[n] = 1`.
-    cdf: Vec<f32>,
+    bins: DiscreteDistribution,
     /// The mean of the values (`Σ fᵢ / n`), `0` for a table of zeros.
     integral: f64,
 }
@@ -40,24 +40,21 @@ impl PiecewiseConstant1D {
     /// With no values.
     pub fn new(values: &[f32]) -> PiecewiseConstant1D {
         assert!(!values.is_empty(), "a piecewise-constant density needs a value");
-        let n = values.len();
-        let value = |f: f32| if f > 0.0 { f as f64 } else { 0.0 };
-        let total: f64 = values.iter().map(|&f| value(f)).sum();
-        let uniform = !(total > 0.0 && total.is_finite());
-        let mut cdf = Vec::with_capacity(n + 1);
-        let mut sum = 0.0f64;
-        cdf.push(0.0);
-        for (i, &f) in values.iter().enumerate() {
-            sum += if uniform { 1.0 } else { value(f) };
-            let total = if uniform { n as f64 } else { total };
-            cdf.push(if i + 1 == n { 1.0 } else { (sum / total) as f32 });
+        match DiscreteDistribution::new(values) {
+            Some(bins) => {
+                let total: f64 = values.iter().map(|&f| if f > 0.0 { f as f64 } else { 0.0 }).sum();
+                PiecewiseConstant1D { bins, integral: total / values.len() as f64 }
+            }
+            None => PiecewiseConstant1D {
+                bins: DiscreteDistribution::new(&vec![1.0; values.len()]).expect("ones"),
+                integral: 0.0,
+            },
         }
-        PiecewiseConstant1D { cdf, integral: if uniform { 0.0 } else { total / n as f64 } }
     }
 
     /// The number of bins.
     pub fn len(&self) -> usize {
-        self.cdf.len() - 1
+        self.bins.len()
     }
 
     /// Always false: a density has at least one bin.
@@ -74,7 +71,7 @@ impl PiecewiseConstant1D {
     /// The probability of bin `i`.
     #[inline]
     pub fn probability(&self, i: usize) -> f32 {
-        self.cdf[i + 1] - self.cdf[i]
+        self.bins.pmf(i)
     }
 
     /// The density at `x ∈ [0, 1)` (outside: the nearest bin's).
@@ -89,13 +86,9 @@ impl PiecewiseConstant1D {
     #[inline]
     pub fn sample(&self, u: f32) -> (f32, f32, usize) {
         let n = self.len();
-        // The last bin whose interval starts at or below u: never one of probability zero
-        // (its successor starts at the same place), but the last bin at worst.
-        let i = (self.cdf.partition_point(|&c| c <= u).max(1) - 1).min(n - 1);
-        let p = self.probability(i);
-        let within =
-            if p > 0.0 { ((u - self.cdf[i]) / p).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 };
-        let x = ((i as f32 + within) / n as f32).min(ONE_MINUS_EPSILON);
+        // Never a bin of probability zero: `pick` skips them.
+        let (i, p, start) = self.bins.pick(u);
+        let x = ((i as f32 + rescaled(u, start, p)) / n as f32).min(ONE_MINUS_EPSILON);
         (x, p * n as f32, i)
     }
 }
