@@ -153,6 +153,9 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         time_limit: args.time_limit,
     };
     let settings = ResolvedSettings::resolve(scene, &options);
+    for warning in settings.warnings(scene) {
+        eprintln!("raylab: warning: {warning}");
+    }
     let mut job = RenderJob::new(scene, settings, args.scene.threads())?;
     let cameras = args.scene.camera_options();
     let (width, height) = cameras.size(scene);

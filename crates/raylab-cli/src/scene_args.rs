@@ -4,6 +4,7 @@
 use anyhow::Result;
 use clap::Args;
 use glam::Vec3;
+use raylab::light::EnvironmentMap;
 use raylab::scene::{CameraSettings, Instancing, LoadOptions, OpenedScene};
 use raylab::session::CameraOptions;
 use raylab::{Scene, Stage};
@@ -68,6 +69,28 @@ pub struct SceneArgs {
     #[arg(long, value_name = "WATTS", value_parser = args::non_negative_f32)]
     pub light_power: Option<f32>,
 
+    /// An equirectangular (latitude-longitude) HDR environment map, .hdr or .exr, lighting the
+    /// scene from every direction, Mitsuba's envmap: the image's top row is up (+y of a y-up
+    /// model), its left edge looks along -z. It replaces the scene's environments and, for a
+    /// model without lights of its own, the default light; the path tracer sees it.
+    #[arg(long, value_name = "FILE")]
+    pub env: Option<std::path::PathBuf>,
+
+    /// Turn the environment map about the vertical axis, in degrees (counter-clockwise seen
+    /// from above) [default: 0].
+    #[arg(
+        long,
+        value_name = "DEG",
+        requires = "env",
+        value_parser = args::finite_f32,
+        allow_hyphen_values = true
+    )]
+    pub env_rotate: Option<f32>,
+
+    /// Multiply the environment map's radiance by S [default: 1].
+    #[arg(long, value_name = "S", requires = "env", value_parser = args::non_negative_f32)]
+    pub env_scale: Option<f32>,
+
     /// Radius of the camera's thin lens in scene units, for depth of field [default: 0, a
     /// pinhole: everything sharp].
     #[arg(long, value_name = "R", value_parser = args::non_negative_f32)]
@@ -116,6 +139,13 @@ impl SceneArgs {
         let load = start.elapsed();
         for warning in &scene.warnings {
             eprintln!("raylab: warning: {warning}");
+        }
+        if let Some(path) = &self.env {
+            let image = raylab::image_io::load_film(path)?;
+            let turn = glam::Mat3::from_rotation_y(self.env_rotate.unwrap_or(0.0).to_radians());
+            let name = path.display().to_string();
+            let map = EnvironmentMap::new(name, image, self.env_scale.unwrap_or(1.0), turn)?;
+            scene.light_with_environment_map(map, is_model);
         }
         if let Some(position) = self.light {
             scene.point_light_mut().position = position;

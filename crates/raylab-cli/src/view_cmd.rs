@@ -120,6 +120,9 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         ..RenderOptions::default()
     };
     let settings = ResolvedSettings::resolve(scene, &options);
+    for warning in settings.warnings(scene) {
+        eprintln!("raylab: warning: {warning}");
+    }
     let mut job = RenderJob::new(scene, settings, args.scene.threads())?;
     let camera = cameras.camera(setup.first_camera(), scene, setup.is_model, job.accel()?)?;
     let accel = job.built_accel().expect("built above");

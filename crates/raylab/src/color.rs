@@ -16,6 +16,13 @@ pub fn linear_to_srgb(c: f32) -> f32 {
     if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
 }
 
+/// The luminance `Y` of a linear sRGB (Rec. 709) colour: `0.2126 r + 0.7152 g + 0.0722 b`
+/// (Mitsuba 3's `luminance`, which weighs an environment map's texels for sampling).
+#[inline]
+pub fn luminance(c: glam::Vec3) -> f32 {
+    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -78,10 +78,11 @@ pub enum IntegratorKind {
 }
 
 impl IntegratorKind {
-    /// The integrator of a scene that names none: `path` where some surface emits (area
-    /// lights, which the lab's model ignores), else `lab`.
-    pub fn default_for(has_area_lights: bool) -> IntegratorKind {
-        if has_area_lights { IntegratorKind::Path } else { IntegratorKind::Lab }
+    /// The integrator of a scene that names none: `path` where the lab's model would miss some
+    /// of its light (emitting surfaces, environments, spot, directional and sun lights:
+    /// `Scene::needs_path_tracing`), else `lab`.
+    pub fn default_for(needs_path_tracing: bool) -> IntegratorKind {
+        if needs_path_tracing { IntegratorKind::Path } else { IntegratorKind::Lab }
     }
 
     /// What it estimates, for a render's identity: `path-scalar` is `path` (the same samples

@@ -221,8 +221,10 @@ fn the_textured_box_shows_its_texels_the_right_way_round() {
 }
 
 /// The metallic-roughness factors become the `Pbr` BSDF, transmission makes glass of the file's
-/// index, and `KHR_lights_punctual` point lights light the scene (intensity in candela: power
-/// 4π·I), in the lab's frame; a directional light and a missing image are warnings.
+/// index, and `KHR_lights_punctual` lights light the scene in the lab's frame: a point light
+/// (intensity in candela: power 4π·I), a spot light (its cone angles, glTF's falloff, along its
+/// node's −z) and a directional light (lux as irradiance, along its node's −z); a missing image
+/// is a warning.
 #[test]
 fn materials_and_punctual_lights_map_to_raylab() {
     use raylab::material::{Bsdf, Dielectric, Pbr};
@@ -239,28 +241,31 @@ fn materials_and_punctual_lights_map_to_raylab() {
                 "extensionsUsed": ["KHR_lights_punctual"],
                 "extensions": {"KHR_lights_punctual": {"lights": [
                     {"type": "point", "color": [1, 0.5, 0.25], "intensity": 10},
-                    {"type": "directional"}]}},"#,
+                    {"type": "directional", "intensity": 3},
+                    {"type": "spot", "intensity": 5, "range": 2,
+                     "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}}]}},"#,
             )
             .replacen(
                 "\"nodes\": [\n                0\n            ]",
-                "\"nodes\": [0, 2, 3]",
+                "\"nodes\": [0, 2, 3, 4]",
                 1,
             )
             .replace(
                 "            \"mesh\": 0\n        }\n    ],",
                 "            \"mesh\": 0\n        },
                 {\"translation\": [1, 2, 3], \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}},
-                {\"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}}\n    ],",
+                {\"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}},
+                {\"translation\": [0, 1, 0], \"rotation\": [0.70710678, 0, 0, 0.70710678],
+                 \"extensions\": {\"KHR_lights_punctual\": {\"light\": 2}}}\n    ],",
             );
     });
     let loaded = load_mesh(&path).unwrap();
     // (The copy has no PNG beside it: a missing image is a warning, and the model loads.)
-    assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
     assert!(
         loaded.warnings[0].contains("material \"Texture\": its base colour texture is ignored")
     );
     assert!(loaded.warnings[0].contains("CesiumLogoFlat.png: cannot read it"));
-    assert!(loaded.warnings[1].contains("node 3: light 1: directional lights are not supported"));
     let scene = raylab::Scene::from_loaded(&loaded);
     // alphaMode MASK: cut out below the cutoff, the factor's alpha kept.
     let mask = scene.materials[0].textures.alpha_mask;
@@ -276,6 +281,17 @@ fn materials_and_punctual_lights_map_to_raylab() {
         .collect();
     let power = 4.0 * std::f32::consts::PI * 10.0 * Vec3::new(1.0, 0.5, 0.25);
     assert_eq!(points, [raylab::PointLight { position: Vec3::new(1.0, -2.0, -3.0), power }]);
+    // The directional light shines along its node's −z: the lab's +z.
+    let directional = raylab::light::DirectionalLight { direction: Vec3::Z, irradiance: Vec3::splat(3.0) };
+    assert!(scene.lights.contains(&raylab::Light::Directional(directional)), "{:?}", scene.lights);
+    // The spot's node turns −z a quarter turn about x, to the file's +y: the lab's −y.
+    let Some(raylab::Light::Spot(spot)) = scene.lights.iter().find(|l| l.kind() == "spot") else {
+        panic!("no spot light in {:?}", scene.lights);
+    };
+    assert!((spot.axis() - Vec3::NEG_Y).length() < 1e-6, "{}", spot.axis());
+    assert_eq!(spot.position(), Vec3::new(0.0, -1.0, 0.0));
+    assert_eq!((spot.intensity(), spot.angles()), (Vec3::splat(5.0), (0.5, 0.2)));
+    assert_eq!(spot.profile(), raylab::light::SpotProfile::Gltf);
 
     // Transmission: glass of the file's index (smooth at roughness 0).
     let (_dir, path) = broken_box(|json| {

@@ -122,6 +122,11 @@ impl Film {
         Film { width, height, pixels }
     }
 
+    /// The pixels, row by row from the top-left, without copying them.
+    pub fn into_pixels(self) -> Vec<Vec3> {
+        self.pixels
+    }
+
     #[cfg(feature = "io")]
     /// 8-bit RGB as the lab displays it: each channel clamped to `[0, 1]`, times 255, rounded to
     /// the nearest level, no gamma.

@@ -365,19 +365,17 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         state: &mut PathState,
         hit: Option<&Hit>,
     ) -> Option<SurfaceInteraction> {
+        let (unweighted, previous_pdf) =
+            (state.depth == 0 || state.previous_delta, state.previous_pdf);
         let found = |light_pdf: f32| {
-            if state.depth == 0 || state.previous_delta {
-                1.0
-            } else {
-                power_heuristic(state.previous_pdf, light_pdf)
-            }
+            if unweighted { 1.0 } else { power_heuristic(previous_pdf, light_pdf) }
         };
         let Some(hit) = hit else {
-            let (environment, light_pdf) = self.lights.environment(state.ray.direction.normalize());
-            if environment != Vec3::ZERO {
+            let direction = state.ray.direction.normalize();
+            self.lights.escaped(direction, |radiance, light_pdf| {
                 let weight = found(light_pdf);
-                state.radiance += state.throughput * environment * weight;
-            }
+                state.radiance += state.throughput * radiance * weight;
+            });
             return None;
         };
         let interaction = self.scene.interaction(&state.ray, hit);

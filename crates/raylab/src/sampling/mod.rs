@@ -177,6 +177,23 @@ pub fn uniform_sphere_pdf(_w: Vec3) -> f32 {
     0.25 * FRAC_1_PI
 }
 
+/// A direction within angle `α` of +z, uniform by solid angle, given `1 − cos α` (which a
+/// small cone, the sun's, needs without cancellation): `1 − cos θ = u.x·(1 − cos α)`, and
+/// `sin θ` from it without cancellation either.
+#[inline]
+pub fn square_to_uniform_cone(u: Vec2, one_minus_cos_alpha: f32) -> Vec3 {
+    let one_minus_cos = u.x * one_minus_cos_alpha;
+    let sin_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
+    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    Vec3::new(sin_theta * cos, sin_theta * sin, 1.0 - one_minus_cos)
+}
+
+/// Density of [`square_to_uniform_cone`] inside its cone: `1 / (2π (1 − cos α))`.
+#[inline]
+pub fn uniform_cone_pdf(one_minus_cos_alpha: f32) -> f32 {
+    1.0 / (2.0 * PI * one_minus_cos_alpha)
+}
+
 // ---------------------------------------------------------------------------------------------
 // Triangles.
 

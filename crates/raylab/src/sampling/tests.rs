@@ -7,7 +7,7 @@ use super::*;
 
 const ATTEMPTS: usize = 400_000;
 /// Warp tests in this file (for the Šidák correction).
-const TESTS: usize = 10;
+const TESTS: usize = 12;
 
 fn uniform(rng: &mut Pcg32) -> Vec2 {
     Vec2::new(rng.next_f32(), rng.next_f32())
@@ -46,6 +46,40 @@ fn uniform_hemisphere_and_sphere_fit_their_densities() {
         uniform_sphere_pdf,
     )
     .assert_fits("uniform sphere", TESTS, 1e-3);
+}
+
+/// Cones, a wide one and one the sun's size, through the projection onto the plane across
+/// their axis, scaled to the square `[−1, 1]²`: a direction at `θ` projects to
+/// `sin θ (cos φ, sin φ)`, where solid angle is `dA / cos θ`, so the projected density is
+/// `pdf / cos θ` (times `sin² α` for the scaling).
+#[test]
+fn uniform_cones_fit_their_density() {
+    let sun_radius = 0.5338f32.to_radians() / 2.0;
+    for (test, alpha) in [(0u64, 1.0f32), (1, sun_radius)] {
+        let one_minus_cos = 2.0 * (0.5 * alpha).sin().powi(2);
+        let sin_alpha = alpha.sin();
+        let domain = Rectangle(Vec2::splat(-1.0), Vec2::splat(1.0));
+        chi2::run(
+            &domain,
+            (24, 24),
+            ATTEMPTS,
+            20 + test,
+            |r| {
+                let w = square_to_uniform_cone(uniform(r), one_minus_cos);
+                assert!((w.length() - 1.0).abs() < 1e-5, "{w}");
+                Some(Vec3::new(w.x / sin_alpha, w.y / sin_alpha, 0.0))
+            },
+            |p| {
+                let sin2 = (p.x * p.x + p.y * p.y) * sin_alpha * sin_alpha;
+                if p.x * p.x + p.y * p.y > 1.0 {
+                    return 0.0;
+                }
+                let cos_theta = (1.0 - sin2).sqrt();
+                uniform_cone_pdf(one_minus_cos) / cos_theta * sin_alpha * sin_alpha
+            },
+        )
+        .assert_fits(&format!("uniform cone of {alpha} rad"), TESTS, 2e-3);
+    }
 }
 
 #[test]

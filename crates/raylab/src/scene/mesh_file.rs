@@ -48,8 +48,9 @@ pub struct LoadedMesh {
     pub warnings: Vec<String>,
     /// The file's camera (glTF), in the lab's frame.
     pub camera: Option<super::CameraSettings>,
-    /// The file's point lights (glTF's `KHR_lights_punctual`), in the lab's frame.
-    pub lights: Vec<crate::light::PointLight>,
+    /// The file's lights (glTF's `KHR_lights_punctual`: point, spot and directional), in the
+    /// lab's frame.
+    pub lights: Vec<crate::light::Light>,
 }
 
 impl LoadedMesh {

@@ -53,7 +53,7 @@ pub use scene_file::{
 use crate::accel::Hit;
 use crate::geometry::Geometry;
 use crate::interaction::SurfaceInteraction;
-use crate::light::{Light, PointLight};
+use crate::light::{EnvironmentMap, Light, PointLight};
 use crate::material::Material;
 use crate::ray::Ray;
 
@@ -339,6 +339,37 @@ impl Scene {
         self.materials.iter().any(Material::is_emissive)
     }
 
+    /// The kinds of its lights that the lab's light model ignores (every kind but the point
+    /// light), each once, in the order they come: the `lab` integrator warns of them.
+    pub fn lights_the_lab_ignores(&self) -> Vec<&'static str> {
+        let mut kinds = Vec::new();
+        for light in &self.lights {
+            if !matches!(light, Light::Point(_)) && !kinds.contains(&light.kind()) {
+                kinds.push(light.kind());
+            }
+        }
+        kinds
+    }
+
+    /// Whether only the path tracer sees all of its light: some surface emits, or some light is
+    /// not a point light.
+    pub fn needs_path_tracing(&self) -> bool {
+        self.has_area_lights() || self.lights.iter().any(|l| !matches!(l, Light::Point(_)))
+    }
+
+    /// Lights the scene with `map` instead of its environments (constant or mapped); a model
+    /// (`is_model`) lit only by its [`default_light`](Self::default_light) loses that light
+    /// too, so that the map alone lights it.
+    pub fn light_with_environment_map(&mut self, map: EnvironmentMap, is_model: bool) {
+        let only_default =
+            matches!(&self.lights[..], [Light::Point(p)] if *p == self.default_light());
+        if is_model && only_default {
+            self.lights.clear();
+        }
+        self.lights.retain(|l| !matches!(l, Light::Environment { .. } | Light::EnvironmentMap(_)));
+        self.lights.push(Light::EnvironmentMap(std::sync::Arc::new(map)));
+    }
+
     /// Checks that every number in the scene is finite and every material id and parameter
     /// valid.
     pub fn validate(&self) -> Result<(), SceneError> {
@@ -370,6 +401,16 @@ impl Scene {
                 problem: problem.to_string(),
             })?;
         }
+        let non_negative = |light: &str, what: &str, value: Vec3| {
+            if value.is_finite() && value.min_element() >= 0.0 {
+                return Ok(());
+            }
+            Err(SceneError::Invalid {
+                scene: self.name.clone(),
+                what: light.into(),
+                problem: format!("{what} {value} must be finite and not negative"),
+            })
+        };
         for light in &self.lights {
             match light {
                 Light::Point(point) => {
@@ -381,21 +422,33 @@ impl Scene {
                     }
                 }
                 Light::Environment { radiance } => {
-                    if !radiance.is_finite() || radiance.min_element() < 0.0 {
-                        return Err(SceneError::Invalid {
-                            scene: self.name.clone(),
-                            what: "the environment".into(),
-                            problem: format!("radiance {radiance} must be finite and not negative"),
-                        });
-                    }
+                    non_negative("the environment", "radiance", *radiance)?
                 }
+                // Checked as it was made.
+                Light::EnvironmentMap(_) => {}
+                Light::Directional(light) => {
+                    if !light.direction.is_finite() {
+                        return Err(not_finite(
+                            "a directional light's direction".into(),
+                            light.direction,
+                        ));
+                    }
+                    non_negative("a directional light", "irradiance", light.irradiance)?;
+                }
+                Light::Spot(spot) => {
+                    if !spot.position().is_finite() {
+                        return Err(not_finite("a spot light's position".into(), spot.position()));
+                    }
+                    non_negative("a spot light", "intensity", spot.intensity())?;
+                }
+                Light::Sun(sun) => non_negative("a sun", "radiance", sun.radiance())?,
             }
         }
         Ok(())
     }
 
-    /// The same scene with every length multiplied by `factor`, and point lights' power by
-    /// `factor²` so that the lab's picture stays the same (lab eq. 27 falls off as 1/r²).
+    /// The same scene with every length multiplied by `factor`, and point and spot lights' power
+    /// by `factor²` so that the picture stays the same (lab eq. 27 falls off as 1/r²).
     pub fn scaled(&self, factor: f32) -> Scene {
         let lights = self
             .lights
@@ -405,6 +458,10 @@ impl Scene {
                     position: point.position * factor,
                     power: point.power * factor * factor,
                 }),
+                Light::Spot(spot) => Light::Spot(
+                    spot.moved_to(spot.position() * factor)
+                        .with_intensity(spot.intensity() * factor * factor),
+                ),
                 other => other.clone(),
             })
             .collect();

@@ -56,14 +56,14 @@ impl Scene {
 
     #[cfg(feature = "io")]
     /// A loaded model file as a scene ([`from_mesh`](Self::from_mesh), its instanced meshes
-    /// stored once) with the file's camera and, where it has some, its point lights instead of
-    /// the default light.
+    /// stored once) with the file's camera and, where it has some, its lights instead of the
+    /// default light.
     pub fn from_loaded(loaded: &LoadedMesh) -> Scene {
         let mut scene = Scene::from_meshes(&loaded.mesh, &loaded.instanced);
         scene.camera = loaded.camera;
         if !loaded.lights.is_empty() {
             scene.lights.retain(|light| !matches!(light, Light::Point(_)));
-            scene.lights.extend(loaded.lights.iter().copied().map(Light::Point));
+            scene.lights.extend(loaded.lights.iter().cloned());
         }
         scene
     }

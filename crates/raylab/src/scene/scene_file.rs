@@ -18,7 +18,6 @@ use super::{CameraSettings, FovAxis, Keyframe, LoadOptions, LoadedMesh, RenderSe
 use crate::camera::Camera;
 use crate::filter::Filter;
 use crate::geometry::Geometry;
-use crate::light::{Light, PointLight};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::sampling::SamplerKind;
@@ -125,7 +124,7 @@ struct Document {
     #[serde(default)]
     shapes: Vec<Spanned<ShapeDoc>>,
     #[serde(default)]
-    lights: Vec<Spanned<LightDoc>>,
+    lights: Vec<Spanned<lights::LightDoc>>,
 }
 
 #[derive(Deserialize)]
@@ -183,13 +182,6 @@ struct ShapeDoc {
 struct RotateDoc {
     axis: [f32; 3],
     angle: f32,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
-enum LightDoc {
-    Point { position: [f32; 3], intensity: Option<[f32; 3]>, power: Option<[f32; 3]> },
-    Environment { radiance: [f32; 3] },
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -466,8 +458,20 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
 
     /// scale, then rotate, then translate, then `to_world`: in the file's y-up frame.
     fn transform(&self, doc: &ShapeDoc) -> Result<Affine3A> {
+        self.placement(doc.scale.as_ref(), doc.rotate.as_ref(), doc.translate, doc.to_world)
+    }
+
+    /// `scale`, then `rotate`, then `translate`, then `to_world`, those given: in the file's
+    /// y-up frame.
+    fn placement(
+        &self,
+        scale: Option<&Spanned<toml::Value>>,
+        rotate: Option<&RotateDoc>,
+        translate: Option<[f32; 3]>,
+        to_world: Option<[[f32; 4]; 4]>,
+    ) -> Result<Affine3A> {
         let mut transform = Affine3A::IDENTITY;
-        if let Some(scale) = &doc.scale {
+        if let Some(scale) = scale {
             let factors = match scale.get_ref() {
                 toml::Value::Float(f) => Vec3::splat(*f as f32),
                 toml::Value::Integer(i) => Vec3::splat(*i as f32),
@@ -490,7 +494,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             }
             transform = Affine3A::from_scale(factors);
         }
-        if let Some(rotate) = &doc.rotate {
+        if let Some(rotate) = rotate {
             let axis = Vec3::from_array(rotate.axis).normalize_or_zero();
             if axis == Vec3::ZERO || !rotate.angle.is_finite() {
                 return (Err((self.at)(
@@ -500,10 +504,10 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             }
             transform = Affine3A::from_axis_angle(axis, rotate.angle.to_radians()) * transform;
         }
-        if let Some(t) = doc.translate {
+        if let Some(t) = translate {
             transform = Affine3A::from_translation(Vec3::from_array(t)) * transform;
         }
-        if let Some(m) = doc.to_world {
+        if let Some(m) = to_world {
             // Rows as written; glam is column-major.
             let matrix = Mat4::from_cols_array_2d(&m).transpose();
             let last = matrix.row(3);
@@ -516,29 +520,6 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
             transform = Affine3A::from_mat4(matrix) * transform;
         }
         Ok(transform)
-    }
-
-    fn light(&self, light: &Spanned<LightDoc>) -> Result<Light> {
-        let light = match light.get_ref() {
-            LightDoc::Point { position, intensity, power } => {
-                let power = match (intensity, power) {
-                    (Some(i), None) => Vec3::from_array(*i) * (4.0 * std::f32::consts::PI),
-                    (None, Some(p)) => Vec3::from_array(*p),
-                    _ => {
-                        return self
-                            .error(light.span(), "a point light needs one of intensity or power");
-                    }
-                };
-                Light::Point(PointLight {
-                    position: super::model_to_lab(Vec3::from_array(*position)),
-                    power,
-                })
-            }
-            LightDoc::Environment { radiance } => {
-                Light::Environment { radiance: Vec3::from_array(*radiance) }
-            }
-        };
-        Ok(light)
     }
 
     fn camera(&self, camera: &Spanned<CameraDoc>) -> Result<CameraSettings> {
@@ -670,6 +651,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
 }
 
 /// Mitsuba's `rectangle`: `[−1, 1]²` in the plane z = 0, facing +z.
+mod lights;
 mod materials;
 mod shapes;
 mod textures;

@@ -147,7 +147,7 @@ impl ResolvedSettings {
         let integrator = options
             .integrator
             .or(file.integrator)
-            .unwrap_or_else(|| IntegratorKind::default_for(scene.has_area_lights()));
+            .unwrap_or_else(|| IntegratorKind::default_for(scene.needs_path_tracing()));
         let default_spp = if integrator == IntegratorKind::Lab { 1 } else { 16 };
         let spp = match (options.time_limit, options.spp) {
             // With a time limit, the passes stop at the time (or at an --spp asked for).
@@ -170,6 +170,22 @@ impl ResolvedSettings {
             },
             time_limit: options.time_limit,
         }
+    }
+
+    /// What the command line should warn of before rendering `scene` with these settings: the
+    /// lights the `lab` integrator ignores, if it is the integrator.
+    pub fn warnings(&self, scene: &Scene) -> Vec<String> {
+        let ignored = scene.lights_the_lab_ignores();
+        if self.integrator != IntegratorKind::Lab || ignored.is_empty() {
+            return Vec::new();
+        }
+        vec![format!(
+            "the lab integrator ignores the scene's {} light{} (its light model is the lab's \
+             point light); --integrator path sees {}",
+            ignored.join(", "),
+            if ignored.len() == 1 { "" } else { "s" },
+            if ignored.len() == 1 { "it" } else { "them" },
+        )]
     }
 
     /// The path tracer's settings.

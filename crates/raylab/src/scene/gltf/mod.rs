@@ -25,7 +25,7 @@ use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3, Vec4};
 
 use super::mesh_file::{InstancedMesh, LoadError, LoadedMesh, mesh_name};
 use super::{CameraSettings, FovAxis, model_to_lab};
-use crate::light::PointLight;
+use crate::light::{DirectionalLight, Light, PointLight, SpotLight, SpotProfile};
 use crate::mesh::{CornerAttribute, Mesh};
 use material::Images;
 
@@ -105,26 +105,10 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
             builder.camera = Some(camera_settings(&world, p.yfov()));
         }
         if let Some(light) = node.light() {
-            let colour = Vec3::from_array(light.color()) * light.intensity();
-            let position = model_to_lab(world.transform_point3(Vec3::ZERO));
-            let place =
-                format!("{}: node {}: light {}", path.display(), node.index(), light.index());
-            match light.kind() {
-                // glTF gives a point light's intensity in candela (lm/sr): a point light of power
-                // P radiates P/(4π) per steradian.
-                gltf::khr_lights_punctual::Kind::Point => {
-                    lights.push(PointLight { position, power: 4.0 * PI * colour })
-                }
-                gltf::khr_lights_punctual::Kind::Spot { .. } => {
-                    warnings.push(format!(
-                        "{place}: a spot light, lit as a point light (its cone is ignored)"
-                    ));
-                    lights.push(PointLight { position, power: 4.0 * PI * colour });
-                }
-                gltf::khr_lights_punctual::Kind::Directional => {
-                    warnings.push(format!("{place}: directional lights are not supported; ignored"))
-                }
-            }
+            let place = format!("node {}: light {}", node.index(), light.index());
+            lights.push(
+                punctual_light(&light, &world).map_err(|p| invalid(format!("{place}: {p}")))?,
+            );
         }
         if let Some(mesh) = node.mesh() {
             draws.push((mesh, world));
@@ -184,16 +168,39 @@ pub(crate) fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadEr
             path.display()
         ));
     }
-    if let Some(bad) = lights
-        .iter()
-        .find(|l| !(l.position.is_finite() && l.power.is_finite() && l.power.min_element() >= 0.0))
-    {
-        return Err(invalid(format!(
-            "a light at {} of power {} is not finite and positive",
-            bad.position, bad.power
-        )));
-    }
     Ok(LoadedMesh { mesh, instanced, warnings, camera, lights })
+}
+
+/// A `KHR_lights_punctual` light placed by its node's `world` transform, in the lab's frame.
+/// Colours times intensities: a point or spot light's in candela (lm/sr, read as W/sr: a point
+/// light of power P radiates P/(4π) per steradian), a directional light's in lux (lm/m², read
+/// as W/m²). Spot and directional lights shine along the node's −z; a spot's cone falls off as
+/// the extension recommends between its inner and outer angles ([`SpotProfile::Gltf`]).
+/// `range` is ignored, as the extension allows.
+fn punctual_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Result<Light, String> {
+    use gltf::khr_lights_punctual::Kind;
+    let colour = Vec3::from_array(light.color()) * light.intensity();
+    if !(colour.is_finite() && colour.min_element() >= 0.0) {
+        return Err(format!("its colour times intensity {colour} must be finite and not negative"));
+    }
+    let position = model_to_lab(world.transform_point3(Vec3::ZERO));
+    let axis = model_to_lab(world.transform_vector3(-Vec3::Z));
+    match light.kind() {
+        Kind::Point => Ok(Light::Point(PointLight { position, power: 4.0 * PI * colour })),
+        Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+            SpotLight::new(position, axis, colour, outer_cone_angle, inner_cone_angle, SpotProfile::Gltf)
+                .map(Light::Spot).ok_or_else(|| {
+                    format!(
+                        "a spot light needs 0 ≤ innerConeAngle ≤ outerConeAngle ≤ π and a node \
+                         that does not flatten its −z (here {inner_cone_angle} and {outer_cone_angle})"
+                    )
+                })
+        }
+        Kind::Directional => match axis.try_normalize() {
+            Some(direction) => Ok(Light::Directional(DirectionalLight { direction, irradiance: colour })),
+            None => Err("a directional light's node flattens its −z".into()),
+        },
+    }
 }
 
 /// Gives every triangle of `mesh` that has no tangents (no TANGENT in its primitive) generated

@@ -5,6 +5,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::*;
+use crate::light::Light;
 use crate::material::Bsdf;
 
 fn parse(text: &str) -> std::result::Result<Scene, SceneFileError> {

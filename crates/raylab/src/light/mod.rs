@@ -1,13 +1,25 @@
-//! Lights that are not surfaces: the lab's point light and a constant environment.
+//! Lights that are not surfaces: the lab's point light, Mitsuba 3's `directional`, `spot` and
+//! `envmap`, a sun disc, and a constant environment.
 //!
 //! Area lights are triangles whose material emits (see `Material::emission`);
 //! the path integrator gathers every light, these and the area lights, into one set that it
-//! samples by power, the environment half the time beside other lights
-//! (`integrator::LightSet`).
+//! samples by power, the environments half the time beside other lights
+//! (`integrator::LightSet`). The lab's integrator knows only the point light (its light model
+//! is the lab's).
+//!
+//! Every direction and position here is in the lab's frame (y down); scene files and glTF
+//! give them y-up and their loaders turn them.
 
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 use glam::Vec3;
+
+mod envmap;
+mod punctual;
+
+pub use envmap::{EnvironmentMap, direction_to_uv, uv_to_direction};
+pub use punctual::{DirectionalLight, SpotLight, SpotProfile, SunLight};
 
 /// A light of the scene that is not a surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,6 +31,38 @@ pub enum Light {
         /// The radiance, per channel.
         radiance: Vec3,
     },
+    /// Radiance arriving from every direction that leaves the scene, as an HDR image says.
+    EnvironmentMap(Arc<EnvironmentMap>),
+    /// Parallel light from infinitely far away (a delta light).
+    Directional(DirectionalLight),
+    /// A point light shining in a cone.
+    Spot(SpotLight),
+    /// A disc of constant radiance infinitely far away, as the sun.
+    Sun(SunLight),
+}
+
+impl Light {
+    /// What kind of light this is, in a scene file's words.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Light::Point(_) => "point",
+            Light::Environment { .. } => "environment",
+            Light::EnvironmentMap(_) => "envmap",
+            Light::Directional(_) => "directional",
+            Light::Spot(_) => "spot",
+            Light::Sun(_) => "sun",
+        }
+    }
+}
+
+/// A light that cannot be made: which, and why.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{light}: {problem}")]
+pub struct LightError {
+    /// The light (an environment map's file).
+    pub light: String,
+    /// What is wrong.
+    pub problem: String,
 }
 
 /// An isotropic point light of power `P` (watts per channel).

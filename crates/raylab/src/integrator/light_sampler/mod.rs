@@ -1,21 +1,24 @@
 //! Light sampling for the path tracer: every light of a scene in one set, chosen by power, the
-//! environment half the time beside other lights.
+//! environments half the time beside other lights.
 //!
-//! [`LightSet`] gathers the scene's point lights, its emissive triangles (area lights) and the
-//! environment, picks one in proportion to its power (the environment, unless black, half the
-//! time when there are other lights), and samples a direction toward it with its density per
-//! unit solid angle (next-event estimation). One pair of numbers picks the light (its first
+//! [`LightSet`] gathers the scene's point, spot and directional lights, suns, its emissive
+//! triangles (area lights) and its environments (constant or mapped), picks one in proportion to
+//! its power (the environments, unless black, half the time when there are other lights), and
+//! samples a direction toward it with its density per unit solid angle (next-event
+//! estimation). A ray that leaves the scene finds the infinite lights (environments and suns)
+//! with their densities, for multiple importance sampling ([`LightSet::escaped`]). One pair of numbers picks the light (its first
 //! number, rescaled within the light's share) and the point on it, as in Mitsuba. A material's
 //! emission texture makes a triangle shine in a pattern: its radiance is read at the sampled
 //! point (and where a ray hits it), and its power for choosing among lights is the texture's
 //! mean over the triangle, estimated on a grid.
 
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
 use crate::interaction::SurfaceInteraction;
-use crate::light::Light;
+use crate::light::{EnvironmentMap, Light, SpotLight, SunLight};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin};
 use crate::sampling::{
     DiscreteDistribution, sample_spherical_triangle, spherical_triangle_area,
@@ -40,8 +43,8 @@ pub struct LightSet {
     distribution: Option<DiscreteDistribution>,
     /// For each triangle, the index of its light, or `u32::MAX`.
     triangle_light: Vec<u32>,
-    /// The environment's radiance and its index, if the scene has one.
-    environment: Option<(Vec3, u32)>,
+    /// The lights that rays leaving the scene find: environments and suns.
+    infinite: Vec<u32>,
     /// How points on triangle lights are chosen.
     triangle_sampling: TriangleSampling,
     /// The emission texture of each textured triangle light, with the texture coordinates at
@@ -79,9 +82,22 @@ const SOLID_ANGLE_SAMPLING: std::ops::Range<f32> = 3e-4..6.22;
 
 #[derive(Clone, Debug)]
 enum SampledLight {
-    Point { position: Vec3, intensity: Vec3 },
+    Point {
+        position: Vec3,
+        intensity: Vec3,
+    },
     Triangle(TriangleLight),
-    Environment { radiance: Vec3 },
+    Environment {
+        radiance: Vec3,
+    },
+    EnvironmentMap(Arc<EnvironmentMap>),
+    /// `toward`: the unit direction toward the light (against the way its light travels).
+    Directional {
+        toward: Vec3,
+        irradiance: Vec3,
+    },
+    Spot(SpotLight),
+    Sun(SunLight),
 }
 
 /// An emitting triangle. `texture`: an index into [`LightSet::textures`], or `u32::MAX` for an
@@ -187,6 +203,15 @@ impl LightSet {
         let mut environment = None;
         for light in &scene.lights {
             match light {
+                Light::EnvironmentMap(map) => {
+                    lights.push(SampledLight::EnvironmentMap(map.clone()))
+                }
+                Light::Directional(light) => lights.push(SampledLight::Directional {
+                    toward: -light.direction,
+                    irradiance: light.irradiance,
+                }),
+                Light::Spot(spot) => lights.push(SampledLight::Spot(*spot)),
+                Light::Sun(sun) => lights.push(SampledLight::Sun(*sun)),
                 Light::Point(point) => lights.push(SampledLight::Point {
                     position: point.position,
                     intensity: point.intensity(),
@@ -232,6 +257,14 @@ impl LightSet {
                 }));
             }
         }
+        // Lights from infinitely far away send their power through a disk the size of the scene
+        // (PBR 4th ed. §12.5).
+        let scene_radius = scene
+            .bounds()
+            .map(|(min, max)| 0.5 * (max - min).length())
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .unwrap_or(1.0);
+        let through_scene = PI * scene_radius * scene_radius;
         let mut powers: Vec<f32> = lights
             .iter()
             .map(|light| match light {
@@ -240,30 +273,52 @@ impl LightSet {
                     let textured = texture_means.get(*texture as usize).copied();
                     PI * area * textured.unwrap_or_else(|| mean(*radiance))
                 }
-                SampledLight::Environment { .. } => 0.0,
+                SampledLight::Directional { irradiance, .. } => through_scene * mean(*irradiance),
+                SampledLight::Sun(sun) => through_scene * mean(sun.irradiance()),
+                SampledLight::Spot(spot) => spot.power(),
+                SampledLight::Environment { .. } | SampledLight::EnvironmentMap(_) => 0.0,
             })
             .collect();
-        // The environment is picked half the time when there are other lights, and always
+        // The environments are picked half the time when there are other lights, and always
         // without (pbrt-v4's `BVHLightSampler`, Mitsuba's uniform choice among two emitters); a
-        // black one never. Its power through a disk the size of the scene (PBR 4th ed. §12.5)
-        // ranks it by the floor around the scene's subject: on the materials scene it took 75 %
+        // black one never. Their power through a disk the size of the scene (PBR 4th ed. §12.5)
+        // ranks them by the floor around the scene's subject: on the materials scene it took 75 %
         // of the picks from the light above the spheres, and 13 % more squared error at 64 spp
         // (RMSE 0.0136 against 0.0128 with half, `tests/data/mitsuba-materials`). The others
-        // are summed as `DiscreteDistribution::new` sums them (in f64, negatives as zero).
-        if let Some((radiance, index)) = environment {
-            let others: f64 = powers.iter().map(|&p| p.max(0.0) as f64).sum();
-            powers[index as usize] = match (mean(radiance) > 0.0, others > 0.0) {
-                (false, _) => 0.0,
-                (true, true) => others as f32,
-                (true, false) => 1.0,
-            };
+        // are summed as `DiscreteDistribution::new` sums them (in f64, negatives as zero). Several
+        // environments share their half by their mean radiance.
+        let environments: Vec<(usize, f32)> = lights
+            .iter()
+            .enumerate()
+            .filter_map(|(i, light)| match light {
+                SampledLight::Environment { radiance } => Some((i, mean(*radiance))),
+                SampledLight::EnvironmentMap(map) => Some((i, mean(map.mean()))),
+                _ => None,
+            })
+            .filter(|(_, power)| *power > 0.0)
+            .collect();
+        let others: f64 = powers.iter().map(|&p| p.max(0.0) as f64).sum();
+        let share = if others > 0.0 { others as f32 } else { 1.0 };
+        let sum: f32 = environments.iter().map(|(_, p)| p).sum();
+        for &(i, power) in &environments {
+            powers[i] = if environments.len() == 1 { share } else { share * (power / sum) };
         }
+        let infinite = (0..lights.len() as u32)
+            .filter(|&i| {
+                matches!(
+                    lights[i as usize],
+                    SampledLight::Environment { .. }
+                        | SampledLight::EnvironmentMap(_)
+                        | SampledLight::Sun(_)
+                )
+            })
+            .collect();
         LightSet {
             lights,
             lane_lights: Vec::new(),
             distribution: DiscreteDistribution::new(&powers),
             triangle_light,
-            environment,
+            infinite,
             triangle_sampling: TriangleSampling::Area,
             textures,
         }
@@ -433,6 +488,52 @@ impl LightSet {
                     shadow_ray: point.spawn_ray(direction),
                 })
             }
+            SampledLight::EnvironmentMap(ref map) => {
+                let (direction, radiance, pdf) = map.sample(u)?;
+                Some(LightSample {
+                    direction,
+                    radiance,
+                    pdf: selection * pdf,
+                    delta: false,
+                    shadow_ray: point.spawn_ray(direction),
+                })
+            }
+            SampledLight::Sun(sun) => {
+                let (direction, pdf) = sun.sample(u);
+                Some(LightSample {
+                    direction,
+                    radiance: sun.radiance(),
+                    pdf: selection * pdf,
+                    delta: false,
+                    shadow_ray: point.spawn_ray(direction),
+                })
+            }
+            SampledLight::Directional { toward, irradiance } => Some(LightSample {
+                direction: toward,
+                radiance: irradiance,
+                pdf: selection,
+                delta: true,
+                shadow_ray: point.spawn_ray(toward),
+            }),
+            SampledLight::Spot(spot) => {
+                let to_light = spot.position() - point.p;
+                let distance_squared = to_light.length_squared();
+                if distance_squared == 0.0 {
+                    return None;
+                }
+                let direction = to_light / distance_squared.sqrt();
+                let intensity = spot.intensity_toward(-direction);
+                if intensity == Vec3::ZERO {
+                    return None;
+                }
+                Some(LightSample {
+                    direction,
+                    radiance: intensity / distance_squared,
+                    pdf: selection,
+                    delta: true,
+                    shadow_ray: point.spawn_ray_to(spot.position()),
+                })
+            }
         }
     }
 
@@ -492,16 +593,36 @@ impl LightSet {
         self.triangle_light[i as usize] != u32::MAX
     }
 
-    /// The environment's radiance along a ray that leaves the scene, and the density with which
-    /// [`sample`](Self::sample) would have chosen its direction; zero without an environment.
+    /// The light a ray leaving the scene along the unit `direction` finds: `found(radiance,
+    /// pdf)` for each infinite light (environment, environment map, sun) that sends some along
+    /// it, with the density with which [`sample`](Self::sample) would have chosen that
+    /// direction toward it (for the caller's MIS weight).
     #[inline]
-    pub fn environment(&self, direction: Vec3) -> (Vec3, f32) {
-        match self.environment {
-            Some((radiance, index)) => {
-                let selection = self.distribution.as_ref().map_or(0.0, |d| d.pmf(index as usize));
-                (radiance, selection * uniform_sphere_pdf(direction))
+    pub fn escaped(&self, direction: Vec3, mut found: impl FnMut(Vec3, f32)) {
+        for &index in &self.infinite {
+            let selection = || self.distribution.as_ref().map_or(0.0, |d| d.pmf(index as usize));
+            let (radiance, pdf) = match &self.lights[index as usize] {
+                SampledLight::Environment { radiance } => {
+                    (*radiance, selection() * uniform_sphere_pdf(direction))
+                }
+                SampledLight::EnvironmentMap(map) => {
+                    let radiance = map.eval(direction);
+                    if radiance == Vec3::ZERO {
+                        continue;
+                    }
+                    (radiance, selection() * map.pdf(direction))
+                }
+                SampledLight::Sun(sun) => {
+                    if !sun.sees(direction) {
+                        continue;
+                    }
+                    (sun.radiance(), selection() * sun.pdf(direction))
+                }
+                _ => unreachable!("infinite indexes environments and suns"),
+            };
+            if radiance != Vec3::ZERO {
+                found(radiance, pdf);
             }
-            None => (Vec3::ZERO, 0.0),
         }
     }
 }
@@ -549,97 +670,4 @@ fn mean_over(texture: &Texture, radiance: Vec3, corners: [Vec3; 3], uvs: [Vec2; 
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// `mean_over` weighs the texture by the emission channel by channel, finds a pattern's
-    /// share of the triangle, and keeps a floor for a pattern its points miss.
-    #[test]
-    fn a_textured_emitter_s_power_is_its_mean_emission() {
-        use crate::texture::{ImageTexture, TextureImage, Wrap};
-        use std::sync::Arc;
-        let image = |texels: Vec<[f32; 4]>, width: u32| {
-            let image = TextureImage::from_rgba_f32("t", width, 1, texels);
-            let texture = ImageTexture::new(Arc::new(image));
-            Texture::Image(ImageTexture { wrap: [Wrap::Clamp; 2], ..texture })
-        };
-        let corners = [Vec3::ZERO, Vec3::X, Vec3::Y];
-        let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
-        // A constant texture scales the emission.
-        let grey = image(vec![[0.5, 0.25, 1.0, 1.0]], 1);
-        let emission = Vec3::new(2.0, 4.0, 1.0);
-        let expected = mean(emission * Vec3::new(0.5, 0.25, 1.0));
-        assert!((mean_over(&grey, emission, corners, uvs) - expected).abs() < 1e-6);
-        // Red emission through a blue texture emits nothing: only the floor remains.
-        let blue = image(vec![[0.0, 0.0, 1.0, 1.0]], 1);
-        let red = Vec3::new(3.0, 0.0, 0.0);
-        assert_eq!(mean_over(&blue, red, corners, uvs), 0.01 * mean(red));
-        // White where u < ½ (256 texels): the triangle's part with u < ½ is ¾ of its area.
-        let texels = (0..256).map(|x| if x < 128 { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] });
-        let half = image(texels.collect(), 256);
-        let share = mean_over(&half, Vec3::ONE, corners, uvs);
-        assert!((share - 0.75).abs() < 0.02, "{share}");
-    }
-
-    #[test]
-    fn several_environments_shine_as_their_sum() {
-        let mut scene = Scene::built_in("cornell").unwrap();
-        scene.lights = vec![
-            Light::Environment { radiance: Vec3::new(1.0, 2.0, 3.0) },
-            Light::Environment { radiance: Vec3::new(0.5, 0.5, 0.5) },
-        ];
-        let lights = LightSet::new(&scene);
-        assert_eq!(lights.len(), 1);
-        let (radiance, pdf) = lights.environment(Vec3::Z);
-        assert_eq!(radiance, Vec3::new(1.5, 2.5, 3.5));
-        assert!((pdf - 1.0 / (4.0 * PI)).abs() < 1e-7);
-        // Light sampling sees the same sum, with the same density.
-        let point = SurfacePoint { p: Vec3::ZERO, error: Vec3::ZERO, normal: Vec3::Z };
-        let sample = lights.sample(&point, Vec2::new(0.2, 0.9)).unwrap();
-        assert_eq!((sample.radiance, sample.pdf), (radiance, pdf));
-    }
-
-    /// With other lights, the environment takes half the picks whatever its power (none if it is
-    /// black); each light's share of a stratified row of first numbers, rescaled, is a
-    /// stratified row again.
-    #[test]
-    fn the_environment_takes_half_the_picks_and_each_light_keeps_its_points_stratified() {
-        let mut scene = Scene::built_in("cornell").unwrap();
-        assert!(matches!(scene.lights[..], [Light::Point(_)]), "{:?}", scene.lights);
-        // A dim environment, then a bright one: half the picks either way.
-        for radiance in [0.01, 100.0] {
-            scene.lights.truncate(1);
-            scene.lights.push(Light::Environment { radiance: Vec3::splat(radiance) });
-            let lights = LightSet::new(&scene);
-            let (_, pdf) = lights.environment(Vec3::Z);
-            assert_eq!(pdf, 0.5 / (4.0 * PI), "radiance {radiance}");
-            const N: usize = 1024;
-            let mut rescaled: [Vec<f32>; 2] = Default::default();
-            for k in 0..N {
-                let u = Vec2::new((k as f32 + 0.5) / N as f32, 0.5);
-                let (index, selection, v) = lights.pick(u).unwrap();
-                assert_eq!((selection, v.y), (0.5, 0.5));
-                rescaled[index].push(v.x);
-            }
-            for xs in &rescaled {
-                assert_eq!(xs.len(), N / 2);
-                for (k, &x) in xs.iter().enumerate() {
-                    let expected = (k as f32 + 0.5) / xs.len() as f32;
-                    assert!((x - expected).abs() < 1e-5, "{k}: {x} against {expected}");
-                }
-            }
-        }
-        // A black environment takes none.
-        scene.lights.truncate(1);
-        scene.lights.push(Light::Environment { radiance: Vec3::ZERO });
-        let lights = LightSet::new(&scene);
-        assert_eq!(lights.environment(Vec3::Z).1, 0.0);
-        assert_eq!(lights.pick(Vec2::new(0.999, 0.5)).map(|(i, p, _)| (i, p)), Some((0, 1.0)));
-        // Alone, the environment takes every pick.
-        scene.lights.truncate(1);
-        scene.lights.push(Light::Environment { radiance: Vec3::splat(0.3) });
-        scene.lights.remove(0);
-        let lights = LightSet::new(&scene);
-        assert_eq!(lights.environment(Vec3::Z).1, 1.0 / (4.0 * PI));
-    }
-}
+mod tests;

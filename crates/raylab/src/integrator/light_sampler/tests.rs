@@ -1,0 +1,100 @@
+use super::*;
+
+/// What a ray leaving the scene along `direction` finds: the infinite lights' radiances and
+/// densities, summed (one light's, or zeros).
+fn escaped(lights: &LightSet, direction: Vec3) -> (Vec3, f32) {
+    let mut sum = (Vec3::ZERO, 0.0);
+    lights.escaped(direction, |radiance, pdf| sum = (sum.0 + radiance, sum.1 + pdf));
+    sum
+}
+
+/// `mean_over` weighs the texture by the emission channel by channel, finds a pattern's
+/// share of the triangle, and keeps a floor for a pattern its points miss.
+#[test]
+fn a_textured_emitter_s_power_is_its_mean_emission() {
+    use crate::texture::{ImageTexture, TextureImage, Wrap};
+    use std::sync::Arc;
+    let image = |texels: Vec<[f32; 4]>, width: u32| {
+        let image = TextureImage::from_rgba_f32("t", width, 1, texels);
+        let texture = ImageTexture::new(Arc::new(image));
+        Texture::Image(ImageTexture { wrap: [Wrap::Clamp; 2], ..texture })
+    };
+    let corners = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
+    // A constant texture scales the emission.
+    let grey = image(vec![[0.5, 0.25, 1.0, 1.0]], 1);
+    let emission = Vec3::new(2.0, 4.0, 1.0);
+    let expected = mean(emission * Vec3::new(0.5, 0.25, 1.0));
+    assert!((mean_over(&grey, emission, corners, uvs) - expected).abs() < 1e-6);
+    // Red emission through a blue texture emits nothing: only the floor remains.
+    let blue = image(vec![[0.0, 0.0, 1.0, 1.0]], 1);
+    let red = Vec3::new(3.0, 0.0, 0.0);
+    assert_eq!(mean_over(&blue, red, corners, uvs), 0.01 * mean(red));
+    // White where u < ½ (256 texels): the triangle's part with u < ½ is ¾ of its area.
+    let texels = (0..256).map(|x| if x < 128 { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] });
+    let half = image(texels.collect(), 256);
+    let share = mean_over(&half, Vec3::ONE, corners, uvs);
+    assert!((share - 0.75).abs() < 0.02, "{share}");
+}
+
+#[test]
+fn several_environments_shine_as_their_sum() {
+    let mut scene = Scene::built_in("cornell").unwrap();
+    scene.lights = vec![
+        Light::Environment { radiance: Vec3::new(1.0, 2.0, 3.0) },
+        Light::Environment { radiance: Vec3::new(0.5, 0.5, 0.5) },
+    ];
+    let lights = LightSet::new(&scene);
+    assert_eq!(lights.len(), 1);
+    let (radiance, pdf) = escaped(&lights, Vec3::Z);
+    assert_eq!(radiance, Vec3::new(1.5, 2.5, 3.5));
+    assert!((pdf - 1.0 / (4.0 * PI)).abs() < 1e-7);
+    // Light sampling sees the same sum, with the same density.
+    let point = SurfacePoint { p: Vec3::ZERO, error: Vec3::ZERO, normal: Vec3::Z };
+    let sample = lights.sample(&point, Vec2::new(0.2, 0.9)).unwrap();
+    assert_eq!((sample.radiance, sample.pdf), (radiance, pdf));
+}
+
+/// With other lights, the environment takes half the picks whatever its power (none if it is
+/// black); each light's share of a stratified row of first numbers, rescaled, is a
+/// stratified row again.
+#[test]
+fn the_environment_takes_half_the_picks_and_each_light_keeps_its_points_stratified() {
+    let mut scene = Scene::built_in("cornell").unwrap();
+    assert!(matches!(scene.lights[..], [Light::Point(_)]), "{:?}", scene.lights);
+    // A dim environment, then a bright one: half the picks either way.
+    for radiance in [0.01, 100.0] {
+        scene.lights.truncate(1);
+        scene.lights.push(Light::Environment { radiance: Vec3::splat(radiance) });
+        let lights = LightSet::new(&scene);
+        let (_, pdf) = escaped(&lights, Vec3::Z);
+        assert_eq!(pdf, 0.5 / (4.0 * PI), "radiance {radiance}");
+        const N: usize = 1024;
+        let mut rescaled: [Vec<f32>; 2] = Default::default();
+        for k in 0..N {
+            let u = Vec2::new((k as f32 + 0.5) / N as f32, 0.5);
+            let (index, selection, v) = lights.pick(u).unwrap();
+            assert_eq!((selection, v.y), (0.5, 0.5));
+            rescaled[index].push(v.x);
+        }
+        for xs in &rescaled {
+            assert_eq!(xs.len(), N / 2);
+            for (k, &x) in xs.iter().enumerate() {
+                let expected = (k as f32 + 0.5) / xs.len() as f32;
+                assert!((x - expected).abs() < 1e-5, "{k}: {x} against {expected}");
+            }
+        }
+    }
+    // A black environment takes none.
+    scene.lights.truncate(1);
+    scene.lights.push(Light::Environment { radiance: Vec3::ZERO });
+    let lights = LightSet::new(&scene);
+    assert_eq!(escaped(&lights, Vec3::Z).1, 0.0);
+    assert_eq!(lights.pick(Vec2::new(0.999, 0.5)).map(|(i, p, _)| (i, p)), Some((0, 1.0)));
+    // Alone, the environment takes every pick.
+    scene.lights.truncate(1);
+    scene.lights.push(Light::Environment { radiance: Vec3::splat(0.3) });
+    scene.lights.remove(0);
+    let lights = LightSet::new(&scene);
+    assert_eq!(escaped(&lights, Vec3::Z).1, 1.0 / (4.0 * PI));
+}

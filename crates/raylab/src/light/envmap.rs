@@ -1,0 +1,312 @@
+//! `envmap`: light arriving from every direction that leaves the scene, read from an
+//! equirectangular (latitude–longitude) HDR image, as Mitsuba 3's `envmap` emitter.
+//!
+//! # Conventions
+//! Mitsuba 3's (`src/emitters/envmap.cpp`), so that the same image and `to_world` light a scene
+//! from the same directions in both renderers. In the map's own frame (y up), a unit direction
+//! `d = (x, y, z)` falls on
+//!
+//! ```text
+//! u = atan2(x, −z) / 2π   (wrapped to [0, 1)),     v = acos(y) / π,
+//! d = (sin φ sin θ, cos θ, −cos φ sin θ)   with φ = 2πu, θ = πv:
+//! ```
+//!
+//! the image's top row is straight up (+y), its left edge looks along −z, and a quarter of the
+//! way across it looks along +x. `to_world` (a rotation, possibly with a mirror) turns the map's
+//! frame into the scene file's y-up world, which the lab's frame flips (`model_to_lab`).
+//!
+//! # Lookup
+//! Bilinear between texel centres, as Mitsuba's: texel `(x, y)` sits at `u = (x + ½)/w`,
+//! `v = y/(h − 1)` (the first and last rows lie on the poles), and the columns wrap around.
+//! The radiance is the texel's value times `scale`. Texels must be finite; negative ones (an
+//! OpenEXR file's out-of-gamut colours) count as black.
+//!
+//! # Sampling
+//! The bilinear patches between four neighbouring texel centres (`w × (h − 1)` of them, the
+//! last column's wrapping to the first) are the bins of a piecewise-constant density over
+//! `(u − ½/w, v)` ([`PiecewiseConstant2D`]); a patch's weight is the integral over it of the
+//! interpolated luminance times `sin θ`, exactly. A patch in which the map is not black has a
+//! positive weight, so every direction that brings light can
+//! be sampled. The density per unit solid angle is `p(ω) = p(u, v) / (2π² sin θ)`, the Jacobian
+//! of the map from the square to the sphere (PBR 3rd ed. §14.2.4, "Infinite Area Lights").
+//! Mitsuba samples the same grid of luminance × `sin θ`, with a bilinear warp within each
+//! patch; the piecewise-constant density differs from it only within patches.
+//!
+//! # Memory
+//! 12 bytes per texel for the radiance and about 4 for the density: an 8k × 4k map takes
+//! 512 MiB. The density is built on every core.
+//!
+//! Tests: `light::envmap::tests` (the convention's known directions, the lookup between texel
+//! centres, chi-square goodness of fit of the sampling against its density) and
+//! `tests/environment_map.rs` (a furnace inside a constant map, a map with one bright texel
+//! lighting the scene from the direction Mitsuba's convention gives).
+
+use std::f32::consts::{FRAC_1_PI, PI};
+
+use glam::{Mat3, Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::LightError;
+use crate::color::luminance;
+use crate::film::Film;
+use crate::sampling::PiecewiseConstant2D;
+
+/// An equirectangular environment map: its radiance, its orientation, and the density that
+/// samples it. Its `Debug` shows its name, size, orientation and a hash of its texels (so
+/// that `Scene::content_hash` tells maps apart without printing millions of texels).
+#[derive(Clone, PartialEq)]
+pub struct EnvironmentMap {
+    /// Where the image came from, for messages.
+    name: String,
+    width: usize,
+    /// At least 2 (a one-row image is doubled).
+    height: usize,
+    /// Radiance (the image times `scale`), row by row from the top (+y).
+    texels: Vec<Vec3>,
+    /// From the lab's frame to the map's.
+    to_local: Mat3,
+    /// From the map's frame to the lab's.
+    to_lab: Mat3,
+    /// Over the `w × (h − 1)` bilinear patches, in `(u − ½/w, v)`.
+    patches: PiecewiseConstant2D,
+    /// The radiance averaged over the sphere (`∫ L dω / 4π`), per channel.
+    mean: Vec3,
+    /// XXH3 of the rows' XXH3s of the texels' bits.
+    texel_hash: u64,
+}
+
+impl std::fmt::Debug for EnvironmentMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EnvironmentMap")
+            .field("name", &self.name)
+            .field("size", &(self.width, self.height))
+            .field("to_lab", &self.to_lab)
+            .field("texel_hash", &format_args!("{:016x}", self.texel_hash))
+            .finish()
+    }
+}
+
+/// `u, v ∈ [0, 1]` of a unit direction in the map's frame (the module's convention).
+#[inline]
+pub fn direction_to_uv(d: Vec3) -> Vec2 {
+    let u = d.x.atan2(-d.z) * (0.5 * FRAC_1_PI);
+    let u = if u < 0.0 { u + 1.0 } else { u };
+    // θ = acos(y), by the arctangent: as precise near the poles as elsewhere.
+    let sin_theta = (d.x * d.x + d.z * d.z).sqrt();
+    Vec2::new(u, sin_theta.atan2(d.y) * FRAC_1_PI)
+}
+
+/// The unit direction in the map's frame at `u, v` (the inverse of [`direction_to_uv`]).
+#[inline]
+pub fn uv_to_direction(uv: Vec2) -> Vec3 {
+    let (sin_theta, cos_theta) = (uv.y * PI).sin_cos();
+    let (sin_phi, cos_phi) = (uv.x * 2.0 * PI).sin_cos();
+    Vec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta)
+}
+
+/// The lab's frame to the scene files' y-up world and back (`scene::model_to_lab`, a half turn
+/// about x: its own inverse).
+const LAB_TO_WORLD: Mat3 = Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0));
+
+impl EnvironmentMap {
+    /// The map of `image` (row 0 at the top), its values times `scale`, turned into the scene
+    /// files' world by `to_world`; `name` names it in messages.
+    ///
+    /// Fails for a `scale` that is negative or not finite, a `to_world` that is not a rotation
+    /// (possibly with a mirror), and a texel that is not finite (named by its column and row).
+    pub fn new(
+        name: impl Into<String>,
+        image: Film,
+        scale: f32,
+        to_world: Mat3,
+    ) -> Result<EnvironmentMap, LightError> {
+        let name = name.into();
+        let error = |problem: String| LightError { light: name.clone(), problem };
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(error(format!("scale {scale} must be finite and not negative")));
+        }
+        let gram = to_world.transpose() * to_world;
+        if !to_world.is_finite() || !gram.abs_diff_eq(Mat3::IDENTITY, 1e-4) {
+            return Err(error(
+                "to_world must be a rotation (an orthonormal matrix; a mirror is allowed)".into(),
+            ));
+        }
+        let (width, height) = (image.width() as usize, image.height() as usize);
+        let mut texels = image.into_pixels();
+        if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
+            return Err(error(format!(
+                "texel ({}, {}) is {} (every texel must be finite)",
+                i % width,
+                i / width,
+                texels[i]
+            )));
+        }
+        texels.par_iter_mut().for_each(|t| *t = t.max(Vec3::ZERO) * scale);
+        let height = if height == 1 {
+            texels.extend_from_within(..);
+            2
+        } else {
+            height
+        };
+        let (patches, mean) = patch_density(&texels, width, height);
+        let row_hashes: Vec<u64> = texels
+            .par_chunks(width)
+            .map(|row| {
+                let bytes: Vec<u8> =
+                    row.iter().flat_map(|t| t.to_array()).flat_map(f32::to_le_bytes).collect();
+                xxhash_rust::xxh3::xxh3_64(&bytes)
+            })
+            .collect();
+        let hash_bytes: Vec<u8> = row_hashes.iter().flat_map(|h| h.to_le_bytes()).collect();
+        let texel_hash = xxhash_rust::xxh3::xxh3_64(&hash_bytes);
+        // `to_world` is orthonormal: its inverse is its transpose (renormalized rows keep the
+        // directions unit).
+        let to_lab = LAB_TO_WORLD * to_world;
+        Ok(EnvironmentMap {
+            name,
+            width,
+            height,
+            texels,
+            to_local: to_lab.transpose(),
+            to_lab,
+            patches,
+            mean,
+            texel_hash,
+        })
+    }
+
+    /// Where the image came from.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The image's width and height in texels (a one-row image counts two).
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The radiance averaged over the sphere, `∫ L dω / 4π`, per channel: the value a constant
+    /// environment of the same power would have.
+    pub fn mean(&self) -> Vec3 {
+        self.mean
+    }
+
+    /// The bytes the map holds: its texels and its density.
+    pub fn memory_bytes(&self) -> usize {
+        let (w, h) = self.patches.size();
+        self.texels.len() * size_of::<Vec3>() + ((w + 1) * h + h + 1) * size_of::<f32>()
+    }
+
+    /// The unit direction in the lab's frame that `u, v` of the image looks along.
+    pub fn direction(&self, uv: Vec2) -> Vec3 {
+        self.to_lab * uv_to_direction(uv)
+    }
+
+    /// The radiance arriving along the unit direction `-direction`, that is, seen looking along
+    /// `direction` (the lab's frame).
+    #[inline]
+    pub fn eval(&self, direction: Vec3) -> Vec3 {
+        self.lookup(direction_to_uv(self.to_local * direction))
+    }
+
+    /// The radiance at `u, v`: bilinear between texel centres (`u` wraps around).
+    #[inline]
+    pub fn lookup(&self, uv: Vec2) -> Vec3 {
+        let (w, h) = (self.width, self.height);
+        let x = uv.x * w as f32 - 0.5;
+        let x_floor = x.floor();
+        let fx = x - x_floor;
+        let x0 = (x_floor as i64).rem_euclid(w as i64) as usize;
+        let x1 = if x0 + 1 == w { 0 } else { x0 + 1 };
+        let y = (uv.y * (h - 1) as f32).clamp(0.0, (h - 1) as f32);
+        let y0 = (y as usize).min(h - 2);
+        let fy = y - y0 as f32;
+        let row0 = &self.texels[y0 * w..(y0 + 1) * w];
+        let row1 = &self.texels[(y0 + 1) * w..(y0 + 2) * w];
+        let top = row0[x0] * (1.0 - fx) + row0[x1] * fx;
+        let bottom = row1[x0] * (1.0 - fx) + row1[x1] * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// A direction (the lab's frame, toward the light) that `u ∈ [0, 1)²` picks, in proportion
+    /// to the map's luminance, with the radiance arriving along it and its density per unit
+    /// solid angle; `None` on a pole, where the density is not finite.
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        let (p, pdf_uv) = self.patches.sample(u);
+        let mut map_u = p.x + 0.5 / self.width as f32;
+        if map_u >= 1.0 {
+            map_u -= 1.0;
+        }
+        let uv = Vec2::new(map_u, p.y);
+        let local = uv_to_direction(uv);
+        let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
+        if !(sin_theta > 0.0 && pdf_uv > 0.0) {
+            return None;
+        }
+        let pdf = pdf_uv / (2.0 * PI * PI * sin_theta);
+        Some((self.to_lab * local, self.lookup(uv), pdf))
+    }
+
+    /// The density per unit solid angle with which [`sample`](Self::sample) picks the unit
+    /// `direction` (the lab's frame).
+    #[inline]
+    pub fn pdf(&self, direction: Vec3) -> f32 {
+        let local = self.to_local * direction;
+        let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
+        if sin_theta <= 0.0 {
+            return 0.0;
+        }
+        let uv = direction_to_uv(local);
+        let mut patch_u = uv.x - 0.5 / self.width as f32;
+        if patch_u < 0.0 {
+            patch_u += 1.0;
+        }
+        self.patches.pdf(Vec2::new(patch_u, uv.y)) / (2.0 * PI * PI * sin_theta)
+    }
+}
+
+/// The density over the bilinear patches of `texels` (`width × height`, `height ≥ 2`) and the
+/// radiance averaged over the sphere.
+///
+/// A patch's weight is the exact integral of the interpolated luminance times `sin θ` over it:
+/// across the patch the interpolant is the mean of the two columns, and down it, linear in θ
+/// from the top row's value to the bottom row's, so with `θ = θ₀ + tΔ` the rows weigh
+/// `I₀ = ∫₀¹ (1 − t) sin θ Δ dt` and `I₁ = ∫₀¹ t sin θ Δ dt = (sin θ₁ − sin θ₀)/Δ − cos θ₁`
+/// (by parts), `I₀ + I₁ = cos θ₀ − cos θ₁`.
+fn patch_density(texels: &[Vec3], width: usize, height: usize) -> (PiecewiseConstant2D, Vec3) {
+    use std::f64::consts::PI;
+    let rows = height - 1;
+    let mut weights = vec![0.0f32; width * rows];
+    let step = PI / rows as f64;
+    let sums: Vec<[f64; 3]> = weights
+        .par_chunks_mut(width)
+        .enumerate()
+        .map(|(j, row)| {
+            let (theta0, theta1) = (j as f64 * step, (j + 1) as f64 * step);
+            let i1 = (theta1.sin() - theta0.sin()) / step - theta1.cos();
+            let i0 = theta0.cos() - theta1.cos() - i1;
+            let top = &texels[j * width..(j + 1) * width];
+            let bottom = &texels[(j + 1) * width..(j + 2) * width];
+            let mut sum = [0.0f64; 3];
+            for (i, weight) in row.iter_mut().enumerate() {
+                let next = if i + 1 == width { 0 } else { i + 1 };
+                let upper = (0.5 * (top[i] + top[next])).as_dvec3();
+                let lower = (0.5 * (bottom[i] + bottom[next])).as_dvec3();
+                let integral = upper * i0 + lower * i1;
+                *weight = luminance(integral.as_vec3());
+                for (s, c) in sum.iter_mut().zip(integral.to_array()) {
+                    *s += c;
+                }
+            }
+            sum
+        })
+        .collect();
+    let total = sums.iter().fold([0.0f64; 3], |a, s| [a[0] + s[0], a[1] + s[1], a[2] + s[2]]);
+    // Each patch spans 2π/w in φ; the mean divides by the sphere's 4π.
+    let mean = total.map(|t| (t * (2.0 * PI / width as f64) / (4.0 * PI)) as f32);
+    (PiecewiseConstant2D::new(&weights, width, rows), Vec3::from_array(mean))
+}
+
+#[cfg(test)]
+mod tests;
