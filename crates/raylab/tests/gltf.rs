@@ -282,7 +282,8 @@ fn materials_and_punctual_lights_map_to_raylab() {
     let power = 4.0 * std::f32::consts::PI * 10.0 * Vec3::new(1.0, 0.5, 0.25);
     assert_eq!(points, [raylab::PointLight { position: Vec3::new(1.0, -2.0, -3.0), power }]);
     // The directional light shines along its node's −z: the lab's +z.
-    let directional = raylab::light::DirectionalLight { direction: Vec3::Z, irradiance: Vec3::splat(3.0) };
+    let directional =
+        raylab::light::DirectionalLight { direction: Vec3::Z, irradiance: Vec3::splat(3.0) };
     assert!(scene.lights.contains(&raylab::Light::Directional(directional)), "{:?}", scene.lights);
     // The spot's node turns −z a quarter turn about x, to the file's +y: the lab's −y.
     let Some(raylab::Light::Spot(spot)) = scene.lights.iter().find(|l| l.kind() == "spot") else {

@@ -18,7 +18,7 @@ use glam::Vec3;
 
 pub use aov::{Aov, AovKind, WithAovs};
 pub use lab::{Lab, Stage};
-pub use light_sampler::{LightSample, LightSet, TriangleSampling};
+pub use light_sampler::{EnvironmentSampling, LightSample, LightSet, TriangleSampling};
 pub use path::{Path, PathSettings};
 pub use wavefront::{PathWavefront, StageTimes};
 

@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::{Vec2, Vec3};
 
 use super::Integrator;
-use super::light_sampler::{LightSet, TriangleSampling};
+use super::light_sampler::{EnvironmentSampling, LightSet, TriangleSampling};
 use crate::accel::{Accelerator, Hit};
 use crate::interaction::SurfaceInteraction;
 use crate::material::lanes::{ParamRows, store_params};
@@ -41,12 +41,19 @@ pub struct PathSettings {
     pub rr_depth: u32,
     /// How points on triangle lights are sampled.
     pub light_sampling: TriangleSampling,
+    /// How directions toward environment maps are sampled.
+    pub environment_sampling: EnvironmentSampling,
 }
 
 impl Default for PathSettings {
     /// Unlimited depth (Mitsuba's default, `max_depth = -1`), roulette from depth 5.
     fn default() -> Self {
-        PathSettings { max_depth: None, rr_depth: 5, light_sampling: TriangleSampling::Area }
+        PathSettings {
+            max_depth: None,
+            rr_depth: 5,
+            light_sampling: TriangleSampling::Area,
+            environment_sampling: EnvironmentSampling::Importance,
+        }
     }
 }
 
@@ -63,7 +70,9 @@ pub struct Path<'a, A: ?Sized> {
 impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// A path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
     pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
-        let lights = LightSet::new(scene).with_triangle_sampling(settings.light_sampling);
+        let lights = LightSet::new(scene)
+            .with_triangle_sampling(settings.light_sampling)
+            .with_environment_sampling(settings.environment_sampling);
         Path { scene, accel, lights: Cow::Owned(lights), settings, discarded: AtomicU64::new(0) }
     }
 

@@ -22,15 +22,16 @@
 //! OpenEXR file's out-of-gamut colours) count as black.
 //!
 //! # Sampling
-//! The bilinear patches between four neighbouring texel centres (`w × (h − 1)` of them, the
-//! last column's wrapping to the first) are the bins of a piecewise-constant density over
-//! `(u − ½/w, v)` ([`PiecewiseConstant2D`]); a patch's weight is the integral over it of the
-//! interpolated luminance times `sin θ`, exactly. A patch in which the map is not black has a
-//! positive weight, so every direction that brings light can
-//! be sampled. The density per unit solid angle is `p(ω) = p(u, v) / (2π² sin θ)`, the Jacobian
-//! of the map from the square to the sphere (PBR 3rd ed. §14.2.4, "Infinite Area Lights").
-//! Mitsuba samples the same grid of luminance × `sin θ`, with a bilinear warp within each
-//! patch; the piecewise-constant density differs from it only within patches.
+//! As Mitsuba's: in proportion to the bilinear interpolant of `f = luminance × sin θ` at the
+//! texel centres, over `(u − ½/w, v)`. The patches between four neighbouring texel centres
+//! (`w × (h − 1)` of them, the last column's wrapping to the first) are chosen by a
+//! [`PiecewiseConstant2D`] of the interpolant's integrals over them (the means of their
+//! corners), and a point within the chosen patch by [`sample_bilinear`]: within a patch the
+//! density follows the radiance, so a small bright sun adds little noise. `sin θ` is kept
+//! above `sin(π/4(h − 1))` on the poles' rows, so that a patch in which the map is not black
+//! has a positive density wherever it is not black. The density per unit solid angle is
+//! `p(ω) = p(u, v) / (2π² sin θ)`, the Jacobian of the map from the square to the sphere (PBR
+//! 3rd ed. §14.2.4, "Infinite Area Lights").
 //!
 //! # Memory
 //! 12 bytes per texel for the radiance and about 4 for the density: an 8k × 4k map takes
@@ -49,7 +50,7 @@ use rayon::prelude::*;
 use super::LightError;
 use crate::color::luminance;
 use crate::film::Film;
-use crate::sampling::PiecewiseConstant2D;
+use crate::sampling::{PiecewiseConstant2D, bilinear_pdf, sample_bilinear};
 
 /// An equirectangular environment map: its radiance, its orientation, and the density that
 /// samples it. Its `Debug` shows its name, size, orientation and a hash of its texels (so
@@ -69,6 +70,8 @@ pub struct EnvironmentMap {
     to_lab: Mat3,
     /// Over the `w × (h − 1)` bilinear patches, in `(u − ½/w, v)`.
     patches: PiecewiseConstant2D,
+    /// `sin θ` of each row of texels, kept off zero on the poles' rows.
+    row_sin: Vec<f32>,
     /// The radiance averaged over the sphere (`∫ L dω / 4π`), per channel.
     mean: Vec3,
     /// XXH3 of the rows' XXH3s of the texels' bits.
@@ -148,7 +151,14 @@ impl EnvironmentMap {
         } else {
             height
         };
-        let (patches, mean) = patch_density(&texels, width, height);
+        let row_sin = (0..height)
+            .map(|y| {
+                let floor = 0.25 * PI / (height - 1) as f32;
+                (PI * y as f32 / (height - 1) as f32).sin().max(floor.sin())
+            })
+            .collect::<Vec<f32>>();
+        let patches = patch_density(&texels, &row_sin, width);
+        let mean = mean_radiance(&texels, width, height);
         let row_hashes: Vec<u64> = texels
             .par_chunks(width)
             .map(|row| {
@@ -170,6 +180,7 @@ impl EnvironmentMap {
             to_local: to_lab.transpose(),
             to_lab,
             patches,
+            row_sin,
             mean,
             texel_hash,
         })
@@ -194,7 +205,8 @@ impl EnvironmentMap {
     /// The bytes the map holds: its texels and its density.
     pub fn memory_bytes(&self) -> usize {
         let (w, h) = self.patches.size();
-        self.texels.len() * size_of::<Vec3>() + ((w + 1) * h + h + 1) * size_of::<f32>()
+        self.texels.len() * size_of::<Vec3>()
+            + ((w + 1) * h + h + 1 + self.row_sin.len()) * size_of::<f32>()
     }
 
     /// The unit direction in the lab's frame that `u, v` of the image looks along.
@@ -228,17 +240,37 @@ impl EnvironmentMap {
         top * (1.0 - fy) + bottom * fy
     }
 
+    /// `f = luminance × sin θ` at the corners of patch `(column, row)`: `[f(0, 0), f(1, 0),
+    /// f(0, 1), f(1, 1)]`, the first index across.
+    #[inline]
+    fn corners(&self, column: usize, row: usize) -> [f32; 4] {
+        let w = self.width;
+        let next = if column + 1 == w { 0 } else { column + 1 };
+        let (top, bottom) = (row * w, (row + 1) * w);
+        let (sin_top, sin_bottom) = (self.row_sin[row], self.row_sin[row + 1]);
+        [
+            luminance(self.texels[top + column]) * sin_top,
+            luminance(self.texels[top + next]) * sin_top,
+            luminance(self.texels[bottom + column]) * sin_bottom,
+            luminance(self.texels[bottom + next]) * sin_bottom,
+        ]
+    }
+
     /// A direction (the lab's frame, toward the light) that `u ∈ [0, 1)²` picks, in proportion
     /// to the map's luminance, with the radiance arriving along it and its density per unit
     /// solid angle; `None` on a pole, where the density is not finite.
     #[inline]
     pub fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
-        let (p, pdf_uv) = self.patches.sample(u);
-        let mut map_u = p.x + 0.5 / self.width as f32;
+        let ((column, row), probability, rest) = self.patches.sample_bin(u);
+        let (columns, rows) = (self.width, self.height - 1);
+        let f = self.corners(column, row);
+        let within = sample_bilinear(rest, f);
+        let pdf_uv = probability * (columns * rows) as f32 * bilinear_pdf(within, f);
+        let mut map_u = (column as f32 + within.x + 0.5) / columns as f32;
         if map_u >= 1.0 {
             map_u -= 1.0;
         }
-        let uv = Vec2::new(map_u, p.y);
+        let uv = Vec2::new(map_u, (row as f32 + within.y) / rows as f32);
         let local = uv_to_direction(uv);
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
         if !(sin_theta > 0.0 && pdf_uv > 0.0) {
@@ -258,43 +290,62 @@ impl EnvironmentMap {
             return 0.0;
         }
         let uv = direction_to_uv(local);
-        let mut patch_u = uv.x - 0.5 / self.width as f32;
-        if patch_u < 0.0 {
-            patch_u += 1.0;
-        }
-        self.patches.pdf(Vec2::new(patch_u, uv.y)) / (2.0 * PI * PI * sin_theta)
+        let (columns, rows) = (self.width, self.height - 1);
+        let x = (uv.x * columns as f32 - 0.5).rem_euclid(columns as f32);
+        let y = uv.y * rows as f32;
+        let (column, row) = ((x as usize).min(columns - 1), (y as usize).min(rows - 1));
+        let within = Vec2::new(x - column as f32, y - row as f32).clamp(Vec2::ZERO, Vec2::ONE);
+        let f = self.corners(column, row);
+        let pdf_uv = self.patches.probability(column, row)
+            * (columns * rows) as f32
+            * bilinear_pdf(within, f);
+        pdf_uv / (2.0 * PI * PI * sin_theta)
     }
 }
 
-/// The density over the bilinear patches of `texels` (`width × height`, `height ≥ 2`) and the
-/// radiance averaged over the sphere.
-///
-/// A patch's weight is the exact integral of the interpolated luminance times `sin θ` over it:
-/// across the patch the interpolant is the mean of the two columns, and down it, linear in θ
-/// from the top row's value to the bottom row's, so with `θ = θ₀ + tΔ` the rows weigh
-/// `I₀ = ∫₀¹ (1 − t) sin θ Δ dt` and `I₁ = ∫₀¹ t sin θ Δ dt = (sin θ₁ − sin θ₀)/Δ − cos θ₁`
-/// (by parts), `I₀ + I₁ = cos θ₀ − cos θ₁`.
-fn patch_density(texels: &[Vec3], width: usize, height: usize) -> (PiecewiseConstant2D, Vec3) {
+/// The density over the bilinear patches of `texels` (`width` across, a row per entry of
+/// `row_sin`): each patch's integral of the interpolant of `luminance × sin θ` (its corners'
+/// mean).
+fn patch_density(texels: &[Vec3], row_sin: &[f32], width: usize) -> PiecewiseConstant2D {
+    let rows = row_sin.len() - 1;
+    let mut weights = vec![0.0f32; width * rows];
+    weights.par_chunks_mut(width).enumerate().for_each(|(j, row)| {
+        let top = &texels[j * width..(j + 1) * width];
+        let bottom = &texels[(j + 1) * width..(j + 2) * width];
+        let (sin_top, sin_bottom) = (row_sin[j], row_sin[j + 1]);
+        for (i, weight) in row.iter_mut().enumerate() {
+            let next = if i + 1 == width { 0 } else { i + 1 };
+            let upper = (luminance(top[i]) + luminance(top[next])) * sin_top;
+            let lower = (luminance(bottom[i]) + luminance(bottom[next])) * sin_bottom;
+            *weight = 0.25 * (upper + lower);
+        }
+    });
+    PiecewiseConstant2D::new(&weights, width, rows)
+}
+
+/// The radiance of `texels` (`width × height`, `height ≥ 2`) averaged over the sphere: the
+/// exact integral of the interpolant over each patch. Across a patch the interpolant is the
+/// mean of its two columns, and down it, linear in θ from the top row's value to the bottom
+/// row's, so with `θ = θ₀ + tΔ` the rows weigh `I₀ = ∫₀¹ (1 − t) sin θ Δ dt` and
+/// `I₁ = ∫₀¹ t sin θ Δ dt = (sin θ₁ − sin θ₀)/Δ − cos θ₁` (by parts), `I₀ + I₁ = cos θ₀ − cos θ₁`.
+fn mean_radiance(texels: &[Vec3], width: usize, height: usize) -> Vec3 {
     use std::f64::consts::PI;
     let rows = height - 1;
-    let mut weights = vec![0.0f32; width * rows];
     let step = PI / rows as f64;
-    let sums: Vec<[f64; 3]> = weights
-        .par_chunks_mut(width)
-        .enumerate()
-        .map(|(j, row)| {
+    let sums: Vec<[f64; 3]> = (0..rows)
+        .into_par_iter()
+        .map(|j| {
             let (theta0, theta1) = (j as f64 * step, (j + 1) as f64 * step);
             let i1 = (theta1.sin() - theta0.sin()) / step - theta1.cos();
             let i0 = theta0.cos() - theta1.cos() - i1;
             let top = &texels[j * width..(j + 1) * width];
             let bottom = &texels[(j + 1) * width..(j + 2) * width];
             let mut sum = [0.0f64; 3];
-            for (i, weight) in row.iter_mut().enumerate() {
+            for i in 0..width {
                 let next = if i + 1 == width { 0 } else { i + 1 };
                 let upper = (0.5 * (top[i] + top[next])).as_dvec3();
                 let lower = (0.5 * (bottom[i] + bottom[next])).as_dvec3();
                 let integral = upper * i0 + lower * i1;
-                *weight = luminance(integral.as_vec3());
                 for (s, c) in sum.iter_mut().zip(integral.to_array()) {
                     *s += c;
                 }
@@ -304,8 +355,7 @@ fn patch_density(texels: &[Vec3], width: usize, height: usize) -> (PiecewiseCons
         .collect();
     let total = sums.iter().fold([0.0f64; 3], |a, s| [a[0] + s[0], a[1] + s[1], a[2] + s[2]]);
     // Each patch spans 2π/w in φ; the mean divides by the sphere's 4π.
-    let mean = total.map(|t| (t * (2.0 * PI / width as f64) / (4.0 * PI)) as f32);
-    (PiecewiseConstant2D::new(&weights, width, rows), Vec3::from_array(mean))
+    Vec3::from_array(total.map(|t| (t * (2.0 * PI / width as f64) / (4.0 * PI)) as f32))
 }
 
 #[cfg(test)]

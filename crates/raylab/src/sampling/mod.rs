@@ -194,6 +194,50 @@ pub fn uniform_cone_pdf(one_minus_cos_alpha: f32) -> f32 {
     1.0 / (2.0 * PI * one_minus_cos_alpha)
 }
 
+/// A point of `[0, 1)` with density proportional to the line from `a` at 0 to `b` at 1 (both
+/// not negative, not both zero): the root of the CDF's quadratic, in the form without
+/// cancellation (pbrt-v4's `SampleLinear`, PBR 4th ed.'s "Sampling a Linear Function").
+#[inline]
+pub fn sample_linear(u: f32, a: f32, b: f32) -> f32 {
+    if u == 0.0 && a == 0.0 {
+        return 0.0;
+    }
+    let x = u * (a + b) / (a + (a * a + u * (b * b - a * a)).max(0.0).sqrt());
+    x.min(ONE_MINUS_EPSILON)
+}
+
+/// Density of [`sample_linear`] at `x ∈ [0, 1]`: `2 ((1 − x) a + x b) / (a + b)`.
+#[inline]
+pub fn linear_pdf(x: f32, a: f32, b: f32) -> f32 {
+    2.0 * ((1.0 - x) * a + x * b) / (a + b)
+}
+
+/// A point of `[0, 1)²` with density proportional to the bilinear interpolant of corner values
+/// `[f(0, 0), f(1, 0), f(0, 1), f(1, 1)]` (not negative, not all zero): `y` from the
+/// marginal, a line, then `x` from the line at that `y` (pbrt-v4's `SampleBilinear`; Mitsuba 3
+/// samples environment maps within texels so).
+#[inline]
+pub fn sample_bilinear(u: Vec2, f: [f32; 4]) -> Vec2 {
+    let y = sample_linear(u.y, f[0] + f[1], f[2] + f[3]);
+    let x = sample_linear(u.x, (1.0 - y) * f[0] + y * f[2], (1.0 - y) * f[1] + y * f[3]);
+    Vec2::new(x, y)
+}
+
+/// Density of [`sample_bilinear`] at `p ∈ [0, 1]²`.
+#[inline]
+pub fn bilinear_pdf(p: Vec2, f: [f32; 4]) -> f32 {
+    let sum = f[0] + f[1] + f[2] + f[3];
+    if sum <= 0.0 {
+        return 0.0;
+    }
+    let (x, y) = (p.x, p.y);
+    4.0 * ((1.0 - x) * (1.0 - y) * f[0]
+        + x * (1.0 - y) * f[1]
+        + (1.0 - x) * y * f[2]
+        + x * y * f[3])
+        / sum
+}
+
 // ---------------------------------------------------------------------------------------------
 // Triangles.
 

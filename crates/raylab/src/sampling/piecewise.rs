@@ -82,6 +82,13 @@ impl PiecewiseConstant1D {
         self.probability(i) * n as f32
     }
 
+    /// The bin that `u ∈ [0, 1)` picks, its probability, and `u` rescaled to `[0, 1)` within
+    /// the bin's share (to place the point within the bin some other way).
+    #[inline]
+    pub fn sample_bin(&self, u: f32) -> (usize, f32, f32) {
+        self.bins.sample(u)
+    }
+
     /// The point that `u ∈ [0, 1)` picks, its density, and its bin.
     #[inline]
     pub fn sample(&self, u: f32) -> (f32, f32, usize) {
@@ -134,6 +141,21 @@ impl PiecewiseConstant2D {
         let (v, pdf_v, row) = self.marginal.sample(u.y);
         let (x, pdf_u, _) = self.rows[row].sample(u.x);
         (Vec2::new(x, v), pdf_v * pdf_u)
+    }
+
+    /// The bin `(column, row)` that `u ∈ [0, 1)²` picks (`u.y` the row, then `u.x` within it),
+    /// its probability, and `u` rescaled to `[0, 1)²` within the bin's shares.
+    #[inline]
+    pub fn sample_bin(&self, u: Vec2) -> ((usize, usize), f32, Vec2) {
+        let (row, p_row, v) = self.marginal.sample_bin(u.y);
+        let (column, p_column, x) = self.rows[row].sample_bin(u.x);
+        ((column, row), p_row * p_column, Vec2::new(x, v))
+    }
+
+    /// The probability of bin `(column, row)`.
+    #[inline]
+    pub fn probability(&self, column: usize, row: usize) -> f32 {
+        self.marginal.probability(row) * self.rows[row].probability(column)
     }
 
     /// The density at `p ∈ [0, 1)²`.

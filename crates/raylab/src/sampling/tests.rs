@@ -7,7 +7,7 @@ use super::*;
 
 const ATTEMPTS: usize = 400_000;
 /// Warp tests in this file (for the Šidák correction).
-const TESTS: usize = 12;
+const TESTS: usize = 14;
 
 fn uniform(rng: &mut Pcg32) -> Vec2 {
     Vec2::new(rng.next_f32(), rng.next_f32())
@@ -79,6 +79,38 @@ fn uniform_cones_fit_their_density() {
             },
         )
         .assert_fits(&format!("uniform cone of {alpha} rad"), TESTS, 2e-3);
+    }
+}
+
+/// Bilinear densities over the square, one with a zero corner and one steep, and their lines.
+#[test]
+fn bilinear_and_linear_samples_fit_their_densities() {
+    let domain = Rectangle(Vec2::ZERO, Vec2::ONE);
+    for (test, f) in [(0u64, [1.0f32, 0.0, 2.0, 5.0]), (1, [0.01, 3.0, 0.2, 0.0])] {
+        chi2::run(
+            &domain,
+            (16, 16),
+            ATTEMPTS,
+            30 + test,
+            |r| {
+                let p = sample_bilinear(uniform(r), f);
+                Some(Vec3::new(p.x, p.y, 0.0))
+            },
+            |p| bilinear_pdf(Vec2::new(p.x, p.y), f),
+        )
+        .assert_fits(&format!("bilinear {f:?}"), TESTS, 1e-3);
+    }
+    // A line from 0 to 1 and one from 3 to 0.5, along x.
+    for (a, b) in [(0.0f32, 1.0f32), (3.0, 0.5)] {
+        chi2::run(
+            &domain,
+            (32, 1),
+            ATTEMPTS,
+            40,
+            |r| Some(Vec3::new(sample_linear(r.next_f32(), a, b), 0.5, 0.0)),
+            |p| linear_pdf(p.x, a, b),
+        )
+        .assert_fits(&format!("linear {a} to {b}"), TESTS, 1e-3);
     }
 }
 

@@ -47,6 +47,8 @@ pub struct LightSet {
     infinite: Vec<u32>,
     /// How points on triangle lights are chosen.
     triangle_sampling: TriangleSampling,
+    /// How directions toward environment maps are chosen.
+    environment_sampling: EnvironmentSampling,
     /// The emission texture of each textured triangle light, with the texture coordinates at
     /// its corners ([`TriangleLight::texture`] indexes it).
     textures: Vec<(Texture, [Vec2; 3])>,
@@ -74,6 +76,17 @@ impl std::str::FromStr for TriangleSampling {
             _ => Err(UnknownName::new("light sampling", s, "area or solid-angle")),
         }
     }
+}
+
+/// How directions toward an environment map are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum EnvironmentSampling {
+    /// In proportion to its luminance ([`EnvironmentMap::sample`]): what renders use.
+    #[default]
+    Importance,
+    /// Uniformly over the sphere, whatever the map holds: only to measure what importance
+    /// sampling is worth.
+    Uniform,
 }
 
 /// Solid angles within which triangle lights are sampled by solid angle (PBR 4th ed.,
@@ -320,6 +333,7 @@ impl LightSet {
             triangle_light,
             infinite,
             triangle_sampling: TriangleSampling::Area,
+            environment_sampling: EnvironmentSampling::Importance,
             textures,
         }
         .with_lane_lights()
@@ -367,6 +381,34 @@ impl LightSet {
     pub fn with_triangle_sampling(mut self, sampling: TriangleSampling) -> LightSet {
         self.triangle_sampling = sampling;
         self.with_lane_lights()
+    }
+
+    /// The same lights, with directions toward environment maps chosen as `sampling` says.
+    pub fn with_environment_sampling(mut self, sampling: EnvironmentSampling) -> LightSet {
+        self.environment_sampling = sampling;
+        self
+    }
+
+    /// A direction toward `map` that `u` picks, the radiance arriving along it and its density
+    /// (as [`environment_sampling`](Self::with_environment_sampling) says).
+    #[inline]
+    fn sample_map(&self, map: &EnvironmentMap, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        match self.environment_sampling {
+            EnvironmentSampling::Importance => map.sample(u),
+            EnvironmentSampling::Uniform => {
+                let direction = square_to_uniform_sphere(u);
+                Some((direction, map.eval(direction), uniform_sphere_pdf(direction)))
+            }
+        }
+    }
+
+    /// The density with which [`sample_map`](Self::sample_map) picks `direction`.
+    #[inline]
+    fn map_pdf(&self, map: &EnvironmentMap, direction: Vec3) -> f32 {
+        match self.environment_sampling {
+            EnvironmentSampling::Importance => map.pdf(direction),
+            EnvironmentSampling::Uniform => uniform_sphere_pdf(direction),
+        }
     }
 
     /// The solid angle of a triangle light seen from `p`, when it is sampled by solid angle.
@@ -489,7 +531,7 @@ impl LightSet {
                 })
             }
             SampledLight::EnvironmentMap(ref map) => {
-                let (direction, radiance, pdf) = map.sample(u)?;
+                let (direction, radiance, pdf) = self.sample_map(map, u)?;
                 Some(LightSample {
                     direction,
                     radiance,
@@ -610,7 +652,7 @@ impl LightSet {
                     if radiance == Vec3::ZERO {
                         continue;
                     }
-                    (radiance, selection() * map.pdf(direction))
+                    (radiance, selection() * self.map_pdf(map, direction))
                 }
                 SampledLight::Sun(sun) => {
                     if !sun.sees(direction) {
