@@ -3,9 +3,10 @@
 
 Made for crates/raylab/tests/data/mitsuba-materials/materials.toml (five spheres of sphere.obj:
 gold, glass, frosted glass, blue plastic and brushed aluminium, on a grey floor under a
-rectangular light, in a constant environment) and for
+rectangular light, in a constant environment), for
 crates/raylab/tests/data/mitsuba-gltf/boxes.toml (a textured glTF box drawn eighteen times by its
-nodes), but it translates the scene format generically
+nodes) and for crates/raylab/tests/data/mitsuba-envmap/envmap.toml (spheres on a floor under an
+HDR sky with a small bright sun, and a spot light), but it translates the scene format generically
 (docs/scene-format.md), as far as Mitsuba has the same thing:
 
   [render]   size -> hdrfilm width/height (pixel_format rgb, float32); filter box -> rfilter box,
@@ -37,7 +38,12 @@ nodes), but it translates the scene format generically
              then rotate (right-handed, degrees), then translate, then to_world:
              to_world = M . T . R . S. `emission` -> an `area` emitter on the shape (its BSDF is
              the named material, or black diffuse without one).
-  lights     environment -> constant; point -> point (intensity, or power / 4 pi).
+  lights     environment -> constant; point -> point (intensity, or power / 4 pi); envmap ->
+             envmap (filename beside the scene file, scale, to_world = the rotate and to_world
+             keys as for shapes); directional -> directional (direction or to_world,
+             irradiance); spot -> spot (intensity, cutoff_angle, beam_width; to_world, or
+             position + target as look_at with an up across the axis). A `sun` has no Mitsuba
+             counterpart (its sunsky is another model): an error.
 
 Not translated (an error): the `cornell` shape, meshes without `material` (MTL materials),
 .gz meshes, integrators other than path.
@@ -501,6 +507,38 @@ def build_scene_dict(mi, doc, folder, width, height, spp, max_depth, rr_depth, s
             scene[f"light_{i:03d}_point"] = {"type": "point",
                                              "position": [float(x) for x in light["position"]],
                                              "intensity": rgb(intensity)}
+        elif kind == "envmap":
+            m = shape_matrix({k: light[k] for k in ("rotate", "to_world") if k in light})
+            scene[f"light_{i:03d}_envmap"] = {
+                "type": "envmap",
+                "filename": os.path.join(folder, light["filename"]),
+                "scale": float(light.get("scale", 1.0)),
+                "to_world": mi.ScalarTransform4f(m.tolist())}
+        elif kind == "directional":
+            d = {"type": "directional", "irradiance": rgb(light.get("irradiance", 1.0))}
+            if ("direction" in light) == ("to_world" in light):
+                raise SceneError("a directional light needs direction or to_world")
+            if "direction" in light:
+                d["direction"] = [float(x) for x in light["direction"]]
+            else:
+                d["to_world"] = mi.ScalarTransform4f(light["to_world"])
+            scene[f"light_{i:03d}_directional"] = d
+        elif kind == "spot":
+            d = {"type": "spot", "intensity": rgb(light.get("intensity", 1.0))}
+            for key in ("cutoff_angle", "beam_width"):
+                if key in light:
+                    d[key] = float(light[key])
+            if "to_world" in light:
+                d["to_world"] = mi.ScalarTransform4f(light["to_world"])
+            else:
+                origin = np.array(light["position"], dtype=np.float64)
+                target = np.array(light["target"], dtype=np.float64)
+                axis = (target - origin) / np.linalg.norm(target - origin)
+                # Any up not along the axis: the spot is round.
+                up = [0.0, 1.0, 0.0] if abs(axis[1]) < 0.9 else [1.0, 0.0, 0.0]
+                d["to_world"] = mi.ScalarTransform4f().look_at(
+                    origin=origin.tolist(), target=target.tolist(), up=up)
+            scene[f"light_{i:03d}_spot"] = d
         else:
             raise SceneError(f"light type {kind!r}")
     return scene
