@@ -5,7 +5,8 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::*;
-use crate::light::Light;
+use crate::film::Film;
+use crate::light::{DirectionalLight, Light};
 use crate::material::Bsdf;
 
 fn parse(text: &str) -> std::result::Result<Scene, SceneFileError> {
@@ -517,4 +518,107 @@ material = "white"
     // Without the mesh in memory, the name is a file that is not there.
     let error = parse_scene(text, path).unwrap_err().to_string();
     assert!(error.contains("<python mesh 0>"), "{error}");
+}
+
+/// Every kind of light, in the file's y-up frame, becomes its light in the lab's (y and z
+/// turned); Mitsuba's defaults fill what is not given.
+#[test]
+fn lights_of_every_kind_parse_into_the_lab_frame() {
+    use crate::light::{SpotProfile, SunLight};
+    let dir = tempfile::tempdir().unwrap();
+    let sky = Film::from_pixels(4, 2, vec![Vec3::new(0.5, 1.0, 2.0); 8]);
+    crate::image_io::save_film(&dir.path().join("sky.pfm"), &sky, &crate::film::Display::LAB)
+        .unwrap();
+    let text = r#"
+[[lights]]
+type = "envmap"
+filename = "sky.pfm"
+scale = 2
+rotate = { axis = [0, 1, 0], angle = 90 }
+
+[[lights]]
+type = "directional"
+direction = [0, -2, 0]
+irradiance = 3
+
+[[lights]]
+type = "directional"
+to_world = [[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]]
+
+[[lights]]
+type = "spot"
+position = [0, 3, 0]
+target = [0, 0, 0]
+intensity = [1, 2, 3]
+
+[[lights]]
+type = "sun"
+direction = [1, -1, 0]
+irradiance = [4, 4, 4]
+"#;
+    let scene = parse_scene(text, &dir.path().join("lights.toml")).unwrap();
+    let [map, down, to_world, spot, sun] = &scene.lights[..] else {
+        panic!("{:?}", scene.lights);
+    };
+    let Light::EnvironmentMap(map) = map else { panic!("{map:?}") };
+    assert_eq!(map.size(), (4, 2));
+    assert!((map.mean() - Vec3::new(1.0, 2.0, 4.0)).abs().max_element() < 1e-5);
+    // The map's left edge looks along its −z, which a quarter turn about y takes to the
+    // world's −x: the lab's −x.
+    assert!((map.direction(glam::Vec2::new(0.0, 0.5)) - Vec3::NEG_X).length() < 1e-6);
+    let expected = DirectionalLight { direction: Vec3::Y, irradiance: Vec3::splat(3.0) };
+    assert_eq!(*down, Light::Directional(expected));
+    // `to_world` (rows as written) takes +z, the way the light travels, to the world's −y
+    // (down): the lab's +y; the irradiance is Mitsuba's default, 1.
+    let Light::Directional(d) = to_world else { panic!("{to_world:?}") };
+    assert!((d.direction - Vec3::Y).length() < 1e-6 && d.irradiance == Vec3::ONE, "{d:?}");
+    let Light::Spot(spot) = spot else { panic!("{spot:?}") };
+    assert_eq!((spot.position(), spot.axis()), (Vec3::new(0.0, -3.0, 0.0), Vec3::Y));
+    assert_eq!(spot.intensity(), Vec3::new(1.0, 2.0, 3.0));
+    let (cutoff, beam) = spot.angles();
+    assert!((cutoff - 20f32.to_radians()).abs() < 1e-6 && (beam - 15f32.to_radians()).abs() < 1e-6);
+    assert_eq!(spot.profile(), SpotProfile::Mitsuba);
+    let Light::Sun(sun) = sun else { panic!("{sun:?}") };
+    let radius = (SunLight::EARTH_APERTURE_DEG / 2.0).to_radians();
+    assert!((sun.angular_radius() - radius).abs() < 1e-7);
+    assert!((sun.irradiance() - Vec3::splat(4.0)).abs().max_element() < 1e-4);
+    assert!((sun.direction() - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
+    assert_eq!(scene.lights_the_lab_ignores(), ["envmap", "directional", "spot", "sun"]);
+    assert!(scene.needs_path_tracing());
+}
+
+#[test]
+fn light_mistakes_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = Film::from_pixels(2, 2, vec![Vec3::ONE; 4]);
+    crate::image_io::save_film(&dir.path().join("sky.pfm"), &sky, &crate::film::Display::LAB)
+        .unwrap();
+    let light = |body: &str| format!("[[lights]]\n{body}\n");
+    let cases = [
+        (light("type = \"envmap\"\nfilename = \"missing.hdr\""), "envmap: cannot read"),
+        (light("type = \"envmap\"\nfilename = \"sky.pfm\"\nscale = -1"), "scale -1"),
+        (
+            light(
+                "type = \"envmap\"\nfilename = \"sky.pfm\"\n\
+                 to_world = [[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]",
+            ),
+            "to_world must be a rotation",
+        ),
+        (light("type = \"directional\"\ndirection = [0, 0, 0]"), "finite and not zero"),
+        (light("type = \"directional\""), "direction or to_world"),
+        (light("type = \"spot\"\nposition = [0, 1, 0]"), "position and target, or to_world"),
+        (
+            light("type = \"spot\"\nposition = [0, 1, 0]\ntarget = [0, 0, 0]\nbeam_width = 30"),
+            "beam_width",
+        ),
+        (light("type = \"spot\"\nposition = [0, 1, 0]\ntarget = [0, 1, 0]"), "direction"),
+        (light("type = \"sun\"\ndirection = [0, -1, 0]"), "one of radiance or irradiance"),
+        (light("type = \"sun\"\ndirection = [0, -1, 0]\nradiance = 1\naperture = 0"), "aperture"),
+        (light("type = \"area\""), "area"),
+    ];
+    for (text, message) in cases {
+        let e = parse_scene(&text, &dir.path().join("lights.toml")).unwrap_err().to_string();
+        assert!(e.contains("lights.toml:") && e.contains(message), "{text:?}: {e}");
+        assert!(!e.contains('\n'), "one line: {e}");
+    }
 }
