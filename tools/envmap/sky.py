@@ -7,12 +7,15 @@ u = (x + 1/2)/w, v = y/(h - 1), where the bilinear lookup of both renderers puts
 The sky: a gradient from a pale horizon to a blue zenith above the horizon, a dim brown ground
 below, and a sun disc of constant radiance (--sun-radiance) and angular radius --sun-radius
 (degrees) at --sun-elevation / --sun-azimuth (degrees; azimuth 0 looks along -z, 90 along +x).
-Each texel is the mean of 8 x 8 points spread over the solid angle around its direction, so
-the sun's edge is anti-aliased.
+Each texel is the mean of --samples x --samples points (8 x 8) spread over the solid angle
+around its direction, so the sun's edge is anti-aliased.
 
 Made for crates/raylab/tests/data/mitsuba-envmap/sky.hdr:
   python3 tools/envmap/sky.py crates/raylab/tests/data/mitsuba-envmap/sky.hdr
 (defaults: 128 x 65, sun at elevation 35, azimuth 60, radius 2.5 degrees, radiance 800).
+An 8k x 4k map for the load figures in BENCHMARKS.md (about 130 MB, not committed):
+  python3 tools/envmap/sky.py /tmp/sky-8k.hdr --width 8192 --height 4096 --samples 1 \
+      --sun-radius 0.27 --sun-radiance 50000
 Needs numpy.
 """
 import argparse
@@ -70,12 +73,13 @@ def main():
     p.add_argument("--sun-azimuth", type=float, default=60.0)
     p.add_argument("--sun-radius", type=float, default=2.5)
     p.add_argument("--sun-radiance", type=float, default=800.0)
+    p.add_argument("--samples", type=int, default=8, help="points per texel across and down")
     a = p.parse_args()
     w, h = a.width, a.height
     el, az = math.radians(a.sun_elevation), math.radians(a.sun_azimuth)
     sun = np.array([math.sin(az) * math.cos(el), math.sin(el), -math.cos(az) * math.cos(el)])
     sun_cos = math.cos(math.radians(a.sun_radius))
-    n = 8
+    n = a.samples
     total = np.zeros((h, w, 3))
     xs, ys = np.meshgrid(np.arange(w), np.arange(h))
     for j in range(n):

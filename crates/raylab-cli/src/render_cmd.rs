@@ -238,6 +238,10 @@ fn report_frame(
             outcome.elapsed.as_secs_f64() * 1e3
         );
     }
-    let report = FrameSummary { job, outcome: &outcome, load_time: setup.load }.to_string();
+    let mut report = FrameSummary { job, outcome: &outcome, load_time: setup.load }.to_string();
+    if let Some(env) = &setup.env_report {
+        report += env;
+        report.push('\n');
+    }
     crate::print_report(&report)
 }

@@ -127,6 +127,9 @@ pub struct Setup {
     pub is_model: bool,
     /// How long reading (or making) the scene took.
     pub load: std::time::Duration,
+    /// What `--env` read, for the report: the map, its size and memory, and how long reading it
+    /// and building its sampling density took.
+    pub env_report: Option<String>,
 }
 
 impl SceneArgs {
@@ -140,11 +143,24 @@ impl SceneArgs {
         for warning in &scene.warnings {
             eprintln!("raylab: warning: {warning}");
         }
+        let mut env_report = None;
         if let Some(path) = &self.env {
+            let start = std::time::Instant::now();
             let image = raylab::image_io::load_film(path)?;
+            let read = start.elapsed();
             let turn = glam::Mat3::from_rotation_y(self.env_rotate.unwrap_or(0.0).to_radians());
             let name = path.display().to_string();
             let map = EnvironmentMap::new(name, image, self.env_scale.unwrap_or(1.0), turn)?;
+            let built = start.elapsed() - read;
+            let (width, height) = map.size();
+            env_report = Some(format!(
+                "environment map {}: {width}×{height}, read in {:.1} ms, sampling built in {:.1} \
+                 ms; memory {}",
+                map.name(),
+                read.as_secs_f64() * 1e3,
+                built.as_secs_f64() * 1e3,
+                raylab::film::format_bytes(map.memory_bytes() as u64),
+            ));
             scene.light_with_environment_map(map, is_model);
         }
         if let Some(position) = self.light {
@@ -154,7 +170,7 @@ impl SceneArgs {
             scene.point_light_mut().power = Vec3::splat(power);
         }
         scene.validate()?;
-        Ok(Setup { scene, is_model, load })
+        Ok(Setup { scene, is_model, load, env_report })
     }
 
     /// The camera overrides.

@@ -20,6 +20,7 @@
 //! uniform fallbacks).
 
 use glam::Vec2;
+use rayon::prelude::*;
 
 use super::{DiscreteDistribution, ONE_MINUS_EPSILON, rescaled};
 
@@ -119,8 +120,9 @@ impl PiecewiseConstant2D {
     pub fn new(values: &[f32], width: usize, height: usize) -> PiecewiseConstant2D {
         assert!(width > 0 && height > 0, "a 2D density needs a value");
         assert_eq!(values.len(), width * height, "{width} × {height} values");
+        // Row by row on every core (an 8k × 4k map's 4,096 rows).
         let rows: Vec<PiecewiseConstant1D> =
-            values.chunks_exact(width).map(PiecewiseConstant1D::new).collect();
+            values.par_chunks_exact(width).map(PiecewiseConstant1D::new).collect();
         let sums: Vec<f32> = rows.iter().map(|r| r.integral() as f32).collect();
         PiecewiseConstant2D { marginal: PiecewiseConstant1D::new(&sums), rows }
     }
