@@ -53,8 +53,9 @@ use crate::film::Film;
 use crate::sampling::{PiecewiseConstant2D, bilinear_pdf, sample_bilinear};
 
 /// An equirectangular environment map: its radiance, its orientation, and the density that
-/// samples it. Its `Debug` shows its name, size, orientation and a hash of its texels (so
-/// that `Scene::content_hash` tells maps apart without printing millions of texels).
+/// samples it. Its `Debug` shows its size, orientation and a hash of its texels, not its name:
+/// `Scene::content_hash` tells maps apart by what they hold, wherever their files are, without
+/// printing millions of texels.
 #[derive(Clone, PartialEq)]
 pub struct EnvironmentMap {
     /// Where the image came from, for messages.
@@ -81,7 +82,6 @@ pub struct EnvironmentMap {
 impl std::fmt::Debug for EnvironmentMap {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("EnvironmentMap")
-            .field("name", &self.name)
             .field("size", &(self.width, self.height))
             .field("to_lab", &self.to_lab)
             .field("texel_hash", &format_args!("{:016x}", self.texel_hash))

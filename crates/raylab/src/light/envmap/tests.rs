@@ -219,3 +219,18 @@ fn bad_maps_are_refused_with_their_reasons() {
     let m = EnvironmentMap::new("m", negative, 1.0, Mat3::IDENTITY).unwrap();
     assert_eq!(m.eval(Vec3::X), Vec3::new(0.0, 2.0, 0.0));
 }
+
+/// `Debug` (which `Scene::content_hash` hashes) tells maps apart by their texels and
+/// orientation, not their names, and stays short however large the map.
+#[test]
+fn debug_names_the_content_not_the_file() {
+    let film = |value: f32| Film::from_pixels(64, 32, vec![Vec3::splat(value); 64 * 32]);
+    let debug = |name: &str, value: f32, to_world: Mat3| {
+        format!("{:?}", EnvironmentMap::new(name, film(value), 1.0, to_world).unwrap())
+    };
+    let a = debug("a.hdr", 1.0, Mat3::IDENTITY);
+    assert_eq!(a, debug("elsewhere/b.hdr", 1.0, Mat3::IDENTITY));
+    assert_ne!(a, debug("a.hdr", 1.5, Mat3::IDENTITY));
+    assert_ne!(a, debug("a.hdr", 1.0, Mat3::from_rotation_y(0.5)));
+    assert!(a.len() < 200, "{a}");
+}

@@ -9,7 +9,8 @@
 //! [`MeshMaterial`](crate::mesh::MeshMaterial): the metallic-roughness material's base colour factor as the diffuse
 //! colour, the emissive factor (times `KHR_materials_emissive_strength`) as emission, and
 //! their textures (base colour, metallic-roughness, normal, emissive). The first perspective
-//! camera, in node order, becomes the scene's camera.
+//! camera, in node order, becomes the scene's camera, and `KHR_lights_punctual` lights become
+//! point, spot and directional lights (`punctual_light`).
 //!
 //! Mistakes are one line naming the file and the part: a primitive that is not triangles
 //! (points, lines, strips are refused, not guessed at), an accessor whose data lies outside its
