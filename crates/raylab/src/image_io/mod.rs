@@ -270,12 +270,11 @@ pub fn parse_hdr(bytes: &[u8]) -> Result<Film, String> {
         return Err(format!("it declares {width}×{height} pixels: no image"));
     }
     // The decoder writes RGB triples of native-endian f32, a `Vec3`'s layout: straight into the
-    // film's pixels, without a second copy (an 8k × 4k map's pixels are 384 MiB).
-    let mut pixels = Vec::new();
-    pixels
-        .try_reserve_exact(pixels_needed(width, height)?)
-        .map_err(|_| format!("not enough memory for {width}×{height} pixels"))?;
-    pixels.resize(pixels.capacity(), Vec3::ZERO);
+    // film's pixels, without a second copy (an 8k × 4k map's pixels are 384 MiB). Zeroed
+    // memory is only committed as the decoder writes it: a short file that declares a huge
+    // image fails at its first missing row, not after filling gigabytes.
+    let mut pixels: Vec<Vec3> = bytemuck::allocation::try_zeroed_vec(pixels_needed(width, height)?)
+        .map_err(|()| format!("not enough memory for {width}×{height} pixels"))?;
     let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut pixels);
     if decoder.total_bytes() != bytes.len() as u64 {
         return Err(format!("{} bytes of pixels for {width}×{height} RGB", decoder.total_bytes()));

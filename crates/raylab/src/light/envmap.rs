@@ -39,8 +39,8 @@
 //!
 //! Tests: `light::envmap::tests` (the convention's known directions, the lookup between texel
 //! centres, chi-square goodness of fit of the sampling against its density) and
-//! `tests/environment_map.rs` (a furnace inside a constant map, a map with one bright texel
-//! lighting the scene from the direction Mitsuba's convention gives).
+//! `tests/lights.rs` (a furnace inside a constant map, a map with one bright texel lighting
+//! the scene from the direction Mitsuba's convention gives).
 
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -50,7 +50,7 @@ use rayon::prelude::*;
 use super::LightError;
 use crate::color::luminance;
 use crate::film::Film;
-use crate::sampling::{PiecewiseConstant2D, bilinear_pdf, sample_bilinear};
+use crate::sampling::{PiecewiseConstant2D, atan2_polynomial, bilinear_pdf, sample_bilinear};
 
 /// An equirectangular environment map: its radiance, its orientation, and the density that
 /// samples it. Its `Debug` shows its size, orientation and a hash of its texels, not its name:
@@ -89,14 +89,27 @@ impl std::fmt::Debug for EnvironmentMap {
     }
 }
 
+/// The brightest radiance a texel may have after scaling: four of them summed stay far from
+/// overflow.
+const MAX_RADIANCE: f32 = 1e30;
+
+/// `m`'s columns made orthonormal by Gram–Schmidt, the third keeping its side (a mirror stays
+/// a mirror).
+fn orthonormalized(m: Mat3) -> Mat3 {
+    let x = m.x_axis.normalize();
+    let y = (m.y_axis - m.y_axis.dot(x) * x).normalize();
+    let z = x.cross(y);
+    Mat3::from_cols(x, y, if z.dot(m.z_axis) < 0.0 { -z } else { z })
+}
+
 /// `u, v ∈ [0, 1]` of a unit direction in the map's frame (the module's convention).
 #[inline]
 pub fn direction_to_uv(d: Vec3) -> Vec2 {
-    let u = d.x.atan2(-d.z) * (0.5 * FRAC_1_PI);
+    let u = atan2_polynomial(d.x, -d.z) * (0.5 * FRAC_1_PI);
     let u = if u < 0.0 { u + 1.0 } else { u };
     // θ = acos(y), by the arctangent: as precise near the poles as elsewhere.
     let sin_theta = (d.x * d.x + d.z * d.z).sqrt();
-    Vec2::new(u, sin_theta.atan2(d.y) * FRAC_1_PI)
+    Vec2::new(u, atan2_polynomial(sin_theta, d.y) * FRAC_1_PI)
 }
 
 /// The unit direction in the map's frame at `u, v` (the inverse of [`direction_to_uv`]).
@@ -135,6 +148,12 @@ impl EnvironmentMap {
             ));
         }
         let (width, height) = (image.width() as usize, image.height() as usize);
+        if width == 0 || height == 0 || height > width {
+            return Err(error(format!(
+                "a {width}×{height} image is no equirectangular map (at least one texel, and at \
+                 least as wide as tall: a map of the sphere is twice as wide)"
+            )));
+        }
         let mut texels = image.into_pixels();
         if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
             return Err(error(format!(
@@ -145,6 +164,15 @@ impl EnvironmentMap {
             )));
         }
         texels.par_iter_mut().for_each(|t| *t = t.max(Vec3::ZERO) * scale);
+        // Sums of four luminances must stay finite for the density.
+        if let Some(i) = texels.iter().position(|t| t.max_element() > MAX_RADIANCE) {
+            return Err(error(format!(
+                "texel ({}, {}) times scale {scale} is {}: more than {MAX_RADIANCE:e}",
+                i % width,
+                i / width,
+                texels[i]
+            )));
+        }
         let height = if height == 1 {
             texels.extend_from_within(..);
             2
@@ -169,9 +197,9 @@ impl EnvironmentMap {
             .collect();
         let hash_bytes: Vec<u8> = row_hashes.iter().flat_map(|h| h.to_le_bytes()).collect();
         let texel_hash = xxhash_rust::xxh3::xxh3_64(&hash_bytes);
-        // `to_world` is orthonormal: its inverse is its transpose (renormalized rows keep the
-        // directions unit).
-        let to_lab = LAB_TO_WORLD * to_world;
+        // Orthonormal to the float (it was within 10⁻⁴), so that its inverse is its transpose
+        // and directions stay unit.
+        let to_lab = LAB_TO_WORLD * orthonormalized(to_world);
         Ok(EnvironmentMap {
             name,
             width,
@@ -284,12 +312,26 @@ impl EnvironmentMap {
     /// `direction` (the lab's frame).
     #[inline]
     pub fn pdf(&self, direction: Vec3) -> f32 {
+        self.eval_pdf(direction).1
+    }
+
+    /// [`eval`](Self::eval) and [`pdf`](Self::pdf) together, the direction's place on the map
+    /// found once: what a ray that leaves the scene needs.
+    #[inline]
+    pub fn eval_pdf(&self, direction: Vec3) -> (Vec3, f32) {
         let local = self.to_local * direction;
+        let uv = direction_to_uv(local);
+        let radiance = self.lookup(uv);
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
         if sin_theta <= 0.0 {
-            return 0.0;
+            return (radiance, 0.0);
         }
-        let uv = direction_to_uv(local);
+        (radiance, self.pdf_at(uv, sin_theta))
+    }
+
+    /// The density per unit solid angle at `uv`, where `sin θ` is `sin_theta` (not zero).
+    #[inline]
+    fn pdf_at(&self, uv: Vec2, sin_theta: f32) -> f32 {
         let (columns, rows) = (self.width, self.height - 1);
         let x = (uv.x * columns as f32 - 0.5).rem_euclid(columns as f32);
         let y = uv.y * rows as f32;

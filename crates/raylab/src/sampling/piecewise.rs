@@ -11,9 +11,10 @@
 //! same density). `p(u, v) = p(v) · p(u | v)`.
 //!
 //! Each row is a [`DiscreteDistribution`] (the bins' cumulative distribution, in `f32`,
-//! summed in `f64`, and nothing else); a density is read from the CDF's steps, so that the density reported is exactly the one sampled, and a
-//! 2D table of `w × h` values takes `(w + 1)·h + h + 1` floats (an 8k × 4k environment map:
-//! 128 MiB). Negative and NaN values count as zero; a table of zeros is uniform.
+//! summed in `f64`, and nothing else); a density is read from the CDF's steps, so that the
+//! density reported is exactly the one sampled, and a 2D table of `w × h` values takes
+//! `(w + 1)·h + h + 1` floats and a small record per row (an 8k × 4k environment map: 128 MiB;
+//! environment maps are at least as wide as tall, so the rows' records stay small). Negative and NaN values count as zero; a table of zeros is uniform.
 //!
 //! Tests: `sampling::tests::piecewise_*` (chi-square goodness of fit in 1D and 2D, against a
 //! table with empty rows and columns and a bright spot; densities integrating to one;

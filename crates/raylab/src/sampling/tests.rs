@@ -482,3 +482,40 @@ fn piecewise_tables_of_zeros_are_uniform() {
     assert_eq!(one.sample(0.25), (0.25, 1.0, 0));
     assert_eq!(one.integral(), 3.0);
 }
+
+/// Every octant, the axes, and points near them, against double precision.
+#[test]
+fn atan2_polynomial_is_accurate() {
+    let mut rng = Pcg32::new(12, 1);
+    let mut worst = 0.0f64;
+    let mut check = |y: f32, x: f32| {
+        let error = (atan2_polynomial(y, x) as f64 - (y as f64).atan2(x as f64)).abs();
+        worst = worst.max(error);
+        assert!(
+            error < 3e-7,
+            "atan2({y}, {x}): {} against {}",
+            atan2_polynomial(y, x),
+            (y as f64).atan2(x as f64)
+        );
+    };
+    for _ in 0..1_000_000 {
+        let angle = (rng.next_f32() * 2.0 - 1.0) * PI;
+        let r = 1e-3 + 10.0 * rng.next_f32();
+        check(r * angle.sin(), r * angle.cos());
+    }
+    for (y, x) in [
+        (0.0, 1.0),
+        (1.0, 0.0),
+        (0.0, -1.0),
+        (-1.0, 0.0),
+        (1.0, 1.0),
+        (-1.0, -1.0),
+        (1e-30, 1.0),
+        (1.0, -1e-30),
+    ] {
+        check(y, x);
+    }
+    assert_eq!(atan2_polynomial(0.0, 0.0), 0.0);
+    assert!(atan2_polynomial(f32::NAN, 1.0).is_nan());
+    eprintln!("atan2_polynomial: worst error {worst:.2e}");
+}

@@ -427,7 +427,7 @@ impl Scene {
                 // Checked as it was made.
                 Light::EnvironmentMap(_) => {}
                 Light::Directional(light) => {
-                    if !light.direction.is_finite() {
+                    if !(light.direction.is_finite() && light.direction != Vec3::ZERO) {
                         return Err(not_finite(
                             "a directional light's direction".into(),
                             light.direction,

@@ -220,7 +220,7 @@ impl LightSet {
                     lights.push(SampledLight::EnvironmentMap(map.clone()))
                 }
                 Light::Directional(light) => lights.push(SampledLight::Directional {
-                    toward: -light.direction,
+                    toward: -light.direction.normalize_or_zero(),
                     irradiance: light.irradiance,
                 }),
                 Light::Spot(spot) => lights.push(SampledLight::Spot(*spot)),
@@ -278,6 +278,7 @@ impl LightSet {
             .filter(|r| r.is_finite() && *r > 0.0)
             .unwrap_or(1.0);
         let through_scene = PI * scene_radius * scene_radius;
+        // (Each kept below overflow: a sum that overflowed would leave no light to pick.)
         let mut powers: Vec<f32> = lights
             .iter()
             .map(|light| match light {
@@ -291,6 +292,7 @@ impl LightSet {
                 SampledLight::Spot(spot) => spot.power(),
                 SampledLight::Environment { .. } | SampledLight::EnvironmentMap(_) => 0.0,
             })
+            .map(|power: f32| power.min(1e30))
             .collect();
         // The environments are picked half the time when there are other lights, and always
         // without (pbrt-v4's `BVHLightSampler`, Mitsuba's uniform choice among two emitters); a
@@ -399,15 +401,6 @@ impl LightSet {
                 let direction = square_to_uniform_sphere(u);
                 Some((direction, map.eval(direction), uniform_sphere_pdf(direction)))
             }
-        }
-    }
-
-    /// The density with which [`sample_map`](Self::sample_map) picks `direction`.
-    #[inline]
-    fn map_pdf(&self, map: &EnvironmentMap, direction: Vec3) -> f32 {
-        match self.environment_sampling {
-            EnvironmentSampling::Importance => map.pdf(direction),
-            EnvironmentSampling::Uniform => uniform_sphere_pdf(direction),
         }
     }
 
@@ -648,11 +641,16 @@ impl LightSet {
                     (*radiance, selection() * uniform_sphere_pdf(direction))
                 }
                 SampledLight::EnvironmentMap(map) => {
-                    let radiance = map.eval(direction);
+                    let (radiance, pdf) = match self.environment_sampling {
+                        EnvironmentSampling::Importance => map.eval_pdf(direction),
+                        EnvironmentSampling::Uniform => {
+                            (map.eval(direction), uniform_sphere_pdf(direction))
+                        }
+                    };
                     if radiance == Vec3::ZERO {
                         continue;
                     }
-                    (radiance, selection() * self.map_pdf(map, direction))
+                    (radiance, selection() * pdf)
                 }
                 SampledLight::Sun(sun) => {
                     if !sun.sees(direction) {

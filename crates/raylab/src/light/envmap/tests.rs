@@ -209,6 +209,15 @@ fn bad_maps_are_refused_with_their_reasons() {
     pixels[4] = Vec3::new(1.0, f32::NAN, 0.0);
     let message = problem(Film::from_pixels(3, 2, pixels), 1.0, Mat3::IDENTITY);
     assert!(message.starts_with("sky.hdr: texel (1, 1)"), "{message}");
+    // No texels, or taller than wide: no map of the sphere.
+    assert!(problem(Film::from_pixels(0, 0, vec![]), 1.0, Mat3::IDENTITY).contains("0×0"));
+    assert!(
+        problem(Film::from_pixels(1, 3, vec![Vec3::ONE; 3]), 1.0, Mat3::IDENTITY).contains("1×3")
+    );
+    // Too bright once scaled.
+    let message =
+        problem(Film::from_pixels(2, 2, vec![Vec3::splat(1e30); 4]), 10.0, Mat3::IDENTITY);
+    assert!(message.contains("texel (0, 0) times scale 10"), "{message}");
     // A mirror is a rotation's kin: allowed.
     assert!(
         EnvironmentMap::new("m", film(), 1.0, Mat3::from_diagonal(Vec3::new(-1.0, 1.0, 1.0)))

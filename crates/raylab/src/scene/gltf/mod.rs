@@ -185,6 +185,9 @@ fn punctual_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Res
         return Err(format!("its colour times intensity {colour} must be finite and not negative"));
     }
     let position = model_to_lab(world.transform_point3(Vec3::ZERO));
+    if !position.is_finite() {
+        return Err(format!("its node places it at {position}, not a finite point"));
+    }
     let axis = model_to_lab(world.transform_vector3(-Vec3::Z));
     match light.kind() {
         Kind::Point => Ok(Light::Point(PointLight { position, power: 4.0 * PI * colour })),
