@@ -18,13 +18,15 @@ use raylab::{
 const SIZE: (u32, u32) = (32, 24);
 
 /// The scenes: every `scenes/*.toml`, the built-in box, three model files, and the Mitsuba
-/// comparison's materials scene (smooth spheres of every BSDF kind, one anisotropic).
+/// comparisons' materials scene (smooth spheres of every BSDF kind, one anisotropic) and
+/// environment-lit scene (an HDR sky with a sun, turned, and a spot light).
 fn scene_names() -> Vec<String> {
     common::scene_names(&[
         "bunny_lowres.obj",
         "spider/spider.obj",
         "BoxTextured/BoxTextured.gltf",
         "../mitsuba-materials/materials.toml",
+        "../mitsuba-envmap/envmap.toml",
     ])
 }
 
