@@ -50,7 +50,9 @@ use rayon::prelude::*;
 use super::LightError;
 use crate::color::luminance;
 use crate::film::Film;
-use crate::sampling::{PiecewiseConstant2D, atan2_polynomial, bilinear_pdf, sample_bilinear};
+use crate::sampling::{
+    PiecewiseConstant2D, atan2_polynomial, bilinear_pdf, sample_bilinear, sin_cos_turns,
+};
 
 /// An equirectangular environment map: its radiance, its orientation, and the density that
 /// samples it. Its `Debug` shows its size, orientation and a hash of its texels, not its name:
@@ -115,8 +117,9 @@ pub fn direction_to_uv(d: Vec3) -> Vec2 {
 /// The unit direction in the map's frame at `u, v` (the inverse of [`direction_to_uv`]).
 #[inline]
 pub fn uv_to_direction(uv: Vec2) -> Vec3 {
-    let (sin_theta, cos_theta) = (uv.y * PI).sin_cos();
-    let (sin_phi, cos_phi) = (uv.x * 2.0 * PI).sin_cos();
+    // θ = πv is half a turn of v; φ = 2πu is u turns (the samplers' polynomial, within 3·10⁻⁷).
+    let (sin_theta, cos_theta) = sin_cos_turns(0.5 * uv.y);
+    let (sin_phi, cos_phi) = sin_cos_turns(uv.x);
     Vec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta)
 }
 

@@ -219,7 +219,7 @@ pub fn uniform_sphere_pdf(_w: Vec3) -> f32 {
 pub fn square_to_uniform_cone(u: Vec2, one_minus_cos_alpha: f32) -> Vec3 {
     let one_minus_cos = u.x * one_minus_cos_alpha;
     let sin_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
-    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    let (sin, cos) = sin_cos_turns(u.y);
     Vec3::new(sin_theta * cos, sin_theta * sin, 1.0 - one_minus_cos)
 }
 

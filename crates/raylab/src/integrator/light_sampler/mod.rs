@@ -404,6 +404,16 @@ impl LightSet {
         }
     }
 
+    /// The radiance arriving from `map` along `direction` and the density with which
+    /// [`sample_map`](Self::sample_map) picks that direction.
+    #[inline]
+    fn map_eval_pdf(&self, map: &EnvironmentMap, direction: Vec3) -> (Vec3, f32) {
+        match self.environment_sampling {
+            EnvironmentSampling::Importance => map.eval_pdf(direction),
+            EnvironmentSampling::Uniform => (map.eval(direction), uniform_sphere_pdf(direction)),
+        }
+    }
+
     /// The solid angle of a triangle light seen from `p`, when it is sampled by solid angle.
     #[inline]
     fn solid_angle(&self, corners: [Vec3; 3], p: Vec3) -> Option<f32> {
@@ -641,12 +651,7 @@ impl LightSet {
                     (*radiance, selection() * uniform_sphere_pdf(direction))
                 }
                 SampledLight::EnvironmentMap(map) => {
-                    let (radiance, pdf) = match self.environment_sampling {
-                        EnvironmentSampling::Importance => map.eval_pdf(direction),
-                        EnvironmentSampling::Uniform => {
-                            (map.eval(direction), uniform_sphere_pdf(direction))
-                        }
-                    };
+                    let (radiance, pdf) = self.map_eval_pdf(map, direction);
                     if radiance == Vec3::ZERO {
                         continue;
                     }

@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 use std::ops::Range;
 use std::sync::Arc;
 
-use glam::{Affine3A, Mat3, Vec3};
+use glam::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -179,8 +179,7 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         let direction = match (direction, to_world) {
             (Some(d), None) => Vec3::from_array(d),
             (None, Some(_)) => {
-                let m: Affine3A = self.placement(None, None, None, to_world)?;
-                Mat3::from(m.matrix3) * Vec3::Z
+                self.placement(None, None, None, to_world)?.transform_vector3(Vec3::Z)
             }
             _ => {
                 return self.error(
