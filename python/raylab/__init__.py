@@ -12,6 +12,9 @@ slips between), and the closest hit at equal distances is the lowest triangle in
 are ``float32`` inside: ``float64`` input is rounded to the nearest ``float32``.
 
 The queries release the GIL and run on every core unless ``threads=`` says how many.
+``raylab.ISA`` names the instruction set their kernels use: the best this CPU has, or the one
+the environment variable ``RAYLAB_ISA`` names (``scalar``, ``sse2``, ``avx2``, ``avx512``) when
+it is set before the import, to measure as on a CPU without AVX-512.
 """
 
 from collections import namedtuple
@@ -24,6 +27,7 @@ import numpy as np
 from . import _raylab
 
 __version__ = _raylab.__version__
+ISA = _raylab.ISA
 __all__ = [
     "AllHits", "Hits", "Mesh", "Render", "Scene", "load_mesh", "render", "write_image"
 ]

@@ -628,11 +628,15 @@ fn load_mesh(py: Python<'_>, path: PathBuf) -> PyResult<Mesh> {
 /// The Rust side of the `raylab` package.
 #[pymodule]
 fn _raylab(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // A wrong `RAYLAB_ISA` stops the import with its reason, rather than being ignored.
+    raylab::cpu::Isa::from_env()
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("RAYLAB_ISA: {e}")))?;
     m.add_class::<Mesh>()?;
     m.add_function(wrap_pyfunction!(load_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(render::write_image, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("ISA", raylab::cpu::Isa::detect().name())?;
     m.add("ORDER_MIN_RAYS", ORDER_MIN_RAYS)?;
     m.add("ORDER_MIN_TREE_BYTES", ORDER_MIN_TREE_BYTES)?;
     Ok(())

@@ -164,10 +164,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let bvh = match &args.isa {
         None => bvh,
         Some(name) => {
-            let isa = Isa::ALL.into_iter().find(|isa| isa.name() == name).with_context(|| {
-                format!("unknown --isa '{name}': use scalar, sse2, avx2 or avx512")
-            })?;
-            bvh.with_isa(isa).with_context(|| format!("this CPU cannot run --isa {name}"))?
+            let isa = Isa::supported_by_name(name).with_context(|| format!("--isa {name}"))?;
+            bvh.with_isa(isa).expect("a set this CPU supports")
         }
     };
     let stats = bvh.stats();

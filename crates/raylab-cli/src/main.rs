@@ -61,6 +61,12 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    // `RAYLAB_ISA` caps the kernels' instruction set (raylab::cpu); a wrong one is refused
+    // before any work, not ignored.
+    if let Err(error) = raylab::cpu::Isa::from_env() {
+        eprintln!("raylab: error: RAYLAB_ISA: {error}");
+        return ExitCode::from(2);
+    }
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
         Command::Merge(args) => merge_cmd::run(&args),

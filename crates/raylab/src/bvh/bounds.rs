@@ -218,6 +218,96 @@ impl RayBoxTest {
     }
 }
 
+/// The single-ray slab test in fused multiply-add form: per axis `t = plane·(1/d) + c` in one
+/// rounding, with `c = −o·(1/d) ∓ m` (Embree's form, `fmsub(plane, rdir, org_rdir)`), so that a
+/// node's boxes cost one FMA per plane and the ray's margin costs nothing per box.
+///
+/// The plain form `(plane − o)·(1/d)` errs by a few roundings of the distance itself; this one
+/// errs also by a rounding of `o·(1/d)`, which may be far larger than the distance when the
+/// scene lies far from the world's origin. So each axis gets its own margin
+/// `m = (M + 4γ₃·|o·(1/d)|)·FAR_SCALE`, `M` the plain test's margin ([`RayBoxTest::margin`]):
+/// the distance errs by at most `2u·(R + |o·(1/d)| + m)` to first order (the rounding of
+/// `o·(1/d)`, of the addend, of the FMA, and of `1/d` within `R`), which `m`'s share beyond
+/// `SLAB_PAD·R` covers with room to spare, as the plain margin covers its own.
+///
+/// Rays for which that bound does not hold in floating point — a zero or infinite `1/d` on some
+/// axis, or `o·(1/d)` or the margin overflowing — have no fused form
+/// ([`RayBoxTest::fused`] is `None`) and use the plain test. With every term finite no distance
+/// is NaN, so the order of the `min`s and `max`s does not matter: near and far are each reduced
+/// as a tree, one level shallower than a chain.
+///
+/// The scalar twin of the AVX2 and AVX-512 node kernels (`f32::mul_add` is the same single
+/// rounding as their FMA).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FusedSlabs {
+    /// `1/d` per axis (finite, non-zero).
+    pub inv_direction: Vec3,
+    /// `−o·(1/d) − m` per axis: the near planes' addend.
+    pub near_add: Vec3,
+    /// `−o·(1/d) + m` per axis: the far planes' addend.
+    pub far_add: Vec3,
+    /// `t_min − M`.
+    pub t_min: f32,
+    /// `M`, added to a query's limit.
+    pub margin: f32,
+    /// Per axis, whether the direction is negative.
+    pub negative: [bool; 3],
+}
+
+impl RayBoxTest {
+    /// The fused form of this ray's test with margin `margin` ([`margin`](Self::margin)), or
+    /// `None` where its error bound does not hold (see [`FusedSlabs`]).
+    #[inline]
+    pub fn fused(&self, margin: f32) -> Option<FusedSlabs> {
+        let mut near_add = Vec3::ZERO;
+        let mut far_add = Vec3::ZERO;
+        for axis in 0..3 {
+            let inv = self.inv_direction[axis];
+            let q = self.origin[axis] * inv;
+            let m = (margin + 4.0 * gamma(3) * q.abs()) * FAR_SCALE;
+            // A finite `m` means a finite `q` and margin.
+            if !inv.is_finite() || inv == 0.0 || !m.is_finite() {
+                return None;
+            }
+            near_add[axis] = -q - m;
+            far_add[axis] = -q + m;
+        }
+        let t_min = self.t_min - margin;
+        t_min.is_finite().then_some(FusedSlabs {
+            inv_direction: self.inv_direction,
+            near_add,
+            far_add,
+            t_min,
+            margin,
+            negative: self.negative,
+        })
+    }
+}
+
+impl FusedSlabs {
+    /// The entry distance into `bounds` (moved out by the margins) if the ray may meet it
+    /// within `[t_min, t_limit]`: never `None` where [`RayBoxTest::enter`] enters (the tests
+    /// check it).
+    #[inline]
+    pub fn enter(&self, bounds: &Bounds, t_limit: f32) -> Option<f32> {
+        let mut tn = [0.0f32; 3];
+        let mut tf = [0.0f32; 3];
+        for axis in 0..3 {
+            let (near_plane, far_plane) = if self.negative[axis] {
+                (bounds.max[axis], bounds.min[axis])
+            } else {
+                (bounds.min[axis], bounds.max[axis])
+            };
+            let inv = self.inv_direction[axis];
+            tn[axis] = near_plane.mul_add(inv, self.near_add[axis]);
+            tf[axis] = far_plane.mul_add(inv, self.far_add[axis]);
+        }
+        let near = tn[0].max(tn[1]).max(tn[2].max(self.t_min));
+        let far = tf[0].min(tf[1]).min(tf[2].min(t_limit + self.margin));
+        (near <= far).then_some(near)
+    }
+}
+
 /// The slab test of a whole packet of rays at once: a box passes if any ray of the packet may
 /// enter it, as [`RayBoxTest::enter`] decides for each ray (Reshetov et al., "Multi-Level Ray
 /// Tracing Algorithm", 2005, and Wald et al., "Ray Tracing Deformable Scenes Using Dynamic

@@ -57,7 +57,7 @@ mod two_level;
 
 use glam::Vec3;
 
-pub use bounds::{Bounds, Frustum, RayBoxTest};
+pub use bounds::{Bounds, Frustum, FusedSlabs, RayBoxTest};
 pub(crate) use bounds::{FAR_SCALE, SLAB_PAD};
 pub use build::BuildSettings;
 pub use isa::Isa;

@@ -127,8 +127,9 @@ mod x86 {
     use crate::bvh::isa::{Avx2, Avx512, Sse};
 
     pub(super) const SSE2: Queries = queries!(Isa::Sse2, Sse, "sse2");
-    pub(super) const AVX2: Queries = queries!(Isa::Avx2, Avx2, "avx2");
-    pub(super) const AVX512: Queries = queries!(Isa::Avx512, Avx512, "avx2,avx512f,avx512vl");
+    pub(super) const AVX2: Queries = queries!(Isa::Avx2, Avx2, "avx2,fma,bmi1,bmi2,lzcnt,popcnt");
+    pub(super) const AVX512: Queries =
+        queries!(Isa::Avx512, Avx512, "avx2,fma,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl");
 }
 
 impl Queries {

@@ -66,6 +66,22 @@ pub(in crate::bvh) fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {
             d.z = 1.0;
         }
         let t_limit = if i % 2 == 0 { f32::INFINITY } else { rng.next() * 3.0 };
+        // Every seventh scene far from the world's origin: `o·(1/d)` far larger than the
+        // distances (the fused test's own margin).
+        let origin = if i % 7 == 6 {
+            let offset = Vec3::new(1000.0, -3.0e4, 250.5);
+            for slot in 0..8 {
+                if node.children[slot] != node::EMPTY {
+                    for axis in 0..3 {
+                        node.planes[axis][slot] += offset[axis];
+                        node.planes[3 + axis][slot] += offset[axis];
+                    }
+                }
+            }
+            origin + offset
+        } else {
+            origin
+        };
         let mut ray = Ray::new(origin, d);
         ray.t_min = if i % 4 == 1 { 0.25 } else { 0.0 };
         cases.push((node, ray, t_limit));
@@ -78,12 +94,39 @@ pub(in crate::bvh) fn node_root(node: &WideNode) -> Bounds {
     (0..8).fold(Bounds::EMPTY, |b, k| b.union(node.bounds(k)))
 }
 
-fn check_kernel<K: NodeKernel>(run: impl Fn(&WideNode, &K::Ray, f32) -> (u32, [f32; 8])) {
+/// What the AVX2 and AVX-512 node kernels compute: the fused test where the ray has one, the
+/// plain one otherwise.
+fn fused_twin(node: &WideNode, ray: &RayBoxTest, margin: f32, t_limit: f32) -> (u32, [f32; 8]) {
+    let Some(fused) = ray.fused(margin) else {
+        // SAFETY: the scalar kernel needs nothing.
+        return unsafe { Scalar::enter(node, &(*ray, margin), t_limit) };
+    };
+    let (mut mask, mut near) = (0, [0.0; 8]);
+    for (k, slot) in near.iter_mut().enumerate() {
+        if let Some(t) = fused.enter(&node.bounds(k), t_limit) {
+            mask |= 1 << k;
+            *slot = t;
+        }
+    }
+    (mask, near)
+}
+
+/// What the SSE2 kernel computes: the plain test.
+fn plain_twin(node: &WideNode, ray: &RayBoxTest, margin: f32, t_limit: f32) -> (u32, [f32; 8]) {
+    // SAFETY: the scalar kernel needs nothing.
+    unsafe { Scalar::enter(node, &(*ray, margin), t_limit) }
+}
+
+type Twin = fn(&WideNode, &RayBoxTest, f32, f32) -> (u32, [f32; 8]);
+
+fn check_kernel<K: NodeKernel>(
+    twin: Twin,
+    run: impl Fn(&WideNode, &K::Ray, f32) -> (u32, [f32; 8]),
+) {
     for (node, ray, t_limit) in hostile_cases() {
         let box_ray = RayBoxTest::new(&ray);
         let margin = box_ray.margin(&node_root(&node));
-        // SAFETY: the scalar kernel needs nothing.
-        let (mask, near) = unsafe { Scalar::enter(&node, &(box_ray, margin), t_limit) };
+        let (mask, near) = twin(&node, &box_ray, margin, t_limit);
         // SAFETY: `check_kernel` runs only kernels this CPU supports.
         let (simd_mask, simd_near) = run(&node, &unsafe { K::prepare(&box_ray, margin) }, t_limit);
         assert_eq!(mask, simd_mask, "{ray:?} limit {t_limit}\n{node:?}");
@@ -94,6 +137,53 @@ fn check_kernel<K: NodeKernel>(run: impl Fn(&WideNode, &K::Ray, f32) -> (u32, [f
             }
         }
     }
+}
+
+/// The fused test (`FusedSlabs`, the AVX2 and AVX-512 kernels' form) enters every box that
+/// the per-box test enters, no later, also in scenes far from the world's origin; most rays
+/// have a fused form (the others, with a zero or tiny direction component, are tested plainly).
+#[test]
+fn the_fused_test_enters_every_box_the_per_box_test_enters() {
+    let (mut fused_rays, mut plain_rays, mut both, mut only_fused) = (0, 0, 0, 0);
+    // The hostile rays, and rays from their origins at each used child's centre (most of
+    // them have a fused form and enter boxes).
+    let mut cases = hostile_cases();
+    for (node, ray, _) in hostile_cases() {
+        for k in (0..8).filter(|&k| node.children[k] != node::EMPTY) {
+            let aim = node.bounds(k).centroid() + Vec3::new(1e-3, -2e-3, 3e-3) * k as f32;
+            if aim != ray.origin {
+                cases.push((node, Ray::new(ray.origin, aim - ray.origin), f32::INFINITY));
+            }
+        }
+    }
+    for (node, ray, t_limit) in cases {
+        let box_ray = RayBoxTest::new(&ray);
+        let margin = box_ray.margin(&node_root(&node));
+        let Some(fused) = box_ray.fused(margin) else {
+            plain_rays += 1;
+            continue;
+        };
+        fused_rays += 1;
+        for k in 0..8 {
+            let bounds = node.bounds(k);
+            match (box_ray.enter(&bounds, t_limit), fused.enter(&bounds, t_limit)) {
+                (Some(near), Some(fused_near)) => {
+                    assert!(fused_near <= near, "{ray:?} {bounds:?}: {fused_near} > {near}");
+                    both += 1;
+                }
+                (Some(_), None) => panic!("{ray:?} limit {t_limit} misses {bounds:?}"),
+                (None, Some(_)) => only_fused += 1,
+                (None, None) => {}
+            }
+            if node.children[k] == node::EMPTY {
+                assert!(fused.enter(&bounds, t_limit).is_none(), "an unused slot is entered");
+            }
+        }
+    }
+    assert!(fused_rays > 20000 && plain_rays > 1000, "{fused_rays} fused, {plain_rays} plain");
+    assert!(both > 20000, "{both} boxes entered");
+    // Boxes that the rays only graze, on the grid of shared planes, within the margins.
+    assert!(only_fused * 50 < both, "{only_fused} more boxes than {both}");
 }
 
 #[test]
@@ -145,7 +235,7 @@ fn the_margin_test_enters_every_box_the_per_box_test_enters() {
 fn sse2_kernel_agrees_with_its_scalar_twin() {
     use super::isa::Sse;
     // SAFETY: SSE2 is part of x86-64.
-    check_kernel::<Sse>(|node, ray, t| unsafe { Sse::enter(node, ray, t) });
+    check_kernel::<Sse>(plain_twin, |node, ray, t| unsafe { Sse::enter(node, ray, t) });
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -156,13 +246,13 @@ fn avx2_kernel_agrees_with_its_scalar_twin() {
         eprintln!("skipped: this CPU has no AVX2");
         return;
     }
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     fn run(node: &WideNode, ray: &<Avx2 as NodeKernel>::Ray, t: f32) -> (u32, [f32; 8]) {
-        // SAFETY: compiled with AVX2, called only after detection.
+        // SAFETY: compiled with AVX2 and FMA, called only after detection.
         unsafe { Avx2::enter(node, ray, t) }
     }
     // SAFETY: AVX2 support was checked above.
-    check_kernel::<Avx2>(|node, ray, t| unsafe { run(node, ray, t) });
+    check_kernel::<Avx2>(fused_twin, |node, ray, t| unsafe { run(node, ray, t) });
 }
 
 /// Packets of rays around each hostile case's ray: from nearby origins (some on the box grid)

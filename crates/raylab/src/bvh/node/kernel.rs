@@ -13,7 +13,7 @@
 //! kernels are in `leaf/kernel.rs`, the packet leaves' in `packet/leaf.rs`.
 
 use super::{WIDTH, WideNode};
-use crate::bvh::bounds::{Frustum, RayBoxTest};
+use crate::bvh::bounds::{Frustum, FusedSlabs, RayBoxTest};
 use crate::bvh::isa::Scalar;
 
 /// Which children a ray enters, and where.
@@ -228,8 +228,24 @@ mod x86 {
         }
     }
 
+    /// A ray broadcast for the fused slab test ([`FusedSlabs`]), with the plain form beside
+    /// it for the rays that have no fused one.
+    #[derive(Clone, Copy)]
+    pub(crate) struct FusedBroadcast {
+        /// Whether the fused form holds; otherwise `plain` is tested.
+        fused: bool,
+        inv: [__m256; 3],
+        near_add: [__m256; 3],
+        far_add: [__m256; 3],
+        t_min: __m256,
+        margin: f32,
+        near_rows: [usize; 3],
+        far_rows: [usize; 3],
+        plain: Broadcast<__m256>,
+    }
+
     impl NodeKernel for Avx2 {
-        type Ray = Broadcast<__m256>;
+        type Ray = FusedBroadcast;
         type Frustum = FrustumBroadcast<__m256>;
 
         #[inline(always)]
@@ -254,32 +270,89 @@ mod x86 {
 
         #[inline(always)]
         unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
+            let (near_rows, far_rows) = plane_rows(ray.negative);
+            let fused = ray.fused(margin);
+            let f = fused.unwrap_or(FusedSlabs {
+                inv_direction: glam::Vec3::ONE,
+                near_add: glam::Vec3::ZERO,
+                far_add: glam::Vec3::ZERO,
+                t_min: 0.0,
+                margin: 0.0,
+                negative: ray.negative,
+            });
             // SAFETY: the caller checked AVX2 support (this function's contract).
-            unsafe { Broadcast::new(ray, margin) }
+            unsafe {
+                FusedBroadcast {
+                    fused: fused.is_some(),
+                    inv: splat3(f.inv_direction),
+                    near_add: splat3(f.near_add),
+                    far_add: splat3(f.far_add),
+                    t_min: _mm256_set1_ps(f.t_min),
+                    margin: f.margin,
+                    near_rows,
+                    far_rows,
+                    plain: Broadcast::new(ray, margin),
+                }
+            }
         }
 
         #[inline(always)]
         unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
-            // SAFETY: the caller checked AVX2 support; every load reads one 32-byte aligned row
-            // of 8 floats of `node`.
+            if !ray.fused {
+                // SAFETY: the caller checked AVX2 support.
+                return unsafe { enter_plain(node, &ray.plain, t_limit) };
+            }
+            // SAFETY: the caller checked AVX2 and FMA support; every load reads one 32-byte
+            // aligned row of 8 floats of `node`.
             unsafe {
-                let mut near = ray.t_min;
-                let mut far = _mm256_set1_ps(t_limit);
-                for axis in 0..3 {
-                    let np = _mm256_load_ps(node.planes[ray.near_rows[axis]].as_ptr());
-                    let fp = _mm256_load_ps(node.planes[ray.far_rows[axis]].as_ptr());
-                    let tn = _mm256_mul_ps(_mm256_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
-                    let tf = _mm256_mul_ps(_mm256_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
-                    near = _mm256_max_ps(tn, near);
-                    far = _mm256_min_ps(tf, far);
-                }
-                let near = _mm256_sub_ps(near, ray.margin);
-                let far = _mm256_add_ps(far, ray.margin);
+                let (n, f) = (&ray.near_rows, &ray.far_rows);
+                let row = |r: usize| node.planes[r].as_ptr();
+                let n0 = _mm256_fmadd_ps(_mm256_load_ps(row(n[0])), ray.inv[0], ray.near_add[0]);
+                let n1 = _mm256_fmadd_ps(_mm256_load_ps(row(n[1])), ray.inv[1], ray.near_add[1]);
+                let n2 = _mm256_fmadd_ps(_mm256_load_ps(row(n[2])), ray.inv[2], ray.near_add[2]);
+                let f0 = _mm256_fmadd_ps(_mm256_load_ps(row(f[0])), ray.inv[0], ray.far_add[0]);
+                let f1 = _mm256_fmadd_ps(_mm256_load_ps(row(f[1])), ray.inv[1], ray.far_add[1]);
+                let f2 = _mm256_fmadd_ps(_mm256_load_ps(row(f[2])), ray.inv[2], ray.far_add[2]);
+                let limit = _mm256_set1_ps(t_limit + ray.margin);
+                let near = _mm256_max_ps(_mm256_max_ps(n0, n1), _mm256_max_ps(n2, ray.t_min));
+                let far = _mm256_min_ps(_mm256_min_ps(f0, f1), _mm256_min_ps(f2, limit));
                 let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
                 let mut out = [0.0f32; WIDTH];
                 _mm256_storeu_ps(out.as_mut_ptr(), near);
                 (_mm256_movemask_ps(hit) as u32, out)
             }
+        }
+    }
+
+    /// The plain slab test ([`RayBoxTest::enter_with_margin`]) of eight boxes.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[inline(always)]
+    unsafe fn enter_plain(
+        node: &WideNode,
+        ray: &Broadcast<__m256>,
+        t_limit: f32,
+    ) -> (u32, [f32; WIDTH]) {
+        // SAFETY: the caller checked AVX2 support; every load reads one 32-byte aligned row
+        // of 8 floats of `node`.
+        unsafe {
+            let mut near = ray.t_min;
+            let mut far = _mm256_set1_ps(t_limit);
+            for axis in 0..3 {
+                let np = _mm256_load_ps(node.planes[ray.near_rows[axis]].as_ptr());
+                let fp = _mm256_load_ps(node.planes[ray.far_rows[axis]].as_ptr());
+                let tn = _mm256_mul_ps(_mm256_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
+                let tf = _mm256_mul_ps(_mm256_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
+                near = _mm256_max_ps(tn, near);
+                far = _mm256_min_ps(tf, far);
+            }
+            let near = _mm256_sub_ps(near, ray.margin);
+            let far = _mm256_add_ps(far, ray.margin);
+            let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
+            let mut out = [0.0f32; WIDTH];
+            _mm256_storeu_ps(out.as_mut_ptr(), near);
+            (_mm256_movemask_ps(hit) as u32, out)
         }
     }
 
