@@ -25,30 +25,13 @@ use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
-use raylab::bvh::order;
-use raylab::{Accelerator, Bvh, Hit, Ray};
+use raylab::bvh::{Batch, RaySource};
+use raylab::{Bvh, Hit, Ray};
 
 mod render;
 
-/// Rays per task: large enough that a task's set-up is nothing, small enough for two threads
-/// to share a million rays evenly.
-const CHUNK: usize = 2048;
-
-/// Batches of at least this many rays are traced in [`raylab::bvh::order`]'s order... (On the
-/// dragon, one thread, random rays: 16k rays took 625 ns each in that order against 728 as
-/// given, 256k rays 505 against 717.)
-const ORDER_MIN_RAYS: usize = 1 << 14;
-/// ... on trees of at least this many bytes. On smaller ones the order's own cost (the keys,
-/// the sort, the answers put back: 30–50 ms for 1 M rays) is about what the cache gives back.
-/// 1 M random rays, one thread, medians of seven alternating rounds in one process, as given
-/// against sorted: the teapot 0.150 against 0.177 s, the bunny (a 2.4 MB tree) 0.266 against
-/// 0.268 s (two threads 0.133 against 0.163 s), `dragon_res2` (6.2 MB) 0.347 against 0.302 s,
-/// the dragon (28 MB) 0.696 against 0.417 s. (BENCHMARKS.md, "Large batches in the tree's
-/// order".)
-const ORDER_MIN_TREE_BYTES: usize = 4 << 20;
-
-/// How many rays ahead of the one traced the ordered trace asks the cache for.
-const AHEAD: usize = 8;
+/// Rays per task: the library's batch chunks.
+const CHUNK: usize = Batch::CHUNK;
 
 /// A triangle mesh and its BVH, built once.
 #[pyclass(module = "raylab._raylab", name = "Mesh")]
@@ -179,10 +162,6 @@ impl<'a> Rays<'a> {
         Ok(rays)
     }
 
-    fn len(&self) -> usize {
-        self.origins.len()
-    }
-
     /// The ray from these parts, or what is wrong with it (`i` its index, for the message).
     #[inline(always)]
     fn ray(i: usize, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32) -> Result<Ray, String> {
@@ -230,99 +209,6 @@ impl<'a> Rays<'a> {
         })
     }
 
-    /// The order to trace the rays in against `bvh` ([`raylab::bvh::order`]), `None` to trace
-    /// them as they come (a small batch or a small tree). The rays are not checked here: a bad
-    /// one gets some key, and the trace names it.
-    fn trace_order(&self, bvh: &Bvh) -> Option<Vec<u32>> {
-        let n = self.len();
-        if n < ORDER_MIN_RAYS
-            || bvh.stats().bytes() < ORDER_MIN_TREE_BYTES
-            || u32::try_from(n).is_err()
-        {
-            return None;
-        }
-        let bounds = bvh.bounds();
-        let mut keys = vec![0u32; n];
-        keys.par_chunks_mut(CHUNK).enumerate().for_each(|(c, keys)| {
-            for (k, key) in keys.iter_mut().enumerate() {
-                *key = order::segment_key(&bounds, &self.unchecked(c * CHUNK + k));
-            }
-        });
-        Some(order::order_by_key(&keys))
-    }
-
-    /// `answer` for the rays `order` names, in that order (a permutation of the rays, from
-    /// [`trace_order`](Self::trace_order)), in parallel, in chunks; the rays a few places ahead are asked
-    /// of the cache while one is traced. The first bad ray's message if there is one.
-    fn in_order<T: Send + Copy + Default>(
-        &self,
-        order: &[u32],
-        answer: impl Fn(&Ray) -> T + Sync,
-    ) -> Result<Vec<T>, String> {
-        let mut sorted = vec![T::default(); order.len()];
-        let found = sorted.par_chunks_mut(CHUNK).zip(order.par_chunks(CHUNK)).try_for_each(
-            |(out, indices)| {
-                for (k, &i) in indices.iter().enumerate() {
-                    if let Some(&ahead) = indices.get(k + AHEAD) {
-                        self.prefetch(ahead as usize);
-                    }
-                    out[k] = answer(&self.get(i as usize)?);
-                }
-                Ok(())
-            },
-        );
-        // The threads may have met a later bad ray first: name the first one.
-        found.map_err(|_: String| self.first_error())?;
-        Ok(sorted)
-    }
-
-    /// Asks the cache for ray `i`'s origin and direction (and limits, if they are arrays).
-    #[inline(always)]
-    fn prefetch(&self, i: usize) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            let prefetch = |address: *const i8| {
-                // SAFETY: a prefetch never faults, whatever the address.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(address) }
-            };
-            prefetch(self.origins.as_ptr().wrapping_add(i).cast());
-            prefetch(self.directions.as_ptr().wrapping_add(i).cast());
-            for limits in [self.t_min, self.t_max] {
-                if let Limits::Each(xs) = limits {
-                    prefetch(xs.as_ptr().wrapping_add(i).cast());
-                }
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = i;
-    }
-
-    /// Every ray's answer from `bvh`, in the rays' order: `answer` run on each in parallel, in
-    /// chunks (in [`trace_order`](Self::trace_order)'s order where it gives one); the first bad ray's
-    /// message if there is one.
-    fn answers<T: Send + Copy + Default>(
-        &self,
-        bvh: &Bvh,
-        answer: impl Fn(&Ray) -> T + Sync,
-    ) -> Result<Vec<T>, String> {
-        let mut out = vec![T::default(); self.len()];
-        match self.trace_order(bvh) {
-            Some(order) => {
-                let sorted = self.in_order(&order, answer)?;
-                for (&i, &x) in order.iter().zip(&sorted) {
-                    out[i as usize] = x;
-                }
-            }
-            None => self.each(
-                &mut out[..],
-                |o| o.chunks_mut(CHUNK).collect(),
-                |o, k, ray| o[k] = answer(ray),
-            )?,
-        }
-        Ok(out)
-    }
-
     /// Runs `answer` on every ray and its index in parallel, in chunks, for `out`'s chunk
     /// (`CHUNK` slots of each output per chunk); the first bad ray's message if there is one
     /// (the outputs are then partly written).
@@ -351,6 +237,38 @@ impl<'a> Rays<'a> {
         };
         // The threads may have met a later bad ray first: name the first one.
         found.map_err(|_: String| self.first_error())
+    }
+}
+
+/// The library's batch engine reads the rays from the arrays, checking each as it is traced.
+impl RaySource for Rays<'_> {
+    type Error = String;
+
+    fn len(&self) -> usize {
+        self.origins.len()
+    }
+
+    #[inline(always)]
+    fn ray(&self, i: usize) -> Result<Ray, String> {
+        self.get(i)
+    }
+
+    #[inline(always)]
+    fn ray_unchecked(&self, i: usize) -> Ray {
+        self.unchecked(i)
+    }
+
+    /// Asks the cache for ray `i`'s origin and direction (and limits, if they are arrays).
+    #[inline(always)]
+    fn prefetch(&self, i: usize) {
+        use raylab::bvh::batch::prefetch;
+        prefetch(self.origins.as_ptr().wrapping_add(i).cast());
+        prefetch(self.directions.as_ptr().wrapping_add(i).cast());
+        for limits in [self.t_min, self.t_max] {
+            if let Limits::Each(xs) = limits {
+                prefetch(xs.as_ptr().wrapping_add(i).cast());
+            }
+        }
     }
 }
 
@@ -453,28 +371,11 @@ impl Mesh {
         let n = rays.len();
         let (mut t, mut triangle) = (vec![0.0f32; n], vec![0i64; n]);
         let (mut u, mut v) = (vec![0.0f32; n], vec![0.0f32; n]);
-        run(py, threads, n, || -> Result<(), String> {
-            if let Some(order) = rays.trace_order(bvh) {
-                let hits = rays.in_order(&order, |ray| bvh.closest_hit(ray))?;
-                for (&i, hit) in order.iter().zip(hits) {
-                    let i = i as usize;
-                    (t[i], triangle[i], u[i], v[i]) = hit_row(hit);
-                }
-                return Ok(());
-            }
-            rays.each(
-                (&mut t[..], &mut triangle[..], &mut u[..], &mut v[..]),
-                |(t, triangle, u, v)| {
-                    let columns = t.chunks_mut(CHUNK).zip(triangle.chunks_mut(CHUNK));
-                    let more = u.chunks_mut(CHUNK).zip(v.chunks_mut(CHUNK));
-                    columns.zip(more).map(|((t, tr), (u, v))| (t, tr, u, v)).collect()
-                },
-                |(t, triangle, u, v), k, ray| {
-                    (t[k], triangle[k], u[k], v[k]) = hit_row(bvh.closest_hit(ray));
-                },
-            )
-        })?
-        .map_err(PyValueError::new_err)?;
+        let hits = run(py, threads, n, || Batch::new(bvh).closest_hits(&rays))?
+            .map_err(PyValueError::new_err)?;
+        for (i, hit) in hits.into_iter().enumerate() {
+            (t[i], triangle[i], u[i], v[i]) = hit_row(hit);
+        }
         Ok((t.into_pyarray(py), triangle.into_pyarray(py), u.into_pyarray(py), v.into_pyarray(py)))
     }
 
@@ -488,7 +389,7 @@ impl Mesh {
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let rays = Rays::new(&rays)?;
         let bvh = &self.bvh;
-        let blocked = run(py, threads, rays.len(), || rays.answers(bvh, |ray| bvh.occluded(ray)))?
+        let blocked = run(py, threads, rays.len(), || Batch::new(bvh).occluded(&rays))?
             .map_err(PyValueError::new_err)?;
         Ok(blocked.into_pyarray(py))
     }
@@ -505,11 +406,9 @@ impl Mesh {
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let rays = Rays::new(&rays)?;
         let bvh = &self.bvh;
-        let counts = run(py, threads, rays.len(), || {
-            rays.answers(bvh, |ray| i64::from(bvh.count_crossings(ray)))
-        })?
-        .map_err(PyValueError::new_err)?;
-        Ok(counts.into_pyarray(py))
+        let counts = run(py, threads, rays.len(), || Batch::new(bvh).crossing_counts(&rays))?
+            .map_err(PyValueError::new_err)?;
+        Ok(counts.into_iter().map(i64::from).collect::<Vec<_>>().into_pyarray(py))
     }
 
     /// Every crossing of every ray (as [`count_hits`](Self::count_hits) counts them), at most
@@ -637,7 +536,7 @@ fn _raylab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::write_image, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("ISA", raylab::cpu::Isa::detect().name())?;
-    m.add("ORDER_MIN_RAYS", ORDER_MIN_RAYS)?;
-    m.add("ORDER_MIN_TREE_BYTES", ORDER_MIN_TREE_BYTES)?;
+    m.add("ORDER_MIN_RAYS", Batch::ORDER_MIN_RAYS)?;
+    m.add("ORDER_MIN_TREE_BYTES", Batch::ORDER_MIN_TREE_BYTES)?;
     Ok(())
 }

@@ -53,7 +53,7 @@ def test_every_supported_set_answers_the_same():
         name, digest, counts = done.stdout.split("\n")[:3]
         assert name == isa
         hits, blocked = map(int, counts.split())
-        assert hits > 1000 and blocked > 1000, counts
+        assert hits > 1000 and blocked > 500, counts
         answers[isa] = (digest, counts)
     assert len(answers) >= 2
     assert len(set(answers.values())) == 1, answers

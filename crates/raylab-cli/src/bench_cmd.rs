@@ -240,6 +240,27 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         mrays_per_s: per_threads,
     });
 
+    // The library's batch engine (`raylab::bvh::Batch`): each set as one batch, on a pool of
+    // each thread count, in the tree's order where the engine's rule says it pays.
+    let mut batch_answers = Vec::new();
+    for (name, occlusion, rays) in &sets {
+        let mut per_threads = Vec::new();
+        for &n in &thread_counts {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build()?;
+            let seconds =
+                time_median(args.reps, || pool.install(|| batch_trace(&bvh, rays, *occlusion)));
+            per_threads.push((n, rays.len() as f64 / seconds / 1e6));
+        }
+        let query = if *occlusion { "batch-occ" } else { "batch" };
+        let mut line = format!("{:<9} {:<9} {:>9}", name, query, rays.len());
+        for (_, mrays) in &per_threads {
+            line += &format!(" {mrays:>8.2} Mr/s");
+        }
+        println!("{line}");
+        results.push(SetResult { set: name.to_string(), query, mrays_per_s: per_threads });
+        batch_answers.push(batch_trace(&bvh, rays, *occlusion));
+    }
+
     if args.counts {
         print_counts(&bvh, &sets, threads);
     }
@@ -274,6 +295,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let shadow_occluded = trace_occluded(&bvh, &sets[1].2, threads);
     let shadow_hits = trace_closest(&bvh, &sets[1].2, threads);
     let diffuse_hits = trace_closest(&bvh, &sets[2].2, threads);
+    let single = [
+        BatchAnswers::Closest(primary_hits.clone()),
+        BatchAnswers::Occluded(shadow_occluded.clone()),
+        BatchAnswers::Closest(diffuse_hits.clone()),
+    ];
+    let batch_rays: usize = sets.iter().map(|s| s.2.len()).sum();
+    let batch_same: usize = batch_answers.iter().zip(&single).map(|(a, b)| a.same_as(b)).sum();
+    println!("batches: {batch_same} of {batch_rays} answers identical to single rays");
     for (file, ours) in [
         ("primary.hits", &primary_hits),
         ("shadow.hits", &shadow_hits),
@@ -490,6 +519,46 @@ fn trace_occluded(bvh: &Bvh, rays: &[Ray], threads: usize) -> Vec<bool> {
             *slot = bvh.occluded(ray);
         }
     })
+}
+
+/// A set's answers from the batch engine, or from single rays.
+#[derive(Clone)]
+enum BatchAnswers {
+    Closest(Vec<HitRecord>),
+    Occluded(Vec<bool>),
+}
+
+impl BatchAnswers {
+    /// How many answers equal `other`'s (none where the kinds differ).
+    fn same_as(&self, other: &BatchAnswers) -> usize {
+        match (self, other) {
+            (BatchAnswers::Closest(a), BatchAnswers::Closest(b)) => {
+                a.iter().zip(b).filter(|(x, y)| x == y).count()
+            }
+            (BatchAnswers::Occluded(a), BatchAnswers::Occluded(b)) => {
+                a.iter().zip(b).filter(|(x, y)| x == y).count()
+            }
+            _ => 0,
+        }
+    }
+}
+
+/// A set traced as one batch by the library's engine, on the current pool, answers written as
+/// [`trace_closest`] and [`trace_occluded`] write theirs.
+fn batch_trace(bvh: &Bvh, rays: &[Ray], occlusion: bool) -> BatchAnswers {
+    let batch = raylab::bvh::Batch::new(bvh);
+    let traced = if occlusion {
+        let mut out = vec![false; rays.len()];
+        batch
+            .answers_into(rays, &mut out, |ray| bvh.occluded(ray))
+            .map(|()| BatchAnswers::Occluded(out))
+    } else {
+        let mut out = vec![HitRecord::default(); rays.len()];
+        let answer = |ray: &Ray| HitRecord::from_hit(bvh.closest_hit(ray));
+        batch.answers_into(rays, &mut out, answer).map(|()| BatchAnswers::Closest(out))
+    };
+    let Ok(answers) = traced;
+    answers
 }
 
 /// One untimed warm-up, then the median wall time of `reps` runs, in seconds.

@@ -10,6 +10,7 @@
 //! | `leaf` | leaf records of up to eight triangles over a table of the vertices they share; `leaf/kernel.rs` and `leaf/lanes.rs`: a ray against a record in one pass |
 //! | `traverse` | single rays: nearest child first for the closest hit, first hit for occlusion; `traverse/flat.rs`: scenes of a few dozen triangles (the Cornell boxes) answer single rays without the tree, every triangle tested sixteen per instruction (up to [`BuildSettings::flat_limit`] triangles); `traverse/flat_rays.rs`: many incoherent rays against that list, sixteen rays per instruction |
 //! | `packet` | up to 64 coherent rays through the tree together: `rays` (their lanes), `setup`, `bundle` (a packet's bound in ray space), `leaf` and `lanes` (a leaf's triangles against several rays per instruction) |
+//! | `batch` | large batches of independent queries on every thread, in the tree's order where it pays ([`Batch`]) |
 //! | `order` | many rays sorted so that neighbours run through the same part of the tree ([`order::segment_key`], [`order::order_by_key`]): large batches of incoherent rays find more of a large tree in the cache |
 //! | `refit` | moving geometry keeps its tree: [`Bvh::refit`] takes new vertices and recomputes the boxes bottom-up |
 //! | `two_level` | [`TwoLevel`]: a tree over instances of bottom accelerators; `scene` ([`SceneBvh`]) picks one or two levels for a scene |
@@ -39,6 +40,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod batch;
 mod bounds;
 mod build;
 mod crossings;
@@ -57,6 +59,7 @@ mod two_level;
 
 use glam::Vec3;
 
+pub use batch::{Batch, RaySource};
 pub use bounds::{Bounds, Frustum, FusedSlabs, RayBoxTest};
 pub(crate) use bounds::{FAR_SCALE, SLAB_PAD};
 pub use build::BuildSettings;
