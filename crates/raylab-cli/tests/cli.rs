@@ -325,12 +325,20 @@ fn bench_generates_traces_and_reports() {
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let json = std::fs::read_to_string(dir.path().join("one.json")).unwrap();
-    assert_eq!(json.matches("\"1\":").count(), 5, "{json}");
+    // Three sets of single rays, the packets, and the three sets as batches.
+    assert_eq!(json.matches("\"1\":").count(), 8, "{json}");
     assert!(
         text(&out.stdout).contains("primary packets: 768 of 768 answers identical to single rays"),
         "{}",
         text(&out.stdout)
     );
+    // The batch engine's answers are the single rays' (768 primary rays, and a shadow and a
+    // diffuse ray per primary hit).
+    let stdout = text(&out.stdout);
+    let batches = stdout.lines().find(|l| l.starts_with("batches: ")).expect("a batches line");
+    let words: Vec<&str> = batches.split_whitespace().collect();
+    assert_eq!(words[1], words[3], "{batches}");
+    assert!(words[1].parse::<usize>().unwrap() > 768, "{batches}");
     assert!(!text(&out.stdout).contains("1 threads"), "{}", text(&out.stdout));
     // With the answers in the ray folder, bench reports full agreement.
     std::fs::copy(dir.path().join("hits/primary.hits"), dir.path().join("rays/primary.hits"))
