@@ -81,6 +81,12 @@ impl Isa {
         }
     }
 
+    /// Whether this set includes `other` (later in [`Isa::ALL`], or the same).
+    pub fn at_least(self, other: Isa) -> bool {
+        let rank = |isa: Isa| Isa::ALL.iter().position(|&x| x == isa);
+        rank(self) >= rank(other)
+    }
+
     /// A short name: `scalar`, `sse2`, `avx2`, `avx512`.
     pub fn name(self) -> &'static str {
         match self {
@@ -149,6 +155,8 @@ mod tests {
         assert_eq!(Isa::supported_by_name("avx3"), Err(IsaError::Unknown("avx3".into())));
         assert!(IsaError::Unknown("x".into()).to_string().contains("avx2 or avx512"));
         assert!(Isa::best().is_supported());
+        assert!(Isa::Avx512.at_least(Isa::Avx2) && Isa::Avx2.at_least(Isa::Avx2));
+        assert!(!Isa::Sse2.at_least(Isa::Avx2) && Isa::Sse2.at_least(Isa::Scalar));
         assert!(Isa::detect().is_supported());
     }
 }

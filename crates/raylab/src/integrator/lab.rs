@@ -192,8 +192,8 @@ impl TileShading {
     /// view --headless`, 2 threads, three alternating runs: 7.6 against 8.1 ms).
     fn new<A: Accelerator + ?Sized>(lab: &Lab<'_, A>, rays: &[Ray], hits: &[Option<Hit>]) -> Self {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was detected just above.
+        if crate::cpu::Isa::detect().at_least(crate::cpu::Isa::Avx2) {
+            // SAFETY: AVX2 was detected just above (`detect` names only sets this CPU has).
             return unsafe { Self::new_avx2(lab, rays, hits) };
         }
         Self::new_portable(lab, rays, hits)

@@ -76,7 +76,7 @@ fn add_group(
     let (_, band_rows) = tile_shape(settings.tile);
     debug_assert!(count >= 1 && band_rows * count as usize <= MAX_TILE_PIXELS);
     #[cfg(target_arch = "x86_64")]
-    let avx2 = std::arch::is_x86_feature_detected!("avx2");
+    let avx2 = crate::cpu::Isa::detect().at_least(crate::cpu::Isa::Avx2);
     let discarded = std::sync::atomic::AtomicU64::new(0);
     let tally = |n: u64| {
         if n > 0 {

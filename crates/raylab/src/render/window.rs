@@ -59,7 +59,7 @@ impl Accumulator {
         if (source_width, source_height) == (width as usize, height as usize) {
             // Same size: pixel for pixel.
             #[cfg(target_arch = "x86_64")]
-            let avx2 = std::arch::is_x86_feature_detected!("avx2");
+            let avx2 = crate::cpu::Isa::detect().at_least(crate::cpu::Isa::Avx2);
             out.par_chunks_mut(ROWS_PER_TASK * source_width)
                 .zip(self.sum.pixels().par_chunks(ROWS_PER_TASK * source_width))
                 .for_each(|(out, sums)| {
