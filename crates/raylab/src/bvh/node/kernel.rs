@@ -165,6 +165,37 @@ mod x86 {
                 }
             }
         }
+
+        /// [`RayBoxTest::enter_with_margin`] for the children from `first` on that `V` holds:
+        /// their mask (bit 0 for child `first`), and their entries written to `out[first..]`.
+        ///
+        /// # Safety
+        /// The CPU must support `V`'s instruction set; `first` is 0, or 4 for a 4-lane `V`.
+        #[inline(always)]
+        unsafe fn enter(
+            &self,
+            node: &WideNode,
+            t_limit: f32,
+            first: usize,
+            out: &mut [f32],
+        ) -> u32 {
+            // SAFETY: the caller's guarantee; loads read one register of a 32-byte aligned row
+            // of 8 from `first`, which is aligned to the register size.
+            unsafe {
+                let mut near = self.t_min;
+                let mut far = V::splat(t_limit);
+                for axis in 0..3 {
+                    let np = V::load(node.planes[self.near_rows[axis]][first..].as_ptr());
+                    let fp = V::load(node.planes[self.far_rows[axis]][first..].as_ptr());
+                    near = np.sub(self.origin[axis]).mul(self.inv[axis]).max(near);
+                    far = fp.sub(self.origin[axis]).mul(self.inv[axis]).min(far);
+                }
+                let near = near.sub(self.margin);
+                let far = far.add(self.margin);
+                near.store(out[first..].as_mut_ptr());
+                near.le_mask(far) << first
+            }
+        }
     }
 
     impl NodeKernel for Sse {
@@ -200,31 +231,12 @@ mod x86 {
 
         #[inline(always)]
         unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
-            // SAFETY: SSE2 is part of x86-64; every load reads 4 floats inside a row of 8 of
-            // `node`, which is 32-byte aligned, so offsets 0 and 4 are 16-byte aligned.
-            unsafe {
-                let limit = _mm_set1_ps(t_limit);
-                let mut out = [0.0f32; WIDTH];
-                let mut mask = 0u32;
-                for half in 0..2 {
-                    let mut near = ray.t_min;
-                    let mut far = limit;
-                    for axis in 0..3 {
-                        let np = _mm_load_ps(node.planes[ray.near_rows[axis]][4 * half..].as_ptr());
-                        let fp = _mm_load_ps(node.planes[ray.far_rows[axis]][4 * half..].as_ptr());
-                        let tn = _mm_mul_ps(_mm_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
-                        let tf = _mm_mul_ps(_mm_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
-                        near = _mm_max_ps(tn, near);
-                        far = _mm_min_ps(tf, far);
-                    }
-                    let near = _mm_sub_ps(near, ray.margin);
-                    let far = _mm_add_ps(far, ray.margin);
-                    let hit = _mm_cmple_ps(near, far);
-                    mask |= (_mm_movemask_ps(hit) as u32) << (4 * half);
-                    _mm_storeu_ps(out[4 * half..].as_mut_ptr(), near);
-                }
-                (mask, out)
-            }
+            let mut out = [0.0f32; WIDTH];
+            // SAFETY: SSE2 is part of x86-64; 0 and 4 are the halves of a node.
+            let mask = unsafe {
+                ray.enter(node, t_limit, 0, &mut out) | ray.enter(node, t_limit, 4, &mut out)
+            };
+            (mask, out)
         }
     }
 
@@ -299,8 +311,10 @@ mod x86 {
         #[inline(always)]
         unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
             if !ray.fused {
-                // SAFETY: the caller checked AVX2 support.
-                return unsafe { enter_plain(node, &ray.plain, t_limit) };
+                let mut out = [0.0f32; WIDTH];
+                // SAFETY: the caller checked AVX2 support; 0 is the start of a node's rows.
+                let mask = unsafe { ray.plain.enter(node, t_limit, 0, &mut out) };
+                return (mask, out);
             }
             // SAFETY: the caller checked AVX2 and FMA support; every load reads one 32-byte
             // aligned row of 8 floats of `node`.
@@ -321,38 +335,6 @@ mod x86 {
                 _mm256_storeu_ps(out.as_mut_ptr(), near);
                 (_mm256_movemask_ps(hit) as u32, out)
             }
-        }
-    }
-
-    /// The plain slab test ([`RayBoxTest::enter_with_margin`]) of eight boxes.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[inline(always)]
-    unsafe fn enter_plain(
-        node: &WideNode,
-        ray: &Broadcast<__m256>,
-        t_limit: f32,
-    ) -> (u32, [f32; WIDTH]) {
-        // SAFETY: the caller checked AVX2 support; every load reads one 32-byte aligned row
-        // of 8 floats of `node`.
-        unsafe {
-            let mut near = ray.t_min;
-            let mut far = _mm256_set1_ps(t_limit);
-            for axis in 0..3 {
-                let np = _mm256_load_ps(node.planes[ray.near_rows[axis]].as_ptr());
-                let fp = _mm256_load_ps(node.planes[ray.far_rows[axis]].as_ptr());
-                let tn = _mm256_mul_ps(_mm256_sub_ps(np, ray.origin[axis]), ray.inv[axis]);
-                let tf = _mm256_mul_ps(_mm256_sub_ps(fp, ray.origin[axis]), ray.inv[axis]);
-                near = _mm256_max_ps(tn, near);
-                far = _mm256_min_ps(tf, far);
-            }
-            let near = _mm256_sub_ps(near, ray.margin);
-            let far = _mm256_add_ps(far, ray.margin);
-            let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
-            let mut out = [0.0f32; WIDTH];
-            _mm256_storeu_ps(out.as_mut_ptr(), near);
-            (_mm256_movemask_ps(hit) as u32, out)
         }
     }
 
