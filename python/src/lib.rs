@@ -371,11 +371,15 @@ impl Mesh {
         let n = rays.len();
         let (mut t, mut triangle) = (vec![0.0f32; n], vec![0i64; n]);
         let (mut u, mut v) = (vec![0.0f32; n], vec![0.0f32; n]);
-        let hits = run(py, threads, n, || Batch::new(bvh).closest_hits(&rays))?
-            .map_err(PyValueError::new_err)?;
-        for (i, hit) in hits.into_iter().enumerate() {
-            (t[i], triangle[i], u[i], v[i]) = hit_row(hit);
-        }
+        // The columns filled with the GIL released too.
+        run(py, threads, n, || -> Result<(), String> {
+            let hits = Batch::new(bvh).closest_hits(&rays)?;
+            for (i, hit) in hits.into_iter().enumerate() {
+                (t[i], triangle[i], u[i], v[i]) = hit_row(hit);
+            }
+            Ok(())
+        })?
+        .map_err(PyValueError::new_err)?;
         Ok((t.into_pyarray(py), triangle.into_pyarray(py), u.into_pyarray(py), v.into_pyarray(py)))
     }
 
@@ -406,9 +410,12 @@ impl Mesh {
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let rays = Rays::new(&rays)?;
         let bvh = &self.bvh;
-        let counts = run(py, threads, rays.len(), || Batch::new(bvh).crossing_counts(&rays))?
-            .map_err(PyValueError::new_err)?;
-        Ok(counts.into_iter().map(i64::from).collect::<Vec<_>>().into_pyarray(py))
+        let batch = Batch::new(bvh);
+        let counts = run(py, threads, rays.len(), || {
+            batch.answers(&rays, |ray| i64::from(bvh.count_crossings(ray)))
+        })?
+        .map_err(PyValueError::new_err)?;
+        Ok(counts.into_pyarray(py))
     }
 
     /// Every crossing of every ray (as [`count_hits`](Self::count_hits) counts them), at most

@@ -1,7 +1,8 @@
 //! The instruction sets raylab's SIMD code is compiled for, and which of them this CPU has:
 //! detected once where a kernel is chosen (a BVH's query table, the sampler's lane loops).
 //!
-//! `RAYLAB_ISA` caps the choice for the whole process: `RAYLAB_ISA=avx2` makes every kernel
+//! `RAYLAB_ISA` caps the choice for the whole process (what a caller asks for by name, as
+//! `Bvh::with_isa` or `raylab bench --isa`, may still go above it): `RAYLAB_ISA=avx2` makes every kernel
 //! that [`Isa::detect`] picks run its AVX2 form on a CPU with AVX-512, so that the path tracer,
 //! `raylab view` and the Python package can be measured as on the CPUs most people own. It
 //! names one of `scalar`, `sse2`, `avx2`, `avx512` ([`Isa::name`]); a set this CPU lacks, or

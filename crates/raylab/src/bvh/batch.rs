@@ -7,14 +7,15 @@
 //! of at least [`Batch::ORDER_MIN_TREE_BYTES`] is traced in the order of [`order::segment_key`]
 //! (neighbours run through the same part of the tree, which then stays in the cache), each
 //! chunk asking the cache for the rays a few places ahead; smaller ones are traced as they come.
-//! The work is cut into chunks of [`Batch::CHUNK`] rays; a batch of one chunk runs on the calling
-//! thread (waking a pool's thread costs more than such a batch).
+//! The work is cut into chunks of [`Batch::CHUNK`] rays; a batch of one chunk traced as it comes
+//! runs on the calling thread (waking a pool's thread costs more than such a batch).
 //!
 //! The answers are each ray's own query's, bit for bit, whatever the order, the chunking and
 //! the threads: the tests check them against single rays in any order.
 //!
 //! A bad ray (what [`RaySource::ray`] refuses) stops the batch with the error of **the first**
-//! bad ray, even where a thread met a later one first.
+//! bad ray, even where a thread met a later one first (or with the error met, if no ray is bad
+//! when the batch looks again: a source that changed during the batch).
 //!
 //! ```
 //! use raylab::bvh::{Batch, Bvh};

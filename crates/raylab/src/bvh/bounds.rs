@@ -199,8 +199,10 @@ impl RayBoxTest {
     /// single-ray box test. It never prunes a box that [`enter`](Self::enter) would enter
     /// (the tests check it), at five operations per axis fewer.
     ///
-    /// This is the scalar twin of the SIMD node kernels: they compute the same values in the
-    /// same order of operations. The ray must have a finite origin and a non-zero direction.
+    /// This is the portable node kernel and the scalar twin of the SSE2 one (and of the AVX2 and
+    /// AVX-512 ones for rays without a fused form, [`FusedSlabs`]): they compute the same values
+    /// in the same order of operations. The ray must have a finite origin and a non-zero
+    /// direction.
     #[inline]
     pub fn enter_with_margin(&self, bounds: &Bounds, t_limit: f32, margin: f32) -> Option<f32> {
         let mut near = self.t_min;
@@ -230,11 +232,14 @@ impl RayBoxTest {
 /// `o·(1/d)`, of the addend, of the FMA, and of `1/d` within `R`), which `m`'s share beyond
 /// `SLAB_PAD·R` covers with room to spare, as the plain margin covers its own.
 ///
-/// Rays for which that bound does not hold in floating point — a zero or infinite `1/d` on some
-/// axis, or `o·(1/d)` or the margin overflowing — have no fused form
-/// ([`RayBoxTest::fused`] is `None`) and use the plain test. With every term finite no distance
-/// is NaN, so the order of the `min`s and `max`s does not matter: near and far are each reduced
-/// as a tree, one level shallower than a chain.
+/// Rays for which that bound does not hold in floating point — a zero, subnormal or infinite
+/// `1/d` on some axis, or `o·(1/d)`, the margin or an addend overflowing — have no fused form
+/// ([`RayBoxTest::fused`] is `None`) and use the plain test. So do rays whose origin lies so far
+/// from the world's origin that `4γ₃·|o|` exceeds the plain margin in world units (`M·|d_k|`
+/// on the dominant axis): there the fused margin would loosen every box by more than the plain
+/// test's, in a scene far from the world's origin many times over. With every term finite no
+/// distance is NaN, so the order of the `min`s and `max`s does not matter: near and far are
+/// each reduced as a tree, one level shallower than a chain.
 ///
 /// The scalar twin of the AVX2 and AVX-512 node kernels (`f32::mul_add` is the same single
 /// rounding as their FMA).
@@ -259,18 +264,29 @@ impl RayBoxTest {
     /// `None` where its error bound does not hold (see [`FusedSlabs`]).
     #[inline]
     pub fn fused(&self, margin: f32) -> Option<FusedSlabs> {
+        // The fused margin's world-space share, `4γ₃·|o|`, against the plain margin's.
+        let reach =
+            margin / crate::triangle::coordinate(self.inv_direction, self.dominant_axis).abs();
+        if 4.0 * gamma(3) * self.origin.abs().max_element() > reach {
+            return None;
+        }
         let mut near_add = Vec3::ZERO;
         let mut far_add = Vec3::ZERO;
         for axis in 0..3 {
             let inv = self.inv_direction[axis];
             let q = self.origin[axis] * inv;
             let m = (margin + 4.0 * gamma(3) * q.abs()) * FAR_SCALE;
-            // A finite `m` means a finite `q` and margin.
-            if !inv.is_finite() || inv == 0.0 || !m.is_finite() {
+            let (near, far) = (-q - m, -q + m);
+            // Finite addends mean a finite `q` and margin.
+            if !inv.is_finite()
+                || inv.abs() < f32::MIN_POSITIVE
+                || !near.is_finite()
+                || !far.is_finite()
+            {
                 return None;
             }
-            near_add[axis] = -q - m;
-            far_add[axis] = -q + m;
+            near_add[axis] = near;
+            far_add[axis] = far;
         }
         let t_min = self.t_min - margin;
         t_min.is_finite().then_some(FusedSlabs {

@@ -1,13 +1,18 @@
 //! The node kernels: one ray, or a packet's bound, against the eight boxes of a [`WideNode`].
 //!
-//! Each kernel computes, for every child, the same values as [`RayBoxTest::enter_with_margin`]
-//! (the scalar twin) in the same order of operations: per axis `tn = (near plane − o)·(1/d)`
+//! The SSE2 kernel computes, for every child, the same values as
+//! [`RayBoxTest::enter_with_margin`] (its scalar twin, the portable kernel) in the same order of
+//! operations: per axis `tn = (near plane − o)·(1/d)`
 //! folded into `near = max(tn, near)` and `tf = (far plane − o)·(1/d)` into `far = min(tf, far)`,
 //! then `near − margin <= far + margin`, with the ray's one margin for every box. x86's
 //! `maxps`/`minps` return their second operand when the first is NaN, which is how the scalar
 //! `f32::max`/`min` treat a NaN `tn`/`tf` (a ray inside a box's face plane). A packet's bound
-//! is tested against the boxes as [`Frustum::enter`] does, with interval arithmetic. The tests in
-//! `bvh/tests.rs` check that all kernels agree bit for bit.
+//! is tested against the boxes as [`Frustum::enter`] does, with interval arithmetic. The AVX2
+//! and AVX-512 kernels test single rays in the fused form ([`FusedSlabs`], one FMA per plane,
+//! its scalar twin [`FusedSlabs::enter`]) where the ray has one, and as SSE2 does otherwise;
+//! both forms are conservative, so the answers never depend on the form, only the boxes entered
+//! at their margins' edge (a fraction of a percent more in the fused form). The tests in
+//! `bvh/tests.rs` check every kernel against its twin bit for bit.
 //!
 //! The kernels are implemented for the instruction-set types of `bvh/isa.rs`; the leaf records'
 //! kernels are in `leaf/kernel.rs`, the packet leaves' in `packet/leaf.rs`.
@@ -28,8 +33,9 @@ pub(crate) trait NodeKernel: Sized {
     unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray;
 
     /// The mask of children entered within `[t_min, t_limit]` (bit `k` for child `k`), and each
-    /// child's entry distance (meaningful only where the bit is set), as
-    /// [`RayBoxTest::enter_with_margin`] decides them.
+    /// child's entry distance (meaningful only where the bit is set), as the kernel's scalar
+    /// twin decides them ([`RayBoxTest::enter_with_margin`], or [`FusedSlabs::enter`] for the
+    /// AVX2 and AVX-512 kernels on rays that have a fused form).
     ///
     /// # Safety
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
