@@ -155,11 +155,7 @@ impl RayBoxTest {
     /// The box's near and far plane on `axis`: its `min` first for a positive direction.
     #[inline(always)]
     fn planes(&self, bounds: &Bounds, axis: usize) -> (f32, f32) {
-        if self.negative[axis] {
-            (bounds.max[axis], bounds.min[axis])
-        } else {
-            (bounds.min[axis], bounds.max[axis])
-        }
+        slab_planes(bounds, self.negative, axis)
     }
 
     /// The margin of [`enter_with_margin`](Self::enter_with_margin) for every box inside
@@ -309,11 +305,7 @@ impl FusedSlabs {
         let mut tn = [0.0f32; 3];
         let mut tf = [0.0f32; 3];
         for axis in 0..3 {
-            let (near_plane, far_plane) = if self.negative[axis] {
-                (bounds.max[axis], bounds.min[axis])
-            } else {
-                (bounds.min[axis], bounds.max[axis])
-            };
+            let (near_plane, far_plane) = slab_planes(bounds, self.negative, axis);
             let inv = self.inv_direction[axis];
             tn[axis] = near_plane.mul_add(inv, self.near_add[axis]);
             tf[axis] = far_plane.mul_add(inv, self.far_add[axis]);
@@ -405,11 +397,7 @@ impl Frustum {
         let mut far = t_max;
         let mut reach = 0.0f32;
         for axis in 0..3 {
-            let (near_plane, far_plane) = if self.negative[axis] {
-                (bounds.max[axis], bounds.min[axis])
-            } else {
-                (bounds.min[axis], bounds.max[axis])
-            };
+            let (near_plane, far_plane) = slab_planes(bounds, self.negative, axis);
             let (o_lo, o_hi) = (self.origin_lo[axis], self.origin_hi[axis]);
             let (i_lo, i_hi) = (self.inv_lo[axis], self.inv_hi[axis]);
             let (tn_lo, tn_hi) = interval_product(near_plane - o_hi, near_plane - o_lo, i_lo, i_hi);
@@ -423,6 +411,17 @@ impl Frustum {
         let pad = reach * SLAB_PAD;
         let (near, far) = (near - pad, far + pad);
         (near <= far).then_some(near)
+    }
+}
+
+/// A box's near and far plane on `axis` for rays whose directions have the signs `negative`:
+/// its `min` first for a positive direction.
+#[inline(always)]
+fn slab_planes(bounds: &Bounds, negative: [bool; 3], axis: usize) -> (f32, f32) {
+    if negative[axis] {
+        (bounds.max[axis], bounds.min[axis])
+    } else {
+        (bounds.min[axis], bounds.max[axis])
     }
 }
 

@@ -410,21 +410,14 @@ pub(crate) unsafe fn closest_in<K: Kernel, C: Counter>(
 /// the node it has just pushed, it changed nothing and is not used.
 #[inline(always)]
 fn prefetch_child(bvh: &WideBvh, child: u32) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let address = match decode(child) {
-            Child::Node(index) => bvh.nodes.as_ptr().wrapping_add(index as usize).cast::<i8>(),
-            Child::Leaf(offset) => bvh.leaves.address(offset).cast::<i8>(),
-            Child::Empty => return,
-        };
-        // SAFETY: a prefetch never faults, whatever the address.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(address) };
-        // SAFETY: as above.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(address.wrapping_add(64)) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (bvh, child);
+    use crate::bvh::batch::prefetch;
+    let address = match decode(child) {
+        Child::Node(index) => bvh.nodes.as_ptr().wrapping_add(index as usize).cast::<u8>(),
+        Child::Leaf(offset) => bvh.leaves.address(offset).cast::<u8>(),
+        Child::Empty => return,
+    };
+    prefetch(address);
+    prefetch(address.wrapping_add(64));
 }
 
 /// Whether anything is hit; stops at the first hit found.
