@@ -15,6 +15,19 @@ fn parse_meminfo(meminfo: &str, key: &str) -> Option<u64> {
     kib.checked_mul(1024)
 }
 
+/// Asks the cache for the line at `address` (a hint; never faults).
+#[inline(always)]
+pub fn prefetch(address: *const u8) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch never faults, whatever the address.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(address.cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = address;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -89,18 +89,7 @@ impl RaySource for [Ray] {
     }
 }
 
-/// Asks the cache for the line at `address` (a hint; never faults).
-#[inline(always)]
-pub fn prefetch(address: *const u8) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: a prefetch never faults, whatever the address.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(address.cast()) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = address;
-}
+pub use crate::memory::prefetch;
 
 /// A tree's batch queries (see the module documentation).
 #[derive(Clone, Copy, Debug)]

@@ -410,7 +410,7 @@ pub(crate) unsafe fn closest_in<K: Kernel, C: Counter>(
 /// the node it has just pushed, it changed nothing and is not used.
 #[inline(always)]
 fn prefetch_child(bvh: &WideBvh, child: u32) {
-    use crate::bvh::batch::prefetch;
+    use crate::memory::prefetch;
     let address = match decode(child) {
         Child::Node(index) => bvh.nodes.as_ptr().wrapping_add(index as usize).cast::<u8>(),
         Child::Leaf(offset) => bvh.leaves.address(offset).cast::<u8>(),
