@@ -185,6 +185,17 @@ struct TileShading {
     unusual: [bool; TILE],
 }
 
+/// The hits of a tile gathered for [`TileShading`]: corners, normals, ray directions and
+/// barycentrics, row by row (zeros where a lane misses).
+struct Gathered {
+    corner: [[[f32; TILE]; 3]; 3],
+    normal: [[f32; TILE]; 3],
+    direction: [[f32; TILE]; 3],
+    b1: [f32; TILE],
+    b2: [f32; TILE],
+    hit_mask: [bool; TILE],
+}
+
 impl TileShading {
     /// The tile's shading, compiled for AVX2 where the CPU has it (the arithmetic is the same
     /// operations either way: Rust never fuses a multiply and an add, so the lanes are the
@@ -237,6 +248,7 @@ impl TileShading {
         // Neighbouring hits mostly share a material: its albedo is looked up once for them
         // (unless it has a texture).
         let mut material = (u32::MAX, Vec3::ZERO, false);
+        let instanced = geometry.is_instanced();
         for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
             let Some(hit) = hit else { continue };
             let triangle = hit.triangle as usize;
@@ -262,18 +274,36 @@ impl TileShading {
         if lab.stage == Stage::Flat {
             return tile;
         }
+        let gathered = Gathered { corner, normal, direction, b1, b2, hit_mask };
+        if instanced {
+            tile.light_lanes::<true, A>(lab, hits, &gathered);
+        } else {
+            tile.light_lanes::<false, A>(lab, hits, &gathered);
+        }
+        tile
+    }
+
+    /// The light's part of [`new`](Self::new) for the hits gathered in `g`: the loop has no
+    /// call where the geometry is not instanced, so that the compiler vectorizes it.
+    #[inline(always)]
+    fn light_lanes<const INSTANCED: bool, A: Accelerator + ?Sized>(
+        &mut self,
+        lab: &Lab<'_, A>,
+        hits: &[Option<Hit>],
+        g: &Gathered,
+    ) {
+        let Gathered { corner, normal, direction, b1, b2, hit_mask } = g;
         let light = lab.light.position.to_array();
         let power = lab.light.power.to_array();
         let shadows = matches!(lab.stage, Stage::Shadows | Stage::Ambient);
         let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let instanced = geometry.is_instanced();
         for i in 0..TILE {
             let mut p = [0.0f32; 3];
             let mut error = [0.0f32; 3];
-            if instanced && let Some(Some(hit)) = hits.get(i) {
+            if INSTANCED && let Some(Some(hit)) = hits.get(i) {
                 // An instance's point is found in its own space, with the bound of the way
                 // there and back.
-                let point = geometry.surface_point(hit);
+                let point = lab.scene.geometry.surface_point(hit);
                 (p, error) = (point.p.to_array(), point.error.to_array());
             } else {
                 // `Geometry::surface_point`, on the gathered corners.
@@ -301,12 +331,12 @@ impl TileShading {
             let r_dot_n = w_dot_n.max(0.0);
             let scale = r_dot_n / (4.0 * PI * r2 * r2.sqrt());
             let mut nonzero = false;
-            for (row, power) in tile.direct.iter_mut().zip(power) {
+            for (row, power) in self.direct.iter_mut().zip(power) {
                 let direct = if r2 == 0.0 { 0.0 } else { power * scale };
                 row[i] = direct;
                 nonzero |= direct != 0.0;
             }
-            tile.shadow[i] = hit_mask[i] & shadows & nonzero;
+            self.shadow[i] = hit_mask[i] & shadows & nonzero;
             // `offset_ray_origin` toward the light.
             let along = n[0].abs() * error[0] + n[1].abs() * error[1] + n[2].abs() * error[2];
             let mut finite = true;
@@ -314,11 +344,10 @@ impl TileShading {
                 let offset = if w_dot_n < 0.0 { -(along * n[axis]) } else { along * n[axis] };
                 let po = p[axis] + offset;
                 finite &= po.is_finite();
-                tile.shadow_origin[axis][i] = step_away(po, offset);
+                self.shadow_origin[axis][i] = step_away(po, offset);
             }
-            tile.unusual[i] = !finite;
+            self.unusual[i] = !finite;
         }
-        tile
     }
 
     /// Lane `i` as `shade` returns it (its shadow ray as a flag).
