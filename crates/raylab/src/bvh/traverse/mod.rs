@@ -403,11 +403,10 @@ pub(crate) unsafe fn closest_in<K: Kernel, C: Counter>(
     }
 }
 
-/// Asks the cache for a child's first bytes (a node's first planes, or a leaf's first record)
-/// while its siblings are sorted and tested: a hint, with no effect on the answers. Measured on
-/// the dragon (48 MB of tree), one thread, three alternating rounds: closest hits 3–4 % faster
-/// (primary 4.75 → 4.92, diffuse 2.51 → 2.60 Mrays/s); in the occlusion traversal, which pops
-/// the node it has just pushed, it changed nothing and is not used.
+/// Asks the cache for the four lines of a child (a node's planes and references, or a leaf's
+/// first record, 256 bytes at most for a record of 16 vertices) while its siblings are sorted
+/// and tested, or, in occlusion, while the other children are: a hint, with no effect on the
+/// answers. It pays on trees larger than the caches (BENCHMARKS.md, "Ray queries on AVX2").
 #[inline(always)]
 fn prefetch_child(bvh: &WideBvh, child: u32) {
     use crate::memory::prefetch;
@@ -416,8 +415,9 @@ fn prefetch_child(bvh: &WideBvh, child: u32) {
         Child::Leaf(offset) => bvh.leaves.address(offset).cast::<u8>(),
         Child::Empty => return,
     };
-    prefetch(address);
-    prefetch(address.wrapping_add(64));
+    for line in 0..4 {
+        prefetch(address.wrapping_add(64 * line));
+    }
 }
 
 /// Whether anything is hit; stops at the first hit found.
@@ -533,6 +533,7 @@ unsafe fn occluded_in<K: Kernel, C: Counter>(
             mask &= mask - 1;
             match decode(node.children[k]) {
                 Child::Node(child) => {
+                    prefetch_child(bvh, node.children[k]);
                     if let Some(other) = next.replace(child) {
                         stack.push(other);
                     }
