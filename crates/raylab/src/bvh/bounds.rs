@@ -266,24 +266,20 @@ impl RayBoxTest {
         if 4.0 * gamma(3) * self.origin.abs().max_element() > reach {
             return None;
         }
-        let mut near_add = Vec3::ZERO;
-        let mut far_add = Vec3::ZERO;
-        for axis in 0..3 {
-            let inv = self.inv_direction[axis];
-            let q = self.origin[axis] * inv;
-            let m = (margin + 4.0 * gamma(3) * q.abs()) * FAR_SCALE;
-            let (near, far) = (-q - m, -q + m);
-            // Finite addends mean a finite `q` and margin.
-            if !inv.is_finite()
-                || inv.abs() < f32::MIN_POSITIVE
-                || !near.is_finite()
-                || !far.is_finite()
-            {
-                return None;
-            }
-            near_add[axis] = near;
-            far_add[axis] = far;
+        // The three axes at once (the same operations per axis as one at a time).
+        let inv = Vec3A::from(self.inv_direction);
+        let q = Vec3A::from(self.origin) * inv;
+        let m = (Vec3A::splat(margin) + Vec3A::splat(4.0 * gamma(3)) * q.abs()) * FAR_SCALE;
+        let (near, far) = (-q - m, -q + m);
+        // Finite addends mean a finite `q` and margin.
+        let usable = inv.is_finite_mask()
+            & inv.abs().cmpge(Vec3A::splat(f32::MIN_POSITIVE))
+            & near.is_finite_mask()
+            & far.is_finite_mask();
+        if !usable.all() {
+            return None;
         }
+        let (near_add, far_add) = (Vec3::from(near), Vec3::from(far));
         let t_min = self.t_min - margin;
         t_min.is_finite().then_some(FusedSlabs {
             inv_direction: self.inv_direction,

@@ -259,7 +259,9 @@ mod x86 {
         margin: f32,
         near_rows: [usize; 3],
         far_rows: [usize; 3],
-        plain: Broadcast<__m256>,
+        /// The ray for the plain test, broadcast only where it is used (a broadcast per node
+        /// for the few rays without a fused form, rather than eight per ray for all).
+        plain: (RayBoxTest, f32),
     }
 
     impl NodeKernel for Avx2 {
@@ -309,7 +311,7 @@ mod x86 {
                     margin: f.margin,
                     near_rows,
                     far_rows,
-                    plain: Broadcast::new(ray, margin),
+                    plain: (*ray, margin),
                 }
             }
         }
@@ -317,10 +319,8 @@ mod x86 {
         #[inline(always)]
         unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
             if !ray.fused {
-                let mut out = [0.0f32; WIDTH];
-                // SAFETY: the caller checked AVX2 support; 0 is the start of a node's rows.
-                let mask = unsafe { ray.plain.enter(node, t_limit, 0, &mut out) };
-                return (mask, out);
+                // SAFETY: the caller checked AVX2 support (this function's contract).
+                return unsafe { plain_enter(node, &ray.plain, t_limit) };
             }
             // SAFETY: the caller checked AVX2 and FMA support; every load reads one 32-byte
             // aligned row of 8 floats of `node`.
@@ -342,6 +342,23 @@ mod x86 {
                 (_mm256_movemask_ps(hit) as u32, out)
             }
         }
+    }
+
+    /// The plain test of a ray without a fused form, broadcast here.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[inline(always)]
+    unsafe fn plain_enter(
+        node: &WideNode,
+        (ray, margin): &(RayBoxTest, f32),
+        t_limit: f32,
+    ) -> (u32, [f32; WIDTH]) {
+        let mut out = [0.0f32; WIDTH];
+        // SAFETY: the caller's guarantee; 0 is the start of a node's rows.
+        let mask =
+            unsafe { Broadcast::<__m256>::new(ray, *margin).enter(node, t_limit, 0, &mut out) };
+        (mask, out)
     }
 
     /// AVX2's node kernel (eight boxes fill one AVX register).
