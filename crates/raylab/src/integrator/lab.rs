@@ -503,37 +503,83 @@ mod tests {
                     Ray::new(origin, Vec3::new(next(), next(), next()))
                 })
                 .collect();
-            let hits: Vec<Option<Hit>> = rays.iter().map(|r| bvh.closest_hit(r)).collect();
-            let tile = TileShading::new(&lab, &rays, &hits);
-            // The form for any instruction set too, where `new` picked AVX2.
-            let portable = TileShading::new_portable(&lab, &rays, &hits);
-            for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
-                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-                let (lane, other) = (tile.lane(i), portable.lane(i));
-                assert_eq!(bits(lane.albedo), bits(other.albedo));
-                assert_eq!(bits(lane.direct), bits(other.direct));
-                assert_eq!(
-                    (tile.shadow[i], tile.unusual[i]),
-                    (portable.shadow[i], portable.unusual[i])
-                );
-                let origin = |t: &TileShading| [0, 1, 2].map(|a| t.shadow_origin[a][i].to_bits());
-                assert_eq!(origin(&tile), origin(&portable));
-                let expected = lab.shade(ray, *hit);
-                let lane = tile.lane(i);
-                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-                assert_eq!(bits(lane.albedo), bits(expected.albedo), "{ray:?} {stage}");
-                assert_eq!(bits(lane.direct), bits(expected.direct), "{ray:?} {stage}");
-                assert_eq!(tile.shadow[i], expected.shadow_ray.is_some(), "{ray:?} {stage}");
-                if let Some(shadow) = expected.shadow_ray {
-                    shadows += 1;
-                    let got = tile.shadow_ray(i, &lab, ray, *hit);
-                    assert_eq!(bits(got.origin), bits(shadow.origin), "{ray:?}");
-                    assert_eq!(bits(got.direction), bits(shadow.direction), "{ray:?}");
-                    assert_eq!((got.t_min, got.t_max), (shadow.t_min, shadow.t_max));
-                }
-            }
+            shadows += tile_matches_shade(&lab, &rays);
         }
         assert!(shadows > 300, "only {shadows} shadow rays");
+    }
+
+    /// The same on instanced geometry (the glTF boxes kept instanced: one box drawn 18 times),
+    /// whose tiles take the other copy of the light loop (the instance's own surface point).
+    #[test]
+    fn tile_shading_is_shade_lane_by_lane_on_instances() {
+        use crate::bvh::SceneBvh;
+        use crate::scene::{Instancing, LoadOptions};
+        let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mitsuba-gltf/boxes.gltf");
+        let options = LoadOptions { instancing: Instancing::Keep };
+        let scene = Scene::open(file, &options).expect("the glTF boxes").scene;
+        assert!(scene.geometry.is_instanced());
+        let accel = SceneBvh::build(&scene.geometry).expect("a tree");
+        let bounds = (0..scene.geometry.len())
+            .flat_map(|i| scene.geometry.triangle(i))
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let (centre, size) = ((bounds.0 + bounds.1) * 0.5, (bounds.1 - bounds.0).length());
+        let mut seed = 11u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let (mut shadows, mut hits) = (0, 0);
+        for (k, stage) in Stage::ALL.into_iter().cycle().take(20).enumerate() {
+            let mut lab = Lab::new(&scene, &accel, stage);
+            lab.light.position = centre + Vec3::new(next(), 1.0, next()) * size;
+            // Rays from around the boxes toward a random triangle's centre.
+            let rays: Vec<Ray> = (0..TILE - k % 3)
+                .map(|_| {
+                    let origin = centre + Vec3::new(next(), next(), next()) * size;
+                    let pick = ((next() * 0.5 + 0.5) * scene.geometry.len() as f32) as usize;
+                    let [a, b, c] = scene.geometry.triangle(pick.min(scene.geometry.len() - 1));
+                    Ray::new(origin, (a + b + c) / 3.0 - origin)
+                })
+                .collect();
+            hits += rays.iter().filter(|r| accel.closest_hit(r).is_some()).count();
+            shadows += tile_matches_shade(&lab, &rays);
+        }
+        assert!(hits > 600 && shadows > 200, "only {hits} hits and {shadows} shadow rays");
+    }
+
+    /// Checks a tile of `rays` lane by lane: `TileShading::new` (AVX2 where the CPU has it) and
+    /// its portable form against `shade`, bit for bit; returns how many shadow rays it compared.
+    fn tile_matches_shade<A: Accelerator + ?Sized>(lab: &Lab<'_, A>, rays: &[Ray]) -> usize {
+        let mut shadows = 0;
+        let stage = lab.stage;
+        let hits: Vec<Option<Hit>> = rays.iter().map(|r| lab.accel.closest_hit(r)).collect();
+        let tile = TileShading::new(lab, rays, &hits);
+        // The form for any instruction set too, where `new` picked AVX2.
+        let portable = TileShading::new_portable(lab, rays, &hits);
+        for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            let (lane, other) = (tile.lane(i), portable.lane(i));
+            assert_eq!(bits(lane.albedo), bits(other.albedo));
+            assert_eq!(bits(lane.direct), bits(other.direct));
+            assert_eq!(
+                (tile.shadow[i], tile.unusual[i]),
+                (portable.shadow[i], portable.unusual[i])
+            );
+            let origin = |t: &TileShading| [0, 1, 2].map(|a| t.shadow_origin[a][i].to_bits());
+            assert_eq!(origin(&tile), origin(&portable));
+            let expected = lab.shade(ray, *hit);
+            assert_eq!(bits(lane.albedo), bits(expected.albedo), "{ray:?} {stage}");
+            assert_eq!(bits(lane.direct), bits(expected.direct), "{ray:?} {stage}");
+            assert_eq!(tile.shadow[i], expected.shadow_ray.is_some(), "{ray:?} {stage}");
+            if let Some(shadow) = expected.shadow_ray {
+                shadows += 1;
+                let got = tile.shadow_ray(i, lab, ray, *hit);
+                assert_eq!(bits(got.origin), bits(shadow.origin), "{ray:?}");
+                assert_eq!(bits(got.direction), bits(shadow.direction), "{ray:?}");
+                assert_eq!((got.t_min, got.t_max), (shadow.t_min, shadow.t_max));
+            }
+        }
+        shadows
     }
 
     #[test]
