@@ -259,8 +259,10 @@ mod x86 {
         margin: f32,
         near_rows: [usize; 3],
         far_rows: [usize; 3],
-        /// The ray for the plain test, broadcast only where it is used (a broadcast per node
-        /// for the few rays without a fused form, rather than eight per ray for all).
+        /// The ray for the plain test, kept as scalars and broadcast by `plain_enter` where a
+        /// ray has no fused form. (The compiler still hoists that broadcast out of the
+        /// traversal loop into every ray's set-up; an out-of-line `plain_enter` that would stop
+        /// it lengthened the loop instead: BENCHMARKS.md, "A leaner set-up".)
         plain: (RayBoxTest, f32),
     }
 
