@@ -18,6 +18,7 @@ use crate::float::{next_float_down, next_float_up};
 /// `t_min = 0` (the intersection test keeps `t` conservatively above zero); a positive `t_min` is
 /// for callers that bring their own epsilon, such as the ray-set benchmark's files.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Ray {
     /// Where the ray starts.
     pub origin: Vec3,

@@ -218,11 +218,12 @@ impl WatertightRay {
     }
 
     /// [`intersect`](Self::intersect) out of line, for the rare triangles a vector test leaves
-    /// undecided (see [`any_lane_hits`](Self::any_lane_hits)).
+    /// undecided (see [`any_lane_hits`](Self::any_lane_hits)). The ray is taken by value, so
+    /// that a traversal need not keep it in memory for this call: the copy is made only here.
     #[cold]
     #[inline(never)]
     pub(crate) fn intersect_rarely(
-        &self,
+        self,
         v0: Vec3,
         v1: Vec3,
         v2: Vec3,

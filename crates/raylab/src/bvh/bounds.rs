@@ -260,10 +260,11 @@ impl RayBoxTest {
     /// `None` where its error bound does not hold (see [`FusedSlabs`]).
     #[inline]
     pub fn fused(&self, margin: f32) -> Option<FusedSlabs> {
-        // The fused margin's world-space share, `4γ₃·|o|`, against the plain margin's.
-        let reach =
-            margin / crate::triangle::coordinate(self.inv_direction, self.dominant_axis).abs();
-        if 4.0 * gamma(3) * self.origin.abs().max_element() > reach {
+        // The fused margin's world-space share, `4γ₃·|o|`, against the plain margin's, both in
+        // units of `t` along the dominant axis (a product rather than the plain margin's
+        // division by `|1/d_k|`).
+        let inv_dominant = crate::triangle::coordinate(self.inv_direction, self.dominant_axis);
+        if 4.0 * gamma(3) * self.origin.abs().max_element() * inv_dominant.abs() > margin {
             return None;
         }
         // The three axes at once (the same operations per axis as one at a time).

@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::isa::Scalar;
-use super::node::kernel::NodeKernel;
+use super::node::kernel::{BoxRay, NodeKernel, NodeRay};
 use super::node::{Child, WideNode, decode};
 use super::*;
 
@@ -116,7 +116,7 @@ fn aimed_cases() -> Vec<(WideNode, Ray, f32)> {
 fn fused_twin(node: &WideNode, ray: &RayBoxTest, margin: f32, t_limit: f32) -> (u32, [f32; 8]) {
     let Some(fused) = ray.fused(margin) else {
         // SAFETY: the scalar kernel needs nothing.
-        return unsafe { Scalar::enter(node, &(*ray, margin), t_limit) };
+        return unsafe { (*ray, margin).enter(node, t_limit) };
     };
     let (mut mask, mut near) = (0, [0.0; 8]);
     for (k, slot) in near.iter_mut().enumerate() {
@@ -131,15 +131,33 @@ fn fused_twin(node: &WideNode, ray: &RayBoxTest, margin: f32, t_limit: f32) -> (
 /// What the SSE2 kernel computes: the plain test.
 fn plain_twin(node: &WideNode, ray: &RayBoxTest, margin: f32, t_limit: f32) -> (u32, [f32; 8]) {
     // SAFETY: the scalar kernel needs nothing.
-    unsafe { Scalar::enter(node, &(*ray, margin), t_limit) }
+    unsafe { (*ray, margin).enter(node, t_limit) }
 }
 
 type Twin = fn(&WideNode, &RayBoxTest, f32, f32) -> (u32, [f32; 8]);
 
+/// A prepared ray's test, in whichever form it was prepared.
+///
+/// # Safety
+/// The CPU must support the instruction set of the kernel that prepared it.
+#[inline(always)]
+unsafe fn enter_either<F: BoxRay, P: BoxRay>(
+    node: &WideNode,
+    ray: &NodeRay<F, P>,
+    t: f32,
+) -> (u32, [f32; 8]) {
+    match ray {
+        // SAFETY: the caller's guarantee.
+        NodeRay::Fused(f) => unsafe { f.enter(node, t) },
+        // SAFETY: as above.
+        NodeRay::Plain(p) => unsafe { p.enter(node, t) },
+    }
+}
+
 /// Checks a kernel against its twin on every aimed case; returns how many rays had a fused form.
 fn check_kernel<K: NodeKernel>(
     twin: Twin,
-    run: impl Fn(&WideNode, &K::Ray, f32) -> (u32, [f32; 8]),
+    run: impl Fn(&WideNode, &NodeRay<K::Fused, K::Plain>, f32) -> (u32, [f32; 8]),
 ) -> usize {
     let mut fused = 0;
     for (node, ray, t_limit) in aimed_cases() {
@@ -202,7 +220,7 @@ fn scalar_kernel_agrees_with_the_box_test() {
         let box_ray = RayBoxTest::new(&ray);
         let margin = box_ray.margin(&node_root(&node));
         // SAFETY: the scalar kernel needs nothing.
-        let (mask, _) = unsafe { Scalar::enter(&node, &(box_ray, margin), t_limit) };
+        let (mask, _) = unsafe { (box_ray, margin).enter(&node, t_limit) };
         for k in 0..8 {
             let expected = box_ray.enter_with_margin(&node.bounds(k), t_limit, margin).is_some();
             assert_eq!(mask & (1 << k) != 0, expected);
@@ -245,7 +263,7 @@ fn the_margin_test_enters_every_box_the_per_box_test_enters() {
 fn sse2_kernel_agrees_with_its_scalar_twin() {
     use super::isa::Sse;
     // SAFETY: SSE2 is part of x86-64.
-    check_kernel::<Sse>(plain_twin, |node, ray, t| unsafe { Sse::enter(node, ray, t) });
+    check_kernel::<Sse>(plain_twin, |node, ray, t| unsafe { enter_either(node, ray, t) });
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -257,9 +275,13 @@ fn avx2_kernel_agrees_with_its_scalar_twin() {
         return;
     }
     #[target_feature(enable = "avx2,fma")]
-    fn run(node: &WideNode, ray: &<Avx2 as NodeKernel>::Ray, t: f32) -> (u32, [f32; 8]) {
+    fn run(
+        node: &WideNode,
+        ray: &NodeRay<<Avx2 as NodeKernel>::Fused, <Avx2 as NodeKernel>::Plain>,
+        t: f32,
+    ) -> (u32, [f32; 8]) {
         // SAFETY: compiled with AVX2 and FMA, called only after detection.
-        unsafe { Avx2::enter(node, ray, t) }
+        unsafe { enter_either(node, ray, t) }
     }
     // SAFETY: AVX2 support was checked above.
     let fused = check_kernel::<Avx2>(fused_twin, |node, ray, t| unsafe { run(node, ray, t) });

@@ -360,15 +360,16 @@ pub(crate) fn record_hits_scalar(ray: &WatertightRay, record: &Record, t_max: f3
 impl Record<'_> {
     /// Whether [`WatertightRay::intersect`] hits any of the triangles whose bits are set in
     /// `triangles` (those a vector test left undecided). Rare, so out of line: a call in a
-    /// traversal loop would make the compiler keep its vector values on the stack.
+    /// traversal loop would make the compiler keep its vector values on the stack. The ray is
+    /// taken by value, as by [`WatertightRay::intersect_rarely`].
     #[inline(always)]
-    pub fn any_hit(&self, ray: &WatertightRay, triangles: u32, t_max: f32) -> bool {
+    pub fn any_hit(&self, ray: WatertightRay, triangles: u32, t_max: f32) -> bool {
         triangles != 0 && self.any_hit_rarely(ray, triangles, t_max)
     }
 
     #[cold]
     #[inline(never)]
-    fn any_hit_rarely(&self, ray: &WatertightRay, mut triangles: u32, t_max: f32) -> bool {
+    fn any_hit_rarely(&self, ray: WatertightRay, mut triangles: u32, t_max: f32) -> bool {
         while triangles != 0 {
             let t = triangles.trailing_zeros() as usize;
             triangles &= triangles - 1;

@@ -21,25 +21,51 @@ use super::{WIDTH, WideNode};
 use crate::bvh::bounds::{Frustum, FusedSlabs, RayBoxTest};
 use crate::bvh::isa::Scalar;
 
+/// One ray's test of a node's eight boxes, prepared for one kernel.
+pub(crate) trait BoxRay: Copy + std::fmt::Debug {
+    /// The mask of children entered within `[t_min, t_limit]` (bit `k` for child `k`), and each
+    /// child's entry distance (meaningful only where the bit is set), as the kernel's scalar
+    /// twin decides them ([`RayBoxTest::enter_with_margin`] for the plain form,
+    /// [`FusedSlabs::enter`] for the fused one).
+    ///
+    /// # Safety
+    /// The CPU must support the instruction set of the kernel that prepared the ray (checked
+    /// once when a BVH picks it).
+    unsafe fn enter(&self, node: &WideNode, t_limit: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// A single ray prepared for a node kernel: its fused form ([`FusedSlabs`]) where the kernel
+/// and the ray have one, its plain form otherwise. The traversals branch on it once per ray, so
+/// that the node loop of either form tests no flag.
+#[derive(Clone, Copy)]
+pub(crate) enum NodeRay<F, P> {
+    Fused(F),
+    Plain(P),
+}
+
+/// The fused form of a kernel that has none: no value, so its traversal compiles away.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum NoFusedForm {}
+
+impl BoxRay for NoFusedForm {
+    #[inline(always)]
+    unsafe fn enter(&self, _: &WideNode, _: f32) -> (u32, [f32; WIDTH]) {
+        match *self {}
+    }
+}
+
 /// Which children a ray enters, and where.
 pub(crate) trait NodeKernel: Sized {
-    /// The ray, prepared for this kernel once per ray.
-    type Ray: Copy;
+    /// A ray's fused form ([`FusedSlabs`]), for the kernels that have one.
+    type Fused: BoxRay;
+    /// A ray's plain form ([`RayBoxTest::enter_with_margin`]).
+    type Plain: BoxRay;
 
     /// Prepares a ray for the boxes inside a root box whose [`RayBoxTest::margin`] is `margin`.
     ///
     /// # Safety
-    /// As for [`enter`](Self::enter).
-    unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray;
-
-    /// The mask of children entered within `[t_min, t_limit]` (bit `k` for child `k`), and each
-    /// child's entry distance (meaningful only where the bit is set), as the kernel's scalar
-    /// twin decides them ([`RayBoxTest::enter_with_margin`], or [`FusedSlabs::enter`] for the
-    /// AVX2 and AVX-512 kernels on rays that have a fused form).
-    ///
-    /// # Safety
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
-    unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]);
+    unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> NodeRay<Self::Fused, Self::Plain>;
 
     /// A packet's bound, prepared for this kernel once per packet.
     type Frustum: Copy;
@@ -73,20 +99,11 @@ pub(super) fn plane_rows(negative: [bool; 3]) -> ([usize; 3], [usize; 3]) {
     ([near(0), near(1), near(2)], [far(0), far(1), far(2)])
 }
 
-impl NodeKernel for Scalar {
-    type Ray = (RayBoxTest, f32);
-
+/// The portable kernel's ray: the plain test, one box at a time.
+impl BoxRay for (RayBoxTest, f32) {
     #[inline(always)]
-    unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> (RayBoxTest, f32) {
-        (*ray, margin)
-    }
-
-    #[inline(always)]
-    unsafe fn enter(
-        node: &WideNode,
-        (ray, margin): &(RayBoxTest, f32),
-        t_limit: f32,
-    ) -> (u32, [f32; WIDTH]) {
+    unsafe fn enter(&self, node: &WideNode, t_limit: f32) -> (u32, [f32; WIDTH]) {
+        let (ray, margin) = self;
         let mut mask = 0;
         let mut near = [0.0; WIDTH];
         for (k, slot) in near.iter_mut().enumerate() {
@@ -96,6 +113,16 @@ impl NodeKernel for Scalar {
             }
         }
         (mask, near)
+    }
+}
+
+impl NodeKernel for Scalar {
+    type Fused = NoFusedForm;
+    type Plain = (RayBoxTest, f32);
+
+    #[inline(always)]
+    unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> NodeRay<NoFusedForm, (RayBoxTest, f32)> {
+        NodeRay::Plain((*ray, margin))
     }
 
     type Frustum = Frustum;
@@ -124,6 +151,9 @@ impl NodeKernel for Scalar {
 }
 
 #[cfg(target_arch = "x86_64")]
+pub(crate) use x86::{Broadcast, FusedBroadcast, broadcast3};
+
+#[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
 
@@ -133,7 +163,7 @@ mod x86 {
     use crate::bvh::simd::Lanes;
 
     /// A ray broadcast into vector registers, with its box margin.
-    #[derive(Clone, Copy)]
+    #[derive(Clone, Copy, Debug)]
     pub(crate) struct Broadcast<V> {
         origin: [V; 3],
         inv: [V; 3],
@@ -149,7 +179,7 @@ mod x86 {
         /// # Safety
         /// The CPU must support `V`'s instruction set.
         #[inline(always)]
-        unsafe fn new(ray: &RayBoxTest, margin: f32) -> Self {
+        pub(crate) unsafe fn new(ray: &RayBoxTest, margin: f32) -> Self {
             let (near_rows, far_rows) = plane_rows(ray.negative);
             // SAFETY: the caller's guarantee.
             unsafe {
@@ -204,8 +234,35 @@ mod x86 {
         }
     }
 
+    /// SSE2's plain test: a node's eight boxes in two halves.
+    impl BoxRay for Broadcast<__m128> {
+        #[inline(always)]
+        unsafe fn enter(&self, node: &WideNode, t_limit: f32) -> (u32, [f32; WIDTH]) {
+            let mut out = [0.0f32; WIDTH];
+            // SAFETY: the caller guarantees SSE2 (part of x86-64); 0 and 4 are the halves of
+            // a node.
+            let mask = unsafe {
+                Broadcast::enter(self, node, t_limit, 0, &mut out)
+                    | Broadcast::enter(self, node, t_limit, 4, &mut out)
+            };
+            (mask, out)
+        }
+    }
+
+    /// AVX2's plain test, for the rays without a fused form.
+    impl BoxRay for Broadcast<__m256> {
+        #[inline(always)]
+        unsafe fn enter(&self, node: &WideNode, t_limit: f32) -> (u32, [f32; WIDTH]) {
+            let mut out = [0.0f32; WIDTH];
+            // SAFETY: the caller guarantees AVX2; 0 is the start of a node's rows.
+            let mask = unsafe { Broadcast::enter(self, node, t_limit, 0, &mut out) };
+            (mask, out)
+        }
+    }
+
     impl NodeKernel for Sse {
-        type Ray = Broadcast<__m128>;
+        type Fused = NoFusedForm;
+        type Plain = Broadcast<__m128>;
         type Frustum = FrustumBroadcast<__m128>;
 
         #[inline(always)]
@@ -230,44 +287,143 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
+        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> NodeRay<NoFusedForm, Self::Plain> {
             // SAFETY: SSE2 is part of x86-64.
-            unsafe { Broadcast::new(ray, margin) }
-        }
-
-        #[inline(always)]
-        unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
-            let mut out = [0.0f32; WIDTH];
-            // SAFETY: SSE2 is part of x86-64; 0 and 4 are the halves of a node.
-            let mask = unsafe {
-                ray.enter(node, t_limit, 0, &mut out) | ray.enter(node, t_limit, 4, &mut out)
-            };
-            (mask, out)
+            NodeRay::Plain(unsafe { Broadcast::new(ray, margin) })
         }
     }
 
-    /// A ray broadcast for the fused slab test ([`FusedSlabs`]), with the plain form beside
-    /// it for the rays that have no fused one.
-    #[derive(Clone, Copy)]
+    /// Byte offsets in a node of the near and far plane rows per axis, for each octant of
+    /// directions (bit `a` set where the direction is negative on axis `a`): rows as
+    /// [`plane_rows`] numbers them, 32 bytes each.
+    const ROW_OFFSETS: [([usize; 3], [usize; 3]); 8] = {
+        let mut table = [([0; 3], [0; 3]); 8];
+        let mut octant = 0;
+        while octant < 8 {
+            let mut axis = 0;
+            while axis < 3 {
+                let negative = octant >> axis & 1;
+                table[octant].0[axis] = (axis + 3 * negative) * 32;
+                table[octant].1[axis] = (axis + 3 * (1 - negative)) * 32;
+                axis += 1;
+            }
+            octant += 1;
+        }
+        table
+    };
+
+    /// A ray broadcast for the fused slab test ([`FusedSlabs`]), its twin.
+    #[derive(Clone, Copy, Debug)]
     pub(crate) struct FusedBroadcast {
-        /// Whether the fused form holds; otherwise `plain` is tested.
-        fused: bool,
         inv: [__m256; 3],
         near_add: [__m256; 3],
         far_add: [__m256; 3],
         t_min: __m256,
         margin: f32,
+        /// Byte offsets of the near and far plane rows per axis ([`ROW_OFFSETS`]).
         near_rows: [usize; 3],
         far_rows: [usize; 3],
-        /// The ray for the plain test, kept as scalars and broadcast by `plain_enter` where a
-        /// ray has no fused form. (The compiler still hoists that broadcast out of the
-        /// traversal loop into every ray's set-up; an out-of-line `plain_enter` that would stop
-        /// it lengthened the loop instead: BENCHMARKS.md, "A leaner set-up".)
-        plain: (RayBoxTest, f32),
+    }
+
+    impl FusedBroadcast {
+        /// Broadcasts `f`.
+        ///
+        /// # Safety
+        /// The CPU must support AVX2.
+        #[inline(always)]
+        pub(crate) unsafe fn new(f: &FusedSlabs) -> Self {
+            let lanes = |v: glam::Vec3| glam::Vec4::from((v, 0.0)).into();
+            let octant = (0..3).fold(0, |o, axis| o | usize::from(f.negative[axis]) << axis);
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                Self::from_lanes(
+                    [lanes(f.inv_direction), lanes(f.near_add), lanes(f.far_add)],
+                    f.t_min,
+                    f.margin,
+                    octant,
+                )
+            }
+        }
+
+        /// Broadcasts the fused form whose `1/d`, near and far addends are lanes 0 to 2 of
+        /// `[inv, near_add, far_add]`, for a direction in `octant` (bit `a` set where it is
+        /// negative on axis `a`).
+        ///
+        /// # Safety
+        /// The CPU must support AVX2; `octant < 8`.
+        #[inline(always)]
+        pub(crate) unsafe fn from_lanes(
+            [inv, near_add, far_add]: [__m128; 3],
+            t_min: f32,
+            margin: f32,
+            octant: usize,
+        ) -> Self {
+            let (near_rows, far_rows) = ROW_OFFSETS[octant & 7];
+            // SAFETY: the caller's guarantee.
+            unsafe {
+                FusedBroadcast {
+                    inv: broadcast3(inv),
+                    near_add: broadcast3(near_add),
+                    far_add: broadcast3(far_add),
+                    t_min: _mm256_set1_ps(t_min),
+                    margin,
+                    near_rows,
+                    far_rows,
+                }
+            }
+        }
+    }
+
+    /// Lanes 0, 1 and 2 of `v`, each in all lanes of a register.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[inline(always)]
+    pub(crate) unsafe fn broadcast3(v: __m128) -> [__m256; 3] {
+        // SAFETY: the caller's guarantee; `vpermps` with indices below 4 reads only the low
+        // half, the 128 bits cast in.
+        unsafe {
+            let wide = _mm256_castps128_ps256(v);
+            [
+                _mm256_broadcastss_ps(v),
+                _mm256_permutevar8x32_ps(wide, _mm256_set1_epi32(1)),
+                _mm256_permutevar8x32_ps(wide, _mm256_set1_epi32(2)),
+            ]
+        }
+    }
+
+    /// The fused test of eight boxes at once.
+    impl BoxRay for FusedBroadcast {
+        #[inline(always)]
+        unsafe fn enter(&self, node: &WideNode, t_limit: f32) -> (u32, [f32; WIDTH]) {
+            // SAFETY: the caller guarantees AVX2 and FMA; every load reads one 32-byte aligned
+            // row of 8 floats of `node`, at a byte offset of `ROW_OFFSETS` (below 192).
+            unsafe {
+                let (n, f) = (&self.near_rows, &self.far_rows);
+                let base = node.planes.as_ptr().cast::<u8>();
+                // A pointer only: a closure calling an intrinsic would not inherit the target
+                // features.
+                let row = |offset: usize| base.add(offset).cast::<f32>();
+                let n0 = _mm256_fmadd_ps(_mm256_load_ps(row(n[0])), self.inv[0], self.near_add[0]);
+                let n1 = _mm256_fmadd_ps(_mm256_load_ps(row(n[1])), self.inv[1], self.near_add[1]);
+                let n2 = _mm256_fmadd_ps(_mm256_load_ps(row(n[2])), self.inv[2], self.near_add[2]);
+                let f0 = _mm256_fmadd_ps(_mm256_load_ps(row(f[0])), self.inv[0], self.far_add[0]);
+                let f1 = _mm256_fmadd_ps(_mm256_load_ps(row(f[1])), self.inv[1], self.far_add[1]);
+                let f2 = _mm256_fmadd_ps(_mm256_load_ps(row(f[2])), self.inv[2], self.far_add[2]);
+                let limit = _mm256_set1_ps(t_limit + self.margin);
+                let near = _mm256_max_ps(_mm256_max_ps(n0, n1), _mm256_max_ps(n2, self.t_min));
+                let far = _mm256_min_ps(_mm256_min_ps(f0, f1), _mm256_min_ps(f2, limit));
+                let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
+                let mut out = [0.0f32; WIDTH];
+                _mm256_storeu_ps(out.as_mut_ptr(), near);
+                (_mm256_movemask_ps(hit) as u32, out)
+            }
+        }
     }
 
     impl NodeKernel for Avx2 {
-        type Ray = FusedBroadcast;
+        type Fused = FusedBroadcast;
+        type Plain = Broadcast<__m256>;
         type Frustum = FrustumBroadcast<__m256>;
 
         #[inline(always)]
@@ -291,81 +447,23 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
-            let (near_rows, far_rows) = plane_rows(ray.negative);
-            let fused = ray.fused(margin);
-            let f = fused.unwrap_or(FusedSlabs {
-                inv_direction: glam::Vec3::ONE,
-                near_add: glam::Vec3::ZERO,
-                far_add: glam::Vec3::ZERO,
-                t_min: 0.0,
-                margin: 0.0,
-                negative: ray.negative,
-            });
-            // SAFETY: the caller checked AVX2 support (this function's contract).
-            unsafe {
-                FusedBroadcast {
-                    fused: fused.is_some(),
-                    inv: splat3(f.inv_direction),
-                    near_add: splat3(f.near_add),
-                    far_add: splat3(f.far_add),
-                    t_min: _mm256_set1_ps(f.t_min),
-                    margin: f.margin,
-                    near_rows,
-                    far_rows,
-                    plain: (*ray, margin),
-                }
-            }
-        }
-
-        #[inline(always)]
-        unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
-            if !ray.fused {
+        unsafe fn prepare(
+            ray: &RayBoxTest,
+            margin: f32,
+        ) -> NodeRay<FusedBroadcast, Broadcast<__m256>> {
+            match ray.fused(margin) {
                 // SAFETY: the caller checked AVX2 support (this function's contract).
-                return unsafe { plain_enter(node, &ray.plain, t_limit) };
-            }
-            // SAFETY: the caller checked AVX2 and FMA support; every load reads one 32-byte
-            // aligned row of 8 floats of `node`.
-            unsafe {
-                let (n, f) = (&ray.near_rows, &ray.far_rows);
-                let row = |r: usize| node.planes[r].as_ptr();
-                let n0 = _mm256_fmadd_ps(_mm256_load_ps(row(n[0])), ray.inv[0], ray.near_add[0]);
-                let n1 = _mm256_fmadd_ps(_mm256_load_ps(row(n[1])), ray.inv[1], ray.near_add[1]);
-                let n2 = _mm256_fmadd_ps(_mm256_load_ps(row(n[2])), ray.inv[2], ray.near_add[2]);
-                let f0 = _mm256_fmadd_ps(_mm256_load_ps(row(f[0])), ray.inv[0], ray.far_add[0]);
-                let f1 = _mm256_fmadd_ps(_mm256_load_ps(row(f[1])), ray.inv[1], ray.far_add[1]);
-                let f2 = _mm256_fmadd_ps(_mm256_load_ps(row(f[2])), ray.inv[2], ray.far_add[2]);
-                let limit = _mm256_set1_ps(t_limit + ray.margin);
-                let near = _mm256_max_ps(_mm256_max_ps(n0, n1), _mm256_max_ps(n2, ray.t_min));
-                let far = _mm256_min_ps(_mm256_min_ps(f0, f1), _mm256_min_ps(f2, limit));
-                let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
-                let mut out = [0.0f32; WIDTH];
-                _mm256_storeu_ps(out.as_mut_ptr(), near);
-                (_mm256_movemask_ps(hit) as u32, out)
+                Some(f) => NodeRay::Fused(unsafe { FusedBroadcast::new(&f) }),
+                // SAFETY: as above.
+                None => NodeRay::Plain(unsafe { Broadcast::new(ray, margin) }),
             }
         }
-    }
-
-    /// The plain test of a ray without a fused form, broadcast here.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[inline(always)]
-    unsafe fn plain_enter(
-        node: &WideNode,
-        (ray, margin): &(RayBoxTest, f32),
-        t_limit: f32,
-    ) -> (u32, [f32; WIDTH]) {
-        let mut out = [0.0f32; WIDTH];
-        // SAFETY: the caller's guarantee; 0 is the start of a node's rows.
-        let mask =
-            unsafe { Broadcast::<__m256>::new(ray, *margin).enter(node, t_limit, 0, &mut out) };
-        (mask, out)
     }
 
     /// AVX2's node kernel (eight boxes fill one AVX register).
     impl NodeKernel for Avx512 {
-        type Ray = <Avx2 as NodeKernel>::Ray;
+        type Fused = <Avx2 as NodeKernel>::Fused;
+        type Plain = <Avx2 as NodeKernel>::Plain;
         type Frustum = <Avx2 as NodeKernel>::Frustum;
 
         #[inline(always)]
@@ -385,15 +483,9 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> Self::Ray {
+        unsafe fn prepare(ray: &RayBoxTest, margin: f32) -> NodeRay<Self::Fused, Self::Plain> {
             // SAFETY: as above.
             unsafe { Avx2::prepare(ray, margin) }
-        }
-
-        #[inline(always)]
-        unsafe fn enter(node: &WideNode, ray: &Self::Ray, t_limit: f32) -> (u32, [f32; WIDTH]) {
-            // SAFETY: as above.
-            unsafe { Avx2::enter(node, ray, t_limit) }
         }
     }
 

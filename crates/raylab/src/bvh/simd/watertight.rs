@@ -211,7 +211,7 @@ pub(crate) unsafe fn watertight_sheared_scaled<V: Lanes, const EARLY_OUT: bool>(
 
 /// A ray's part of the watertight test broadcast into registers `V` once per query, permuted to
 /// its `(kx, ky, kz)`: what the lane tests of leaf records and of the flat list start from.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct RayBroadcast<V> {
     /// The origin's `kx`, `ky`, `kz` coordinates.
     pub origin: [V; 3],

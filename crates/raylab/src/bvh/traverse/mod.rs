@@ -8,23 +8,109 @@
 pub(crate) mod flat;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod flat_rays;
+mod setup;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod tree_rays;
 
 use crate::accel::Hit;
-use crate::bvh::bounds::{FAR_SCALE, RayBoxTest};
+use crate::bvh::bounds::FAR_SCALE;
 use crate::bvh::leaf::Leaves;
-use crate::bvh::leaf::kernel::{RecordKernel, TriangleRay, prepare_triangle_ray};
-use crate::bvh::node::kernel::NodeKernel;
+use crate::bvh::leaf::kernel::{RecordKernel, TriangleRay};
+use crate::bvh::node::kernel::{BoxRay, NodeKernel, NodeRay};
 use crate::bvh::node::{Child, EMPTY, WIDTH, WideBvh, decode};
 use crate::float::next_float_up;
 use crate::ray::Ray;
-use crate::triangle::WatertightRay;
 
-/// A single ray's kernels: the node test and the leaf records' test of one instruction set.
-pub(crate) trait Kernel: NodeKernel + RecordKernel {}
+/// A single ray's kernels: the node test and the leaf records' test of one instruction set,
+/// and the ray's set-up for both (`setup.rs`).
+pub(crate) trait Kernel: NodeKernel + RecordKernel {
+    /// Sets `ray` up and runs `query` on it, or answers `None` if it can hit nothing
+    /// ([`can_hit`]). The query runs in the branch that set the ray up, fused or plain, so that
+    /// the set-up's values reach the traversal in registers rather than through a merged
+    /// struct (which measured 100 moves a ray).
+    ///
+    /// # Safety
+    /// The CPU must support the kernels' instruction set.
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output>;
+}
 
-impl<K: NodeKernel + RecordKernel> Kernel for K {}
+/// What a single-ray query does once its ray is set up: a traversal, for either form of the
+/// box test.
+pub(crate) trait Query<K: Kernel> {
+    type Output;
+
+    /// # Safety
+    /// The CPU must support `K`'s instruction set.
+    unsafe fn run<B: BoxRay>(
+        self,
+        bvh: &WideBvh,
+        box_ray: &B,
+        triangle_ray: &TriangleRay<K::RecordRay>,
+        t_max: f32,
+    ) -> Self::Output;
+}
+
+/// `query` on a prepared ray, in its fused or plain form.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn run_prepared<K: Kernel, Q: Query<K>>(
+    bvh: &WideBvh,
+    prepared: &Prepared<K>,
+    query: Q,
+) -> Q::Output {
+    let (triangle_ray, t_max) = (&prepared.triangle_ray, prepared.t_max);
+    match &prepared.box_ray {
+        NodeRay::Fused(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { query.run(bvh, b, triangle_ray, t_max) }
+        }
+        NodeRay::Plain(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { query.run(bvh, b, triangle_ray, t_max) }
+        }
+    }
+}
+
+impl Kernel for crate::bvh::isa::Scalar {
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee.
+        let prepared = unsafe { setup::setup_portable::<Self>(bvh, ray) }?;
+        // SAFETY: the caller's guarantee.
+        Some(unsafe { run_prepared(bvh, &prepared, query) })
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Kernel for crate::bvh::isa::Sse {
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee.
+        let prepared = unsafe { setup::setup_portable::<Self>(bvh, ray) }?;
+        // SAFETY: the caller's guarantee.
+        Some(unsafe { run_prepared(bvh, &prepared, query) })
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Kernel for crate::bvh::isa::Avx2 {
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee (AVX2 and FMA).
+        unsafe { setup::query_avx2::<Self, Q>(bvh, ray, query) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Kernel for crate::bvh::isa::Avx512 {
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee (AVX-512 implies AVX2 and FMA).
+        unsafe { setup::query_avx2::<Self, Q>(bvh, ray, query) }
+    }
+}
 
 /// Many incoherent rays through the tree at once, per instruction set: by default one by one
 /// (the single-ray traversals, the scalar twin); the vector sets put them in lanes
@@ -281,7 +367,7 @@ pub(crate) unsafe fn leaf_occluded<K: Kernel>(
     for record in bvh.leaves.leaf(offset) {
         // SAFETY: the caller guarantees `K`'s instruction set.
         let decided = unsafe { K::record_hits(triangle_ray, &record, t_max) };
-        if decided.hits != 0 || record.any_hit(&triangle_ray.ray, decided.undecided, t_max) {
+        if decided.hits != 0 || record.any_hit(triangle_ray.ray, decided.undecided, t_max) {
             return true;
         }
     }
@@ -309,20 +395,51 @@ pub(crate) unsafe fn closest_hit_counted<K: Kernel, C: Counter>(
     ray: &Ray,
     counter: &mut C,
 ) -> Option<Hit> {
-    if !can_hit(ray) {
-        return None;
+    /// The closest hit from the root.
+    struct ClosestQuery<'a, C>(&'a Ray, &'a mut C);
+    impl<K: Kernel, C: Counter> Query<K> for ClosestQuery<'_, C> {
+        type Output = Option<Hit>;
+        #[inline(always)]
+        unsafe fn run<B: BoxRay>(
+            self,
+            bvh: &WideBvh,
+            box_ray: &B,
+            triangle_ray: &TriangleRay<K::RecordRay>,
+            _: f32,
+        ) -> Option<Hit> {
+            let mut closest = Closest::new(self.0);
+            // SAFETY: the caller's guarantee.
+            unsafe { closest_in::<K, B, C>(bvh, box_ray, triangle_ray, 0, &mut closest, self.1) };
+            closest.best
+        }
     }
-    let box_ray = RayBoxTest::new(ray);
-    let margin = box_ray.margin(&bvh.root);
-    let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-    // SAFETY: (both) the caller guarantees `K`'s instruction set.
-    let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
-    // SAFETY: as above.
-    let box_ray = unsafe { K::prepare(&box_ray, margin) };
-    let mut closest = Closest::new(ray);
-    // SAFETY: the caller's guarantee.
-    unsafe { closest_in::<K, C>(bvh, &box_ray, &triangle_ray, 0, &mut closest, counter) };
-    closest.best
+    // SAFETY: the caller guarantees `K`'s instruction set.
+    unsafe { K::query(bvh, ray, ClosestQuery(ray, counter)) }.flatten()
+}
+
+/// [`closest_in`] for a prepared ray, in its fused or plain form.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn closest_in_prepared<K: Kernel, C: Counter>(
+    bvh: &WideBvh,
+    prepared: &Prepared<K>,
+    start: u32,
+    closest: &mut Closest,
+    counter: &mut C,
+) {
+    let triangle_ray = &prepared.triangle_ray;
+    match &prepared.box_ray {
+        NodeRay::Fused(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { closest_in::<K, _, C>(bvh, b, triangle_ray, start, closest, counter) }
+        }
+        NodeRay::Plain(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { closest_in::<K, _, C>(bvh, b, triangle_ray, start, closest, counter) }
+        }
+    }
 }
 
 /// The closest hit in the subtree of child reference `start` (an interior node or a leaf),
@@ -331,9 +448,9 @@ pub(crate) unsafe fn closest_hit_counted<K: Kernel, C: Counter>(
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn closest_in<K: Kernel, C: Counter>(
+pub(crate) unsafe fn closest_in<K: Kernel, B: BoxRay, C: Counter>(
     bvh: &WideBvh,
-    box_ray: &<K as NodeKernel>::Ray,
+    box_ray: &B,
     triangle_ray: &TriangleRay<K::RecordRay>,
     start: u32,
     closest: &mut Closest,
@@ -348,7 +465,7 @@ pub(crate) unsafe fn closest_in<K: Kernel, C: Counter>(
             counter.node();
             let node = &bvh.nodes[index as usize];
             // SAFETY: the caller guarantees `K`'s instruction set.
-            let (mut mask, near) = unsafe { K::enter(node, box_ray, closest.box_limit) };
+            let (mut mask, near) = unsafe { box_ray.enter(node, closest.box_limit) };
             if mask == 0 {
                 current = EMPTY;
                 break;
@@ -440,24 +557,30 @@ pub(crate) unsafe fn occluded_counted<K: Kernel, C: Counter>(
     ray: &Ray,
     counter: &mut C,
 ) -> bool {
-    if !can_hit(ray) {
-        return false;
+    /// Occlusion from the root.
+    struct OccludedQuery<'a, C>(&'a mut C);
+    impl<K: Kernel, C: Counter> Query<K> for OccludedQuery<'_, C> {
+        type Output = bool;
+        #[inline(always)]
+        unsafe fn run<B: BoxRay>(
+            self,
+            bvh: &WideBvh,
+            box_ray: &B,
+            triangle_ray: &TriangleRay<K::RecordRay>,
+            t_max: f32,
+        ) -> bool {
+            // SAFETY: the caller's guarantee.
+            unsafe { occluded_in::<K, B, C>(bvh, box_ray, triangle_ray, t_max, 0, self.0) }
+        }
     }
-    let box_ray = RayBoxTest::new(ray);
-    let margin = box_ray.margin(&bvh.root);
-    let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-    // SAFETY: (both) the caller guarantees `K`'s instruction set.
-    let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
-    // SAFETY: as above.
-    let box_ray = unsafe { K::prepare(&box_ray, margin) };
-    // SAFETY: the caller's guarantee.
-    unsafe { occluded_in::<K, C>(bvh, &box_ray, &triangle_ray, ray.t_max, 0, counter) }
+    // SAFETY: the caller guarantees `K`'s instruction set.
+    unsafe { K::query(bvh, ray, OccludedQuery(counter)) }.unwrap_or(false)
 }
 
-/// A single ray prepared for `K`'s kernels: what every query of it sets up first.
+/// A single ray prepared for `K`'s kernels, kept for several queries (`tree_rays.rs`).
 #[derive(Clone, Copy)]
 pub(crate) struct Prepared<K: Kernel> {
-    pub(crate) box_ray: <K as NodeKernel>::Ray,
+    pub(crate) box_ray: NodeRay<K::Fused, K::Plain>,
     pub(crate) triangle_ray: TriangleRay<K::RecordRay>,
     pub(crate) t_max: f32,
 }
@@ -465,25 +588,12 @@ pub(crate) struct Prepared<K: Kernel> {
 impl<K: Kernel> Prepared<K> {
     /// `ray` prepared, or `None` if it can hit nothing ([`can_hit`]).
     ///
-    /// [`closest_hit_counted`] and [`occluded_counted`] write the same set-up out rather than
-    /// call this: through it (the prepared ray returned, then passed by reference) the single
-    /// rays' occlusion measured 74 against 67 ns a shadow ray on the glTF boxes' recorded rays.
-    ///
     /// # Safety
     /// The CPU must support `K`'s instruction set.
     #[inline(always)]
     pub(crate) unsafe fn new(bvh: &WideBvh, ray: &Ray) -> Option<Self> {
-        if !can_hit(ray) {
-            return None;
-        }
-        let box_ray = RayBoxTest::new(ray);
-        let margin = box_ray.margin(&bvh.root);
-        let triangle_ray = WatertightRay::with_inverse(ray, box_ray.inv_direction);
-        // SAFETY: (both) the caller guarantees `K`'s instruction set.
-        let triangle_ray = unsafe { prepare_triangle_ray::<K>(&triangle_ray) };
-        // SAFETY: as above.
-        let box_ray = unsafe { K::prepare(&box_ray, margin) };
-        Some(Prepared { box_ray, triangle_ray, t_max: ray.t_max })
+        // SAFETY: the caller's guarantee.
+        unsafe { setup::setup_portable::<K>(bvh, ray) }
     }
 }
 
@@ -498,9 +608,17 @@ pub(crate) unsafe fn occluded_prepared<K: Kernel, C: Counter>(
     start: u32,
     counter: &mut C,
 ) -> bool {
-    let (box_ray, triangle_ray) = (&prepared.box_ray, &prepared.triangle_ray);
-    // SAFETY: the caller's guarantee.
-    unsafe { occluded_in::<K, C>(bvh, box_ray, triangle_ray, prepared.t_max, start, counter) }
+    let (triangle_ray, t_max) = (&prepared.triangle_ray, prepared.t_max);
+    match &prepared.box_ray {
+        NodeRay::Fused(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { occluded_in::<K, _, C>(bvh, b, triangle_ray, t_max, start, counter) }
+        }
+        NodeRay::Plain(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { occluded_in::<K, _, C>(bvh, b, triangle_ray, t_max, start, counter) }
+        }
+    }
 }
 
 /// Whether the ray, set up for `K`'s kernels, hits anything below `t_max` in the subtree of
@@ -509,9 +627,9 @@ pub(crate) unsafe fn occluded_prepared<K: Kernel, C: Counter>(
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-unsafe fn occluded_in<K: Kernel, C: Counter>(
+unsafe fn occluded_in<K: Kernel, B: BoxRay, C: Counter>(
     bvh: &WideBvh,
-    box_ray: &<K as NodeKernel>::Ray,
+    box_ray: &B,
     triangle_ray: &TriangleRay<K::RecordRay>,
     t_max: f32,
     start: u32,
@@ -524,7 +642,7 @@ unsafe fn occluded_in<K: Kernel, C: Counter>(
         counter.node();
         let node = &bvh.nodes[index as usize];
         // SAFETY: the caller guarantees `K`'s instruction set.
-        let (mut mask, _) = unsafe { K::enter(node, box_ray, box_limit) };
+        let (mut mask, _) = unsafe { box_ray.enter(node, box_limit) };
         // Leaves are tested at once (a hit ends the search); the first interior child is
         // visited next without going through the stack, the others pushed.
         let mut next = None;

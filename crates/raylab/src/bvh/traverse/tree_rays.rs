@@ -58,7 +58,8 @@ use glam::Vec3;
 
 use super::flat_rays::{RayRegisters, RayRows, blocked_rarely, corners_of};
 use super::{
-    Closest, Kernel, Prepared, closest_in, leaf_occluded as leaf_occluded_single, occluded_prepared,
+    Closest, Kernel, Prepared, closest_in_prepared, leaf_occluded as leaf_occluded_single,
+    occluded_prepared,
 };
 use super::{STACK_SIZE, TreeRaysKernel};
 use crate::accel::Hit;
@@ -467,14 +468,7 @@ pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
                         rest &= rest - 1;
                         let p = singles.get(bvh, rays, lane);
                         let mut closest = state.closest[lane];
-                        closest_in::<K, ()>(
-                            bvh,
-                            &p.box_ray,
-                            &p.triangle_ray,
-                            entry.child,
-                            &mut closest,
-                            &mut (),
-                        );
+                        closest_in_prepared::<K, ()>(bvh, p, entry.child, &mut closest, &mut ());
                         state.set(lane, closest);
                     }
                     continue;
