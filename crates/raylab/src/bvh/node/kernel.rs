@@ -73,7 +73,7 @@ pub(crate) trait NodeKernel: Sized {
     /// Prepares a packet's bound.
     ///
     /// # Safety
-    /// As for [`enter`](Self::enter).
+    /// As for [`prepare`](Self::prepare).
     unsafe fn prepare_frustum(frustum: &Frustum) -> Self::Frustum;
 
     /// The mask of children that some ray of the packet may enter within `[t_min, t_limit]`,
@@ -81,7 +81,7 @@ pub(crate) trait NodeKernel: Sized {
     /// computes them.
     ///
     /// # Safety
-    /// As for [`enter`](Self::enter).
+    /// As for [`prepare`](Self::prepare).
     unsafe fn enter_frustum(
         node: &WideNode,
         frustum: &Self::Frustum,

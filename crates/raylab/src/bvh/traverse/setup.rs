@@ -1,15 +1,16 @@
 //! A single ray's set-up: what every query of one ray computes before it tests the root. That
-//! is the box test's form and margin ([`RayBoxTest`], [`FusedSlabs`]), the watertight test's
-//! frame and shear ([`WatertightRay`]), and both broadcast into the kernels' registers.
+//! is the box test's form and margin ([`RayBoxTest`],
+//! [`FusedSlabs`](crate::bvh::bounds::FusedSlabs)), the watertight test's frame and shear
+//! ([`WatertightRay`]), and both broadcast into the kernels' registers.
 //!
 //! [`setup_portable`] builds it from those types, axis by axis. It is the set-up of the
-//! portable and SSE2 kernels, and the twin of [`setup_avx2`], the AVX2 and AVX-512 kernels'
+//! portable and SSE2 kernels, and the twin of [`query_avx2`], the AVX2 and AVX-512 kernels'
 //! set-up. That one computes the same values in SSE registers, three axes at once. It permutes
 //! the origin, the direction and `1/d` into the ray's frame with one `vpermilps` each, where
 //! the portable code picks coordinates by indexed loads from the stack. It broadcasts each
 //! value once. Rays without a fused form (a zero, tiny or huge `1/d`, an origin far from the
-//! world's origin) go to [`setup_portable`]. On the bunny's primary rays the set-up was about
-//! 350 instructions of a ray's 1,274 (callgrind); BENCHMARKS.md has what this one saves.
+//! world's origin) go to the plain test, set up as [`setup_portable`] does (BENCHMARKS.md, "Ray
+//! queries on AVX2 (issue 46, third sitting)", measures what this saves).
 //!
 //! Every operation is the portable code's, in the same order, so the two agree bit for bit; the
 //! tests below check it on hostile rays.
