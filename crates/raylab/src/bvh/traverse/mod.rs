@@ -29,9 +29,17 @@ pub(crate) trait Kernel: NodeKernel + RecordKernel {
     /// the set-up's values reach the traversal in registers rather than through a merged
     /// struct, which the compiler copies field by field.
     ///
+    /// The default is the portable set-up ([`setup::setup_portable`]).
+    ///
     /// # Safety
     /// The CPU must support the kernels' instruction set.
-    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output>;
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee.
+        let prepared = unsafe { setup::setup_portable::<Self>(bvh, ray) }?;
+        // SAFETY: the caller's guarantee.
+        Some(unsafe { run_prepared(bvh, &prepared, query) })
+    }
 }
 
 /// What a single-ray query does once its ray is set up: a traversal, for either form of the
@@ -73,26 +81,10 @@ pub(crate) unsafe fn run_prepared<K: Kernel, Q: Query<K>>(
     }
 }
 
-impl Kernel for crate::bvh::isa::Scalar {
-    #[inline(always)]
-    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
-        // SAFETY: the caller's guarantee.
-        let prepared = unsafe { setup::setup_portable::<Self>(bvh, ray) }?;
-        // SAFETY: the caller's guarantee.
-        Some(unsafe { run_prepared(bvh, &prepared, query) })
-    }
-}
+impl Kernel for crate::bvh::isa::Scalar {}
 
 #[cfg(target_arch = "x86_64")]
-impl Kernel for crate::bvh::isa::Sse {
-    #[inline(always)]
-    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
-        // SAFETY: the caller's guarantee.
-        let prepared = unsafe { setup::setup_portable::<Self>(bvh, ray) }?;
-        // SAFETY: the caller's guarantee.
-        Some(unsafe { run_prepared(bvh, &prepared, query) })
-    }
-}
+impl Kernel for crate::bvh::isa::Sse {}
 
 #[cfg(target_arch = "x86_64")]
 impl Kernel for crate::bvh::isa::Avx2 {
