@@ -387,26 +387,34 @@ pub(crate) unsafe fn closest_hit_counted<K: Kernel, C: Counter>(
     ray: &Ray,
     counter: &mut C,
 ) -> Option<Hit> {
-    /// The closest hit from the root.
-    struct ClosestQuery<'a, C>(&'a Ray, &'a mut C);
-    impl<K: Kernel, C: Counter> Query<K> for ClosestQuery<'_, C> {
-        type Output = Option<Hit>;
-        #[inline(always)]
-        unsafe fn run<B: BoxRay>(
-            self,
-            bvh: &WideBvh,
-            box_ray: &B,
-            triangle_ray: &TriangleRay<K::RecordRay>,
-            _: f32,
-        ) -> Option<Hit> {
-            let mut closest = Closest::new(self.0);
-            // SAFETY: the caller's guarantee.
-            unsafe { closest_in::<K, B, C>(bvh, box_ray, triangle_ray, 0, &mut closest, self.1) };
-            closest.best
-        }
-    }
+    let mut closest = Closest::new(ray);
+    let query = ClosestQuery { start: 0, closest: &mut closest, counter };
     // SAFETY: the caller guarantees `K`'s instruction set.
-    unsafe { K::query(bvh, ray, ClosestQuery(ray, counter)) }.flatten()
+    unsafe { K::query(bvh, ray, query) }?;
+    closest.best
+}
+
+/// The closest hit in the subtree of `start` ([`closest_in`]), kept in `closest`.
+struct ClosestQuery<'a, C> {
+    start: u32,
+    closest: &'a mut Closest,
+    counter: &'a mut C,
+}
+
+impl<K: Kernel, C: Counter> Query<K> for ClosestQuery<'_, C> {
+    type Output = ();
+    #[inline(always)]
+    unsafe fn run<B: BoxRay>(
+        self,
+        bvh: &WideBvh,
+        box_ray: &B,
+        triangle_ray: &TriangleRay<K::RecordRay>,
+        _: f32,
+    ) {
+        let (start, closest, counter) = (self.start, self.closest, self.counter);
+        // SAFETY: the caller's guarantee.
+        unsafe { closest_in::<K, B, C>(bvh, box_ray, triangle_ray, start, closest, counter) }
+    }
 }
 
 /// [`closest_in`] for a prepared ray, in its fused or plain form.
@@ -421,17 +429,8 @@ pub(crate) unsafe fn closest_in_prepared<K: Kernel, C: Counter>(
     closest: &mut Closest,
     counter: &mut C,
 ) {
-    let triangle_ray = &prepared.triangle_ray;
-    match &prepared.box_ray {
-        NodeRay::Fused(b) => {
-            // SAFETY: the caller's guarantee.
-            unsafe { closest_in::<K, _, C>(bvh, b, triangle_ray, start, closest, counter) }
-        }
-        NodeRay::Plain(b) => {
-            // SAFETY: the caller's guarantee.
-            unsafe { closest_in::<K, _, C>(bvh, b, triangle_ray, start, closest, counter) }
-        }
-    }
+    // SAFETY: the caller's guarantee.
+    unsafe { run_prepared(bvh, prepared, ClosestQuery { start, closest, counter }) }
 }
 
 /// The closest hit in the subtree of child reference `start` (an interior node or a leaf),
@@ -549,24 +548,31 @@ pub(crate) unsafe fn occluded_counted<K: Kernel, C: Counter>(
     ray: &Ray,
     counter: &mut C,
 ) -> bool {
-    /// Occlusion from the root.
-    struct OccludedQuery<'a, C>(&'a mut C);
-    impl<K: Kernel, C: Counter> Query<K> for OccludedQuery<'_, C> {
-        type Output = bool;
-        #[inline(always)]
-        unsafe fn run<B: BoxRay>(
-            self,
-            bvh: &WideBvh,
-            box_ray: &B,
-            triangle_ray: &TriangleRay<K::RecordRay>,
-            t_max: f32,
-        ) -> bool {
-            // SAFETY: the caller's guarantee.
-            unsafe { occluded_in::<K, B, C>(bvh, box_ray, triangle_ray, t_max, 0, self.0) }
-        }
-    }
+    let query = OccludedQuery { start: 0, counter };
     // SAFETY: the caller guarantees `K`'s instruction set.
-    unsafe { K::query(bvh, ray, OccludedQuery(counter)) }.unwrap_or(false)
+    unsafe { K::query(bvh, ray, query) }.unwrap_or(false)
+}
+
+/// Whether anything is hit in the subtree of node `start` ([`occluded_in`]).
+struct OccludedQuery<'a, C> {
+    start: u32,
+    counter: &'a mut C,
+}
+
+impl<K: Kernel, C: Counter> Query<K> for OccludedQuery<'_, C> {
+    type Output = bool;
+    #[inline(always)]
+    unsafe fn run<B: BoxRay>(
+        self,
+        bvh: &WideBvh,
+        box_ray: &B,
+        triangle_ray: &TriangleRay<K::RecordRay>,
+        t_max: f32,
+    ) -> bool {
+        let (start, counter) = (self.start, self.counter);
+        // SAFETY: the caller's guarantee.
+        unsafe { occluded_in::<K, B, C>(bvh, box_ray, triangle_ray, t_max, start, counter) }
+    }
 }
 
 /// A single ray prepared for `K`'s kernels, kept for several queries (`tree_rays.rs`).
@@ -600,17 +606,8 @@ pub(crate) unsafe fn occluded_prepared<K: Kernel, C: Counter>(
     start: u32,
     counter: &mut C,
 ) -> bool {
-    let (triangle_ray, t_max) = (&prepared.triangle_ray, prepared.t_max);
-    match &prepared.box_ray {
-        NodeRay::Fused(b) => {
-            // SAFETY: the caller's guarantee.
-            unsafe { occluded_in::<K, _, C>(bvh, b, triangle_ray, t_max, start, counter) }
-        }
-        NodeRay::Plain(b) => {
-            // SAFETY: the caller's guarantee.
-            unsafe { occluded_in::<K, _, C>(bvh, b, triangle_ray, t_max, start, counter) }
-        }
-    }
+    // SAFETY: the caller's guarantee.
+    unsafe { run_prepared(bvh, prepared, OccludedQuery { start, counter }) }
 }
 
 /// Whether the ray, set up for `K`'s kernels, hits anything below `t_max` in the subtree of
