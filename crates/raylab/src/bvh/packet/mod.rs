@@ -95,13 +95,25 @@ impl Chunk {
         self.present = 0;
         self.alone = 0;
         let groups = setup::fill(&mut self.lanes, rays);
-        for (i, &group) in groups[..rays.len()].iter().enumerate() {
-            if group == setup::ALONE {
-                self.alone |= 1 << i;
-            } else {
-                self.groups[group as usize] |= 1 << i;
-                self.present |= 1 << group;
+        let groups = &groups[..rays.len()];
+        // Camera and shadow rays are nearly always one group: found without a loop through
+        // memory (each `|=` below waits on the one before it).
+        let first = groups.first().copied().unwrap_or(setup::ALONE);
+        let differ = groups.iter().fold(0u8, |differ, &group| differ | (group ^ first));
+        if differ == 0 && first != setup::ALONE {
+            self.groups[first as usize] = self.lanes.all();
+            self.present = 1 << first;
+        } else {
+            let (mut present, mut alone) = (0u32, 0u64);
+            for (i, &group) in groups.iter().enumerate() {
+                if group == setup::ALONE {
+                    alone |= 1 << i;
+                } else {
+                    self.groups[group as usize] |= 1 << i;
+                    present |= 1 << group;
+                }
             }
+            (self.present, self.alone) = (present, alone);
         }
         for group in bits(self.present as u64) {
             self.shared[group] = setup::shared(group as u8);
