@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use raylab::bvh::{BuildSettings, Bvh, Isa};
+use raylab::bvh::{BuildSettings, Bvh, Collapse, Isa};
 use raylab::ray_sets::{self, Agreement, Frame, HitRecord};
 use raylab::{Accelerator, Ray};
 
@@ -60,6 +60,12 @@ pub struct BenchArgs {
     /// with leaves of up to 4 triangles below 4096 triangles).
     #[arg(long, value_name = "PRESET", default_value = "auto")]
     build: String,
+
+    /// How the binary tree becomes the 8-wide one: greedy (open the largest child) or optimal
+    /// (least SAH cost, over binary leaves of up to 4) [default: the build preset's; high is
+    /// optimal].
+    #[arg(long, value_name = "HOW")]
+    collapse: Option<String>,
 
     /// Scenes of at most this many triangles answer single rays by testing every triangle, without
     /// the tree (0: always the tree) [default: the build preset's, 48].
@@ -132,6 +138,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(limit) = args.flat_limit {
         settings.flat_limit = limit;
     }
+    if let Some(collapse) = &args.collapse {
+        settings.collapse = match collapse.as_str() {
+            "greedy" => Collapse::Greedy,
+            "optimal" => Collapse::Optimal { binary_leaf_size: 4 },
+            other => bail!("unknown --collapse '{other}': use greedy or optimal"),
+        };
+    }
 
     if let Some(dir) = &args.generate {
         return generate(args, &mesh, &triangles, dir, &settings);
@@ -171,13 +184,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let stats = bvh.stats();
 
     println!(
-        "{}: {} triangles ({} in the BVH), BVH {} preset ({} bins, leaves of up to {}), {} kernels",
+        "{}: {} triangles ({} in the BVH), BVH {} preset ({} bins, leaves of up to {}, {} \
+         collapse), {} kernels",
         args.mesh.display(),
         stats.triangles,
         stats.indexed_triangles,
         args.build,
         settings.bins,
         settings.max_leaf_size,
+        match settings.collapse {
+            Collapse::Greedy => "greedy".to_string(),
+            Collapse::Optimal { binary_leaf_size } =>
+                format!("optimal over binary leaves of up to {binary_leaf_size}"),
+        },
         bvh.isa().name()
     );
     println!(

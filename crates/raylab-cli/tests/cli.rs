@@ -346,6 +346,23 @@ fn bench_generates_traces_and_reports() {
     let out =
         raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"]);
     assert!(text(&out.stdout).contains("primary.hits: 768 of 768 agree"), "{}", text(&out.stdout));
+    // Either collapse gives the same answers; a third is refused by name.
+    for (collapse, says) in
+        [("greedy", "greedy collapse"), ("optimal", "optimal over binary leaves of up to 4")]
+    {
+        let args = ["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"];
+        let out =
+            raylab(dir.path(), &[&args[..], &["--collapse", collapse, "--build", "high"]].concat());
+        let stdout = text(&out.stdout);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        assert!(
+            stdout.contains(says) && stdout.contains("primary.hits: 768 of 768 agree"),
+            "{stdout}"
+        );
+    }
+    let out = raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--collapse", "best"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("unknown --collapse 'best'"), "{}", text(&out.stderr));
     // Embree's figures beside raylab's, from its summary.json; another mesh's is refused.
     let summary = |triangles: usize| {
         format!(

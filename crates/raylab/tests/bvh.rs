@@ -1,20 +1,31 @@
 //! The BVH gives exactly the brute-force answers: the same `t`, bit for bit, and the same triangle
-//! (ties at equal `t` go to the lowest index in both), for every build preset and instruction set,
-//! on random triangle soups and hostile inputs.
+//! (ties at equal `t` go to the lowest index in both), for every build preset, both collapses and
+//! every instruction set, on random triangle soups and hostile inputs.
 
 use glam::Vec3;
 use proptest::prelude::*;
-use raylab::bvh::{BuildSettings, Bvh, Isa};
+use raylab::bvh::{BuildSettings, Bvh, Collapse, Isa};
 use raylab::{Accelerator, BruteForce, Ray};
 
-/// Every BVH variant over `triangles`: each preset's tree, small-scene leaves (one block), and
+/// Every BVH variant over `triangles`: each preset's tree, small-scene leaves (one block), the
+/// collapse of least cost over the finest binary trees, and
 /// (up to 4,096 triangles) the flat list that small scenes answer single rays from.
 fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
     let mut all = Vec::new();
     let small = ("small-scene", BuildSettings::for_triangles(0));
+    // The collapse of least cost over binary leaves of one triangle, and on small-scene leaves.
+    let optimal = |binary_leaf_size| Collapse::Optimal { binary_leaf_size };
+    let finest = ("optimal-1", BuildSettings { collapse: optimal(1), ..BuildSettings::MEDIUM });
+    let small_optimal = (
+        "small-optimal",
+        BuildSettings { collapse: optimal(2), ..BuildSettings::for_triangles(0) },
+    );
     let tree = |settings: BuildSettings| BuildSettings { flat_limit: 0, ..settings };
-    let mut variants: Vec<(&str, BuildSettings)> =
-        BuildSettings::PRESETS.into_iter().chain([small]).map(|(n, s)| (n, tree(s))).collect();
+    let mut variants: Vec<(&str, BuildSettings)> = BuildSettings::PRESETS
+        .into_iter()
+        .chain([small, finest, small_optimal])
+        .map(|(n, s)| (n, tree(s)))
+        .collect();
     if triangles.len() <= 4096 {
         variants.push(("flat", BuildSettings { flat_limit: usize::MAX, ..BuildSettings::MEDIUM }));
     }

@@ -5,7 +5,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | `bounds` | boxes, the conservative slab test of one ray ([`RayBoxTest`]) and of a packet ([`Frustum`]) |
-//! | `build` | [`BuildSettings`]; the binned SAH build of a binary tree, in parallel on the current rayon pool (`build/sweep.rs`: the split sweep); its collapse into the 8-wide tree (`build/collapse.rs`) |
+//! | `build` | [`BuildSettings`]; the binned SAH build of a binary tree, in parallel on the current rayon pool (`build/sweep.rs`: the split sweep); its collapse into the 8-wide tree: greedy (`build/collapse.rs`) or of least SAH cost by dynamic programming (`build/optimal.rs`, the `high` preset) |
 //! | `node` | the wide node's layout (eight boxes plane by plane, eight child references, drawn in its doc); `node/kernel.rs`: one ray or a packet's bound against eight boxes |
 //! | `leaf` | leaf records of up to eight triangles over a table of the vertices they share; `leaf/kernel.rs` and `leaf/lanes.rs`: a ray against a record in one pass |
 //! | `traverse` | single rays: nearest child first for the closest hit, first hit for occlusion; `traverse/flat.rs`: scenes of a few dozen triangles (the Cornell boxes) answer single rays without the tree, every triangle tested sixteen per instruction (up to [`BuildSettings::flat_limit`] triangles); `traverse/flat_rays.rs`: many incoherent rays against that list, sixteen rays per instruction |
@@ -62,7 +62,7 @@ use glam::Vec3;
 pub use batch::{Batch, RaySource};
 pub use bounds::{Bounds, Frustum, FusedSlabs, RayBoxTest};
 pub(crate) use bounds::{FAR_SCALE, SLAB_PAD};
-pub use build::BuildSettings;
+pub use build::{BuildSettings, Collapse};
 pub use isa::Isa;
 pub use refit::RefitError;
 pub use scene::SceneBvh;
@@ -178,22 +178,40 @@ impl Bvh {
     /// primitives' boxes and build records, the binary tree and the wide tree with its copies of
     /// the triangles): for a caller to check against the memory it has before it builds.
     pub fn build_bytes_estimate(triangles: usize) -> u64 {
-        // At its peak the build holds about 90 bytes per triangle: the build records (32) with
-        // the binary tree (about 25), then the wide tree (about 56, see `BvhStats::bytes`) while
-        // the binary tree is collapsed. 160 leaves a margin.
-        triangles as u64 * 160
+        // At its peak the build holds about 90 bytes per triangle with the greedy collapse: the
+        // build records (32) with the binary tree (about 25), then the wide tree (about 56, see
+        // `BvhStats::bytes`) while the binary tree is collapsed. The collapse of least cost over
+        // binary leaves of one triangle holds up to two binary nodes a triangle (64 bytes) and
+        // their table rows (104) beside the wide tree: about 230. 256 leaves a margin.
+        triangles as u64 * 256
     }
 
     fn build_checked(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {
         let settings = settings.clamped();
-        let binary = build::build_triangles(triangles, &settings);
+        let binary = match settings.collapse {
+            Collapse::Greedy => build::build_triangles(triangles, &settings),
+            Collapse::Optimal { binary_leaf_size } => build::build_triangles(
+                triangles,
+                &BuildSettings { max_leaf_size: binary_leaf_size, ..settings },
+            ),
+        };
         let indexed_triangles = binary.order.len();
         let flat = (indexed_triangles <= settings.flat_limit).then(|| {
             let mut indices = binary.order.clone();
             indices.sort_unstable();
             Flat::new(triangles, &indices)
         });
-        let wide = build::collapse(&binary, |i| triangles[i as usize], |i| i);
+        let wide = match settings.collapse {
+            Collapse::Greedy => build::collapse(&binary, |i| triangles[i as usize], |i| i),
+            Collapse::Optimal { .. } => {
+                let costs = build::Costs {
+                    node: settings.traversal_cost,
+                    record: settings.record_cost,
+                    max_leaf: settings.max_leaf_size,
+                };
+                build::collapse_optimal(&binary, costs, |i| triangles[i as usize], |i| i)
+            }
+        };
         let stats = BvhStats {
             triangles: triangles.len(),
             indexed_triangles,

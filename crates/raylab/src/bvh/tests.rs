@@ -684,7 +684,13 @@ fn tree_rays_in_lanes_give_the_single_ray_answers() {
             triangles.push(triangles[k]);
         }
         let max_leaf_size = [1, 4, 8, 16, 32][case / 5 % 5];
-        let settings = BuildSettings { flat_limit: 0, max_leaf_size, ..BuildSettings::MEDIUM };
+        // Every other case the collapse of least cost, over binary leaves of 1 to 4.
+        let collapse = match case % 2 {
+            0 => Collapse::Greedy,
+            _ => Collapse::Optimal { binary_leaf_size: 1 + case / 2 % 4 },
+        };
+        let settings =
+            BuildSettings { flat_limit: 0, max_leaf_size, collapse, ..BuildSettings::MEDIUM };
         let scalar = Bvh::build(&triangles, &settings).with_isa(Isa::Scalar).expect("scalar");
         let mut batch = Vec::new();
         while batch.len() < 400 {

@@ -16,11 +16,13 @@
 use glam::{Vec3, Vec3A, Vec4};
 
 mod collapse;
+mod optimal;
 mod settings;
 mod sweep;
 
 pub(crate) use collapse::collapse;
-pub use settings::BuildSettings;
+pub(crate) use optimal::{Costs, collapse_optimal};
+pub use settings::{BuildSettings, Collapse};
 
 use crate::bvh::bounds::Bounds;
 use crate::bvh::leaf::RECORD_TRIANGLES;

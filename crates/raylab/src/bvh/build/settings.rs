@@ -20,6 +20,26 @@ pub struct BuildSettings {
     /// (`flat`): faster for a few dozen triangles. `0` always walks the tree; at most
     /// [`MAX_FLAT_LIMIT`](Self::MAX_FLAT_LIMIT) (larger limits are clamped to it).
     pub flat_limit: usize,
+    /// How the binary tree becomes the 8-wide one.
+    pub collapse: Collapse,
+}
+
+/// How the binary tree becomes the 8-wide one. Never changes the answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Collapse {
+    /// Open the child of largest area until a node has eight (`build/collapse.rs`); the binary
+    /// build's leaves are the wide tree's.
+    #[default]
+    Greedy,
+    /// The cut of the binary tree into wide nodes and leaves of least surface-area cost, by
+    /// dynamic programming (`build/optimal.rs`). The binary tree is built with leaves of at most
+    /// `binary_leaf_size` triangles (1 to [`max_leaf_size`](BuildSettings::max_leaf_size)), which
+    /// the collapse may merge into leaves of up to `max_leaf_size`: smaller binary leaves leave
+    /// it more choice and take longer to build.
+    Optimal {
+        /// The most triangles in a leaf of the binary tree.
+        binary_leaf_size: usize,
+    },
 }
 
 impl BuildSettings {
@@ -30,6 +50,7 @@ impl BuildSettings {
         traversal_cost: 1.0,
         record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
+        collapse: Collapse::Greedy,
     };
     /// The default: 16 bins, leaves of up to 8 triangles.
     pub const MEDIUM: BuildSettings = BuildSettings {
@@ -38,14 +59,16 @@ impl BuildSettings {
         traversal_cost: 1.0,
         record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
+        collapse: Collapse::Greedy,
     };
-    /// Best trees: 32 bins.
+    /// Best trees: 32 bins, and the collapse of least cost over binary leaves of up to four.
     pub const HIGH: BuildSettings = BuildSettings {
         bins: 32,
         max_leaf_size: 8,
         traversal_cost: 1.0,
         record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
+        collapse: Collapse::Optimal { binary_leaf_size: 4 },
     };
     /// Every preset with its name.
     pub const PRESETS: [(&'static str, BuildSettings); 3] =
@@ -86,9 +109,10 @@ impl BuildSettings {
 
     /// The settings with every field clamped to its valid range.
     pub(crate) fn clamped(&self) -> BuildSettings {
+        let max_leaf_size = self.max_leaf_size.clamp(1, MAX_LEAF_TRIANGLES);
         BuildSettings {
             bins: self.bins.clamp(2, super::MAX_BINS),
-            max_leaf_size: self.max_leaf_size.clamp(1, MAX_LEAF_TRIANGLES),
+            max_leaf_size,
             traversal_cost: if self.traversal_cost.is_finite() {
                 self.traversal_cost.max(0.0)
             } else {
@@ -100,6 +124,12 @@ impl BuildSettings {
                 1.0
             },
             flat_limit: self.flat_limit.min(Self::MAX_FLAT_LIMIT),
+            collapse: match self.collapse {
+                Collapse::Greedy => Collapse::Greedy,
+                Collapse::Optimal { binary_leaf_size } => {
+                    Collapse::Optimal { binary_leaf_size: binary_leaf_size.clamp(1, max_leaf_size) }
+                }
+            },
         }
     }
 }

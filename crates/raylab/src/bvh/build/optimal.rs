@@ -1,0 +1,370 @@
+//! The binary tree collapsed into the 8-wide one at the least surface-area cost, by dynamic
+//! programming (Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on GPUs Through
+//! Compressed Wide BVHs", HPG 2017, §3.1).
+//!
+//! The greedy collapse (`collapse.rs`) opens the largest child until a node has eight; it keeps
+//! the binary build's leaves as they are. Here every way of cutting the binary tree into wide
+//! nodes and leaves is priced, and the cheapest taken. For a binary node `n` of half area `A(n)`
+//! over `p(n)` triangles, let `C(n, i)` be the least cost of `n`'s subtree when it may take up
+//! to `i` slots of its wide parent:
+//!
+//! ```text
+//! C(n, 1)     = min(C_leaf(n), C_node(n))
+//! C(n, i)     = min(C(n, i − 1), D(n, i))                    for i = 2..8
+//! C_leaf(n)   = A(n) · c_record · ⌈p(n)/u⌉    if p(n) ≤ the leaf limit, else ∞
+//! C_node(n)   = A(n) · c_node + D(n, 8)
+//! D(n, j)     = min over 0 < k < j of C(left, k) + C(right, j − k)
+//! ```
+//!
+//! `C_leaf` makes one leaf of the whole subtree (records of `u` triangles, as the binned build
+//! prices them), `C_node` a wide node whose children are the subtree cut into up to eight
+//! parts, and `D` shares `j` slots between the two children. A binary leaf is one slot whatever
+//! `i`. The table is filled children first (the binary tree is depth first, so in reverse
+//! order), eight costs and the choices that gave them per node; the wide tree is then read off
+//! from the root. Ylitie et al. build the binary tree down to one triangle a leaf so that the
+//! choice of leaves is the collapse's too: [`BuildSettings::collapse`](super::BuildSettings)
+//! does the same.
+
+use glam::Vec3;
+
+use super::{BinaryBvh, records, unit_shift};
+use crate::bvh::bounds::Bounds;
+use crate::bvh::leaf::Leaves;
+use crate::bvh::node::{WIDTH, WideBvh, WideNode, encode_leaf};
+
+/// The costs the collapse weighs: a wide node's test and a leaf record's, and the largest leaf.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Costs {
+    pub node: f32,
+    pub record: f32,
+    pub max_leaf: usize,
+}
+
+/// One binary node's row of the table.
+#[derive(Clone, Copy, Debug)]
+struct Row {
+    /// `C(n, i)` for `i = 1..=8` at `cost[i − 1]`.
+    cost: [f32; WIDTH],
+    /// `split[j]`: the `k` slots of the left child that give `D(n, j)`, `j = 2..=8`.
+    split: [u8; WIDTH + 1],
+    /// Bit `i` set where `C(n, i) = C(n, i − 1)`: fewer slots are as cheap.
+    fewer: u16,
+    /// `C(n, 1)` is a leaf of the whole subtree.
+    leaf: bool,
+    /// The subtree's triangles: `order[first..first + count]`.
+    first: u32,
+    count: u32,
+}
+
+/// Collapses `binary` (built over `prim_ids`' triangles) into a wide BVH of least cost.
+///
+/// `triangle(i)` gives the vertices of build primitive `i`, and `prim_ids[i]` its caller's index.
+pub(crate) fn collapse_optimal(
+    binary: &BinaryBvh,
+    costs: Costs,
+    triangle: impl Fn(u32) -> [Vec3; 3],
+    prim_ids: impl Fn(u32) -> u32,
+) -> WideBvh {
+    let mut wide = WideBvh {
+        nodes: Vec::with_capacity(binary.nodes.len() / 8 + 1),
+        leaves: Leaves::with_capacity(binary.order.len()),
+        root: Bounds::EMPTY,
+    };
+    wide.nodes.push(WideNode::UNUSED);
+    if binary.nodes.is_empty() {
+        return wide;
+    }
+    let table = table(binary, costs);
+    let reader = Reader { binary, table: &table, triangle: &triangle, prim_ids: &prim_ids };
+    if binary.nodes[0].is_leaf() || table[0].leaf {
+        // One leaf: a root with one child.
+        let child = reader.emit_leaf(0, &mut wide);
+        wide.nodes[0].children[0] = child;
+        wide.nodes[0].set_bounds(0, binary.nodes[0].bounds);
+    } else {
+        reader.emit_node(0, 0, &mut wide);
+    }
+    wide.root = wide.root_bounds();
+    wide
+}
+
+/// The table of every node's costs and choices, children before parents.
+fn table(binary: &BinaryBvh, costs: Costs) -> Vec<Row> {
+    let nodes = &binary.nodes;
+    let unit = unit_shift(costs.max_leaf);
+    let empty = Row {
+        cost: [0.0; WIDTH],
+        split: [0; WIDTH + 1],
+        fewer: 0,
+        leaf: false,
+        first: 0,
+        count: 0,
+    };
+    let mut table = vec![empty; nodes.len()];
+    for n in (0..nodes.len()).rev() {
+        let node = &nodes[n];
+        let area = node.bounds.half_area();
+        let leaf_cost = |count: u32| {
+            if count as usize <= costs.max_leaf {
+                area * costs.record * records(count, unit)
+            } else {
+                f32::INFINITY
+            }
+        };
+        if node.is_leaf() {
+            let cost = leaf_cost(node.count);
+            table[n] = Row {
+                cost: [cost; WIDTH],
+                leaf: true,
+                first: node.first_or_right,
+                count: node.count,
+                ..empty
+            };
+            continue;
+        }
+        let (left, right) = (&table[n + 1], &table[node.first_or_right as usize]);
+        let mut row = Row { first: left.first, count: left.count + right.count, ..empty };
+        // D(n, j) for j = 2..=8.
+        let mut distribute = [f32::INFINITY; WIDTH + 1];
+        for (j, (least, split)) in distribute.iter_mut().zip(&mut row.split).enumerate().skip(2) {
+            for k in 1..j {
+                let cost = left.cost[k - 1] + right.cost[j - k - 1];
+                if cost < *least {
+                    (*least, *split) = (cost, k as u8);
+                }
+            }
+        }
+        let as_leaf = leaf_cost(row.count);
+        let as_node = area * costs.node + distribute[WIDTH];
+        row.leaf = as_leaf <= as_node;
+        row.cost[0] = as_leaf.min(as_node);
+        for (i, &shared) in distribute.iter().enumerate().skip(2) {
+            if shared < row.cost[i - 2] {
+                row.cost[i - 1] = shared;
+            } else {
+                row.cost[i - 1] = row.cost[i - 2];
+                row.fewer |= 1 << i;
+            }
+        }
+        table[n] = row;
+    }
+    table
+}
+
+/// Reads the wide tree off the table.
+struct Reader<'a, T, I> {
+    binary: &'a BinaryBvh,
+    table: &'a [Row],
+    triangle: &'a T,
+    prim_ids: &'a I,
+}
+
+impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Reader<'_, T, I> {
+    /// The binary nodes that take the slots of `n`'s subtree when it may take up to `i`.
+    fn slots(&self, n: usize, i: usize, out: &mut Vec<usize>) {
+        if i == 1 || self.binary.nodes[n].is_leaf() {
+            out.push(n);
+        } else if self.table[n].fewer & (1 << i) != 0 {
+            self.slots(n, i - 1, out);
+        } else {
+            self.distribute(n, i, out);
+        }
+    }
+
+    /// The binary nodes that take `j` slots shared between `n`'s children.
+    fn distribute(&self, n: usize, j: usize, out: &mut Vec<usize>) {
+        let k = self.table[n].split[j] as usize;
+        self.slots(n + 1, k, out);
+        self.slots(self.binary.nodes[n].first_or_right as usize, j - k, out);
+    }
+
+    /// Fills wide node `slot` from binary interior node `node`, whose cheapest form is a node.
+    fn emit_node(&self, node: usize, slot: usize, wide: &mut WideBvh) {
+        let nodes = &self.binary.nodes;
+        let mut children = Vec::with_capacity(WIDTH);
+        self.distribute(node, WIDTH, &mut children);
+        debug_assert!(children.len() <= WIDTH);
+        // Keep the depth-first order of the binary tree among siblings.
+        children.sort_unstable();
+        for (k, &child) in children.iter().enumerate() {
+            let reference = if self.table[child].leaf {
+                self.emit_leaf(child, wide)
+            } else {
+                let index = wide.nodes.len();
+                wide.nodes.push(WideNode::UNUSED);
+                self.emit_node(child, index, wide);
+                index as u32
+            };
+            wide.nodes[slot].children[k] = reference;
+            wide.nodes[slot].set_bounds(k, nodes[child].bounds);
+        }
+    }
+
+    /// Writes the triangles of binary node `node`'s subtree as one leaf; returns its reference.
+    fn emit_leaf(&self, node: usize, wide: &mut WideBvh) -> u32 {
+        let Row { first, count, .. } = self.table[node];
+        let prims = &self.binary.order[first as usize..(first + count) as usize];
+        let triangles: Vec<(u32, [Vec3; 3])> =
+            prims.iter().map(|&prim| ((self.prim_ids)(prim), (self.triangle)(prim))).collect();
+        encode_leaf(wide.leaves.push_leaf(&triangles))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::bvh::build::{BinaryNode, BuildSettings, build_triangles, collapse};
+    use crate::bvh::node::{Child, decode};
+
+    /// A small random generator (no dependency).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn vec(&mut self) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next())
+        }
+    }
+
+    fn soup(count: usize, seed: u64) -> Vec<[Vec3; 3]> {
+        let mut rng = Lcg(seed);
+        (0..count)
+            .map(|_| {
+                let p = rng.vec() * 10.0;
+                let size = 0.05 + rng.next() * rng.next() * 3.0;
+                [p, p + rng.vec() * size, p + rng.vec() * size]
+            })
+            .collect()
+    }
+
+    /// The surface-area cost of a wide tree, priced as the collapse prices it: every wide node's
+    /// half area times `c_node`, every leaf's half area times `c_record` per record unit.
+    fn wide_cost(wide: &WideBvh, costs: Costs) -> f64 {
+        let unit = unit_shift(costs.max_leaf);
+        fn node(wide: &WideBvh, index: u32, area: f32, costs: Costs, unit: u32) -> f64 {
+            let n = &wide.nodes[index as usize];
+            let mut cost = area as f64 * costs.node as f64;
+            for k in 0..WIDTH {
+                let a = n.bounds(k).half_area();
+                match decode(n.children[k]) {
+                    Child::Empty => {}
+                    Child::Node(child) => cost += node(wide, child, a, costs, unit),
+                    Child::Leaf(offset) => {
+                        let count = wide.leaves.leaf_triangles(offset).count() as u32;
+                        cost += a as f64 * costs.record as f64 * records(count, unit) as f64;
+                    }
+                }
+            }
+            cost
+        }
+        node(wide, 0, wide.root.half_area(), costs, unit)
+    }
+
+    /// The least cost of `n`'s subtree as one child of a wide node, by listing every cut of it
+    /// into at most eight parts: the definition in the module documentation, without its
+    /// table.
+    fn least_by_listing(nodes: &[BinaryNode], n: usize, costs: Costs) -> f64 {
+        let unit = unit_shift(costs.max_leaf);
+        let count = |n: usize| -> u32 {
+            fn c(nodes: &[BinaryNode], n: usize) -> u32 {
+                if nodes[n].is_leaf() {
+                    nodes[n].count
+                } else {
+                    c(nodes, n + 1) + c(nodes, nodes[n].first_or_right as usize)
+                }
+            }
+            c(nodes, n)
+        };
+        let area = nodes[n].bounds.half_area() as f64;
+        let leaf = if count(n) as usize <= costs.max_leaf {
+            area * costs.record as f64 * records(count(n), unit) as f64
+        } else {
+            f64::INFINITY
+        };
+        if nodes[n].is_leaf() {
+            return leaf;
+        }
+        // Every cut of a subtree into parts: itself, or a cut of each child.
+        fn cuts(nodes: &[BinaryNode], n: usize) -> Vec<Vec<usize>> {
+            let mut all = vec![vec![n]];
+            if !nodes[n].is_leaf() {
+                for a in cuts(nodes, n + 1) {
+                    for b in cuts(nodes, nodes[n].first_or_right as usize) {
+                        if a.len() + b.len() <= WIDTH {
+                            all.push([a.clone(), b].concat());
+                        }
+                    }
+                }
+            }
+            all
+        }
+        let mut best_children = f64::INFINITY;
+        for a in cuts(nodes, n + 1) {
+            for b in cuts(nodes, nodes[n].first_or_right as usize) {
+                if a.len() + b.len() <= WIDTH {
+                    let parts: f64 =
+                        a.iter().chain(&b).map(|&m| least_by_listing(nodes, m, costs)).sum();
+                    best_children = best_children.min(parts);
+                }
+            }
+        }
+        leaf.min(area * costs.node as f64 + best_children)
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-5 * a.abs().max(b.abs())
+    }
+
+    #[test]
+    fn the_table_holds_the_least_cost_of_every_cut() {
+        for seed in 0..12u64 {
+            let triangles = soup(10 + seed as usize * 2, seed);
+            let max_leaf = [2, 4, 8][seed as usize % 3];
+            let costs =
+                Costs { node: [1.0, 0.3, 2.5][seed as usize / 3 % 3], record: 1.0, max_leaf };
+            let settings =
+                BuildSettings { max_leaf_size: 1, flat_limit: 0, ..BuildSettings::MEDIUM };
+            let binary = build_triangles(&triangles, &settings);
+            let table = table(&binary, costs);
+            let listed = least_by_listing(&binary.nodes, 0, costs);
+            assert!(
+                close(table[0].cost[0] as f64, listed),
+                "seed {seed}: {} against {listed}",
+                table[0].cost[0]
+            );
+            // And the tree read off the table costs what the table says (a root that is one
+            // leaf is priced as a node over it, as `wide_cost` sees it).
+            let wide = collapse_optimal(&binary, costs, |i| triangles[i as usize], |i| i);
+            if !table[0].leaf {
+                assert!(close(wide_cost(&wide, costs), listed), "seed {seed}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_collapse_costs_no_more_than_the_greedy_one() {
+        for (seed, max_leaf) in [(1u64, 8usize), (2, 4), (3, 8)] {
+            let triangles = soup(4000, seed);
+            let settings =
+                BuildSettings { max_leaf_size: max_leaf, flat_limit: 0, ..BuildSettings::MEDIUM };
+            let binary = build_triangles(&triangles, &settings);
+            let costs = Costs { node: 1.0, record: 1.0, max_leaf };
+            let greedy = wide_cost(&collapse(&binary, |i| triangles[i as usize], |i| i), costs);
+            let optimal = wide_cost(
+                &collapse_optimal(&binary, costs, |i| triangles[i as usize], |i| i),
+                costs,
+            );
+            assert!(optimal <= greedy * (1.0 + 1e-6), "seed {seed}: {optimal} against {greedy}");
+            // Over finer binary leaves it has more to choose from.
+            let fine = build_triangles(&triangles, &BuildSettings { max_leaf_size: 1, ..settings });
+            let finer =
+                wide_cost(&collapse_optimal(&fine, costs, |i| triangles[i as usize], |i| i), costs);
+            assert!(finer < greedy, "seed {seed}: {finer} against {greedy}");
+        }
+    }
+}
