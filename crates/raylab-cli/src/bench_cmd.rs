@@ -61,9 +61,9 @@ pub struct BenchArgs {
     #[arg(long, value_name = "PRESET", default_value = "auto")]
     build: String,
 
-    /// How the binary tree becomes the 8-wide one: greedy (open the largest child) or optimal
-    /// (least SAH cost, over binary leaves of up to 4) [default: the build preset's; high is
-    /// optimal].
+    /// How the binary tree becomes the 8-wide one: greedy (open the largest child), optimal
+    /// (least SAH cost, over binary leaves of up to 4) or optimal:N (over binary leaves of up to
+    /// N) [default: the build preset's; high is optimal].
     #[arg(long, value_name = "HOW")]
     collapse: Option<String>,
 
@@ -139,10 +139,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         settings.flat_limit = limit;
     }
     if let Some(collapse) = &args.collapse {
-        settings.collapse = match collapse.as_str() {
-            "greedy" => Collapse::Greedy,
-            "optimal" => Collapse::Optimal { binary_leaf_size: 4 },
-            other => bail!("unknown --collapse '{other}': use greedy or optimal"),
+        let optimal = |binary_leaf_size| Collapse::Optimal { binary_leaf_size };
+        settings.collapse = match collapse.split_once(':') {
+            None if collapse == "greedy" => Collapse::Greedy,
+            None if collapse == "optimal" => optimal(4),
+            Some(("optimal", n)) if matches!(n.parse::<usize>(), Ok(1..=64)) => {
+                optimal(n.parse().expect("checked"))
+            }
+            _ => bail!(
+                "unknown --collapse '{collapse}': use greedy, optimal or optimal:N (N = 1 to 64)"
+            ),
         };
     }
 

@@ -347,9 +347,11 @@ fn bench_generates_traces_and_reports() {
         raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"]);
     assert!(text(&out.stdout).contains("primary.hits: 768 of 768 agree"), "{}", text(&out.stdout));
     // Either collapse gives the same answers; a third is refused by name.
-    for (collapse, says) in
-        [("greedy", "greedy collapse"), ("optimal", "optimal over binary leaves of up to 4")]
-    {
+    for (collapse, says) in [
+        ("greedy", "greedy collapse"),
+        ("optimal", "optimal over binary leaves of up to 4"),
+        ("optimal:2", "optimal over binary leaves of up to 2"),
+    ] {
         let args = ["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"];
         let out =
             raylab(dir.path(), &[&args[..], &["--collapse", collapse, "--build", "high"]].concat());
@@ -360,9 +362,12 @@ fn bench_generates_traces_and_reports() {
             "{stdout}"
         );
     }
-    let out = raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--collapse", "best"]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(text(&out.stderr).contains("unknown --collapse 'best'"), "{}", text(&out.stderr));
+    for bad in ["best", "optimal:0", "optimal:x"] {
+        let out = raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--collapse", bad]);
+        assert_eq!(out.status.code(), Some(1));
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains(&format!("unknown --collapse '{bad}'")), "{stderr}");
+    }
     // Embree's figures beside raylab's, from its summary.json; another mesh's is refused.
     let summary = |triangles: usize| {
         format!(
