@@ -3,6 +3,7 @@
 use glam::Vec3;
 #[cfg(feature = "io")]
 use image::RgbImage;
+use rayon::prelude::*;
 
 use super::SampleSettings;
 use super::passes::{Pass, add_pass};
@@ -10,6 +11,9 @@ use crate::camera::Camera;
 use crate::film::{Film, FilmError};
 use crate::integrator::Integrator;
 use crate::region::Region;
+
+/// Pixels per task when sums are cleared.
+const CLEAR_CHUNK: usize = 16 * 1024;
 
 /// Samples added up pass by pass: a picture that refines while the camera stands still.
 #[derive(Clone, Debug)]
@@ -163,9 +167,14 @@ impl Accumulator {
 
     /// Forgets every sample (the camera moved).
     pub fn clear(&mut self) {
-        self.sum.pixels_mut().fill(Vec3::ZERO);
+        // On the current pool's threads: a window's sums are megabytes, and `raylab view`
+        // clears them for every moving frame.
+        let clear = |pixels: &mut [Vec3]| {
+            pixels.par_chunks_mut(CLEAR_CHUNK).for_each(|chunk| chunk.fill(Vec3::ZERO))
+        };
+        clear(self.sum.pixels_mut());
         for layer in &mut self.layers {
-            layer.pixels_mut().fill(Vec3::ZERO);
+            clear(layer.pixels_mut());
         }
         self.discarded = 0;
         self.samples = 0;
