@@ -139,15 +139,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         settings.flat_limit = limit;
     }
     if let Some(collapse) = &args.collapse {
-        let optimal = |binary_leaf_size| Collapse::Optimal { binary_leaf_size };
+        // Binary leaves no larger than the wide tree's.
+        let largest = settings.max_leaf_size;
+        let optimal = |binary_leaf_size: usize| Collapse::Optimal {
+            binary_leaf_size: binary_leaf_size.min(largest),
+        };
+        let size = |n: &str| n.parse::<usize>().ok().filter(|n| (1..=largest).contains(n));
         settings.collapse = match collapse.split_once(':') {
             None if collapse == "greedy" => Collapse::Greedy,
             None if collapse == "optimal" => optimal(4),
-            Some(("optimal", n)) if matches!(n.parse::<usize>(), Ok(1..=64)) => {
-                optimal(n.parse().expect("checked"))
-            }
+            Some(("optimal", n)) if size(n).is_some() => optimal(size(n).expect("checked")),
             _ => bail!(
-                "unknown --collapse '{collapse}': use greedy, optimal or optimal:N (N = 1 to 64)"
+                "unknown --collapse '{collapse}': use greedy, optimal or optimal:N, N from 1 to \
+                 {largest} (the preset's largest leaf)"
             ),
         };
     }

@@ -362,7 +362,7 @@ fn bench_generates_traces_and_reports() {
             "{stdout}"
         );
     }
-    for bad in ["best", "optimal:0", "optimal:x"] {
+    for bad in ["best", "optimal:0", "optimal:x", "optimal:9"] {
         let out = raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--collapse", bad]);
         assert_eq!(out.status.code(), Some(1));
         let stderr = text(&out.stderr);

@@ -174,16 +174,21 @@ impl Bvh {
         Ok(Bvh::build_checked(triangles, settings))
     }
 
-    /// About how many bytes building over `triangles` triangles takes at its peak (the
-    /// primitives' boxes and build records, the binary tree and the wide tree with its copies of
-    /// the triangles): for a caller to check against the memory it has before it builds.
-    pub fn build_bytes_estimate(triangles: usize) -> u64 {
-        // At its peak the build holds about 90 bytes per triangle with the greedy collapse: the
-        // build records (32) with the binary tree (about 25), then the wide tree (about 56, see
-        // `BvhStats::bytes`) while the binary tree is collapsed. The collapse of least cost over
-        // binary leaves of one triangle holds up to two binary nodes a triangle (64 bytes) and
-        // their table rows (104) beside the wide tree: about 230. 256 leaves a margin.
-        triangles as u64 * 256
+    /// About how many bytes building over `triangles` triangles with `settings` takes at its
+    /// peak (the primitives' boxes and build records, the binary tree and the wide tree with its
+    /// copies of the triangles): for a caller to check against the memory it has before it
+    /// builds.
+    pub fn build_bytes_estimate(triangles: usize, settings: &BuildSettings) -> u64 {
+        let per_triangle = match settings.clamped().collapse {
+            // About 90 bytes per triangle at the peak: the build records (32) with the binary
+            // tree (about 25), then the wide tree (about 56, see `BvhStats::bytes`) while the
+            // binary tree is collapsed. 160 leaves a margin.
+            Collapse::Greedy => 160,
+            // Up to 2/b binary nodes a triangle for binary leaves of up to b (32 bytes each) and
+            // as many table rows (52 bytes), beside the wide tree: about 230 at b = 1.
+            Collapse::Optimal { binary_leaf_size } => 100 + 2 * 84 / binary_leaf_size as u64,
+        };
+        triangles as u64 * per_triangle
     }
 
     fn build_checked(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {

@@ -419,6 +419,56 @@ fn the_tree_is_the_same_for_every_thread_count() {
     }
 }
 
+/// The collapse of least cost keeps its limits where costs overflow: boxes whose half area is
+/// infinite (coordinates near `f32::MAX`) or NaN (an infinite extent beside a zero one), many
+/// alike, with a node cost of zero too. Every leaf fits the leaf limit, every triangle is in one
+/// leaf, and rays get the brute-force answers.
+#[test]
+fn the_collapse_of_least_cost_keeps_its_limits_on_huge_boxes() {
+    use crate::accel::{Accelerator, BruteForce};
+    let huge = [Vec3::splat(-3e38), Vec3::new(3e38, -3e38, 0.0), Vec3::splat(3e38)];
+    let flat = [Vec3::new(-3e38, 0.0, 0.0), Vec3::new(3e38, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+    let mut rng = Lcg(5);
+    let mut triangles = vec![huge; 100];
+    triangles.extend(vec![flat; 100]);
+    triangles.extend((0..200).map(|_| {
+        let p = rng.vec() * 10.0;
+        [p, p + rng.vec(), p + rng.vec()]
+    }));
+    for (traversal_cost, binary_leaf_size) in [(1.0, 4), (0.0, 1), (0.0, 4)] {
+        let collapse = Collapse::Optimal { binary_leaf_size };
+        let settings =
+            BuildSettings { traversal_cost, collapse, flat_limit: 0, ..BuildSettings::HIGH };
+        let bvh = Bvh::build(&triangles, &settings);
+        let mut seen = vec![0u32; triangles.len()];
+        let mut stack = vec![0u32];
+        while let Some(index) = stack.pop() {
+            let node = &bvh.wide.nodes[index as usize];
+            for k in 0..8 {
+                match decode(node.children[k]) {
+                    Child::Empty => {}
+                    Child::Node(child) => stack.push(child),
+                    Child::Leaf(offset) => {
+                        let leaf: Vec<_> = bvh.wide.leaves.leaf_triangles(offset).collect();
+                        assert!(leaf.len() <= settings.max_leaf_size, "{}", leaf.len());
+                        for (id, _) in leaf {
+                            seen[id as usize] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s == 1), "{traversal_cost} {binary_leaf_size}");
+        let brute = BruteForce::new(&triangles);
+        for i in 0..200 {
+            let from = rng.vec() * 20.0 - 5.0;
+            let ray = Ray::new(from, rng.vec() * 2.0 - Vec3::ONE);
+            assert_eq!(bvh.closest_hit(&ray), brute.closest_hit(&ray), "ray {i}");
+            assert_eq!(bvh.occluded(&ray), brute.occluded(&ray), "ray {i}");
+        }
+    }
+}
+
 #[test]
 fn wide_trees_cover_every_triangle_once() {
     let mut rng = Lcg(3);
@@ -684,10 +734,11 @@ fn tree_rays_in_lanes_give_the_single_ray_answers() {
             triangles.push(triangles[k]);
         }
         let max_leaf_size = [1, 4, 8, 16, 32][case / 5 % 5];
-        // Every other case the collapse of least cost, over binary leaves of 1 to 4.
-        let collapse = match case % 2 {
+        // Every other pair of cases (grid-snapped and not) the collapse of least cost, over
+        // binary leaves of 1 to 4.
+        let collapse = match case / 2 % 2 {
             0 => Collapse::Greedy,
-            _ => Collapse::Optimal { binary_leaf_size: 1 + case / 2 % 4 },
+            _ => Collapse::Optimal { binary_leaf_size: 1 + case / 4 % 4 },
         };
         let settings =
             BuildSettings { flat_limit: 0, max_leaf_size, collapse, ..BuildSettings::MEDIUM };
@@ -788,8 +839,18 @@ fn more_triangles_than_a_bvh_holds_are_an_error_not_a_panic() {
             [p, p + Vec3::X, p + Vec3::Y]
         })
         .collect();
-    let bvh = Bvh::new(&triangles);
-    assert!(Bvh::build_bytes_estimate(5000) >= 2 * bvh.stats().bytes() as u64);
+    for settings in [BuildSettings::for_triangles(5000), BuildSettings::HIGH] {
+        let bvh = Bvh::build(&triangles, &settings);
+        assert!(Bvh::build_bytes_estimate(5000, &settings) >= 2 * bvh.stats().bytes() as u64);
+    }
+    // Finer binary leaves take more.
+    let optimal = |binary_leaf_size| BuildSettings {
+        collapse: Collapse::Optimal { binary_leaf_size },
+        ..BuildSettings::HIGH
+    };
+    assert!(
+        Bvh::build_bytes_estimate(5000, &optimal(1)) > Bvh::build_bytes_estimate(5000, &optimal(4))
+    );
 }
 
 /// Mitsuba's box shares its corners as its shapes do: each of its six rectangles (five walls

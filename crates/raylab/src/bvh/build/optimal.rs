@@ -16,14 +16,23 @@
 //! D(n, j)     = min over 0 < k < j of C(left, k) + C(right, j − k)
 //! ```
 //!
-//! `C_leaf` makes one leaf of the whole subtree (records of `u` triangles, as the binned build
-//! prices them), `C_node` a wide node whose children are the subtree cut into up to eight
-//! parts, and `D` shares `j` slots between the two children. A binary leaf is one slot whatever
-//! `i`. The table is filled children first (the binary tree is depth first, so in reverse
-//! order), eight costs and the choices that gave them per node; the wide tree is then read off
-//! from the root. Ylitie et al. build the binary tree down to one triangle a leaf so that the
-//! choice of leaves is the collapse's too: [`BuildSettings::collapse`](super::BuildSettings)
-//! does the same.
+//! `C_leaf` makes one leaf of the whole subtree (records of `u` triangles: eight for leaves of
+//! up to eight, as the binned build prices a tree of such leaves), `C_node` a wide node whose
+//! children are the subtree cut into up to eight parts, and `D` shares `j` slots between the
+//! two children. A binary leaf is one slot whatever `i`. The table is filled children first
+//! (the binary tree is depth first, so in reverse order), eight costs and the choices that gave
+//! them per node; the wide tree is then read off from the root.
+//!
+//! Ylitie et al. build the binary tree down to one triangle a leaf, so that the choice of leaves
+//! is the collapse's alone; [`Collapse::Optimal`](super::Collapse) names the largest binary
+//! leaf, and `high` uses four, which keeps nearly all of the gain at a fraction of the build
+//! time (BENCHMARKS.md, "The collapse of least cost").
+//!
+//! Costs stay numbers in any scene: a box whose half area is not finite (coordinates near
+//! `f32::MAX`, or an infinite extent beside a zero one, whose product is NaN) is priced at
+//! `f32::MAX`, sums may reach infinity but never NaN, a subtree becomes a leaf only if it fits
+//! one, and every split gives each child at least one slot, so that a node never has more than
+//! eight children whatever the costs.
 
 use glam::Vec3;
 
@@ -104,12 +113,11 @@ fn table(binary: &BinaryBvh, costs: Costs) -> Vec<Row> {
     for n in (0..nodes.len()).rev() {
         let node = &nodes[n];
         let area = node.bounds.half_area();
+        // Not finite (or NaN): the largest price, so that sums never hold a NaN.
+        let area = if area.is_finite() { area } else { f32::MAX };
+        let fits = |count: u32| count as usize <= costs.max_leaf;
         let leaf_cost = |count: u32| {
-            if count as usize <= costs.max_leaf {
-                area * costs.record * records(count, unit)
-            } else {
-                f32::INFINITY
-            }
+            if fits(count) { area * costs.record * records(count, unit) } else { f32::INFINITY }
         };
         if node.is_leaf() {
             let cost = leaf_cost(node.count);
@@ -123,7 +131,14 @@ fn table(binary: &BinaryBvh, costs: Costs) -> Vec<Row> {
             continue;
         }
         let (left, right) = (&table[n + 1], &table[node.first_or_right as usize]);
-        let mut row = Row { first: left.first, count: left.count + right.count, ..empty };
+        // Every split starts at one slot for the left child: a valid cut even if no cost is
+        // finite.
+        let mut row = Row {
+            first: left.first,
+            count: left.count + right.count,
+            split: [1; WIDTH + 1],
+            ..empty
+        };
         // D(n, j) for j = 2..=8.
         let mut distribute = [f32::INFINITY; WIDTH + 1];
         for (j, (least, split)) in distribute.iter_mut().zip(&mut row.split).enumerate().skip(2) {
@@ -136,7 +151,7 @@ fn table(binary: &BinaryBvh, costs: Costs) -> Vec<Row> {
         }
         let as_leaf = leaf_cost(row.count);
         let as_node = area * costs.node + distribute[WIDTH];
-        row.leaf = as_leaf <= as_node;
+        row.leaf = fits(row.count) && as_leaf <= as_node;
         row.cost[0] = as_leaf.min(as_node);
         for (i, &shared) in distribute.iter().enumerate().skip(2) {
             if shared < row.cost[i - 2] {

@@ -1,6 +1,6 @@
 //! The 8-wide tree's layout: nodes of eight boxes and eight child references, tested by one
 //! kernel call each (`node/kernel.rs`); the build makes them by collapsing a binary tree
-//! (`build/collapse.rs`).
+//! (`build/collapse.rs`, greedy, or `build/optimal.rs`, at the least SAH cost).
 //!
 //! # Node layout
 //! A [`WideNode`] is 224 bytes, 32-byte aligned: six rows of eight floats, the boxes' planes stored

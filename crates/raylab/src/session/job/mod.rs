@@ -12,7 +12,7 @@ pub use frames::frame_path;
 
 use super::checkpoint::{Checkpoints, channels_of, checkpoint_path, resume_from};
 use super::{RenderIdentity, ResolvedSettings, SessionError};
-use crate::bvh::{Bvh, SceneBvh};
+use crate::bvh::{BuildSettings, Bvh, SceneBvh};
 use crate::camera::Camera;
 use crate::film::{Display, Film, ToneMap, format_bytes};
 use crate::image_io::{self, ImageFormat, ImageIoError};
@@ -571,7 +571,8 @@ fn check_bvh_memory(
     triangles: usize,
     available: Option<u64>,
 ) -> Result<(), SessionError> {
-    let bytes = Bvh::build_bytes_estimate(triangles);
+    // What `Bvh::new` builds.
+    let bytes = Bvh::build_bytes_estimate(triangles, &BuildSettings::for_triangles(triangles));
     match available {
         Some(available) if bytes > available => Err(SessionError::OutOfMemory(format!(
             "{name}: {triangles} triangles need about {} of memory for the BVH, but only {} is \
