@@ -7,15 +7,17 @@ use super::node::kernel::{BoxRay, NodeKernel, NodeRay};
 use super::node::{Child, WideNode, decode};
 use super::*;
 
-/// A small deterministic generator (PCG-style LCG) for test data.
-struct Lcg(u64);
+/// A small deterministic generator (PCG-style LCG) for test data, shared by the BVH's tests.
+pub(in crate::bvh) struct Lcg(pub(in crate::bvh) u64);
 
 impl Lcg {
-    fn next(&mut self) -> f32 {
+    /// A number in `[0, 1)`.
+    pub(in crate::bvh) fn next(&mut self) -> f32 {
         self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32) / (1u64 << 24) as f32
     }
-    fn vec(&mut self) -> Vec3 {
+    /// A point in the unit cube.
+    pub(in crate::bvh) fn vec(&mut self) -> Vec3 {
         Vec3::new(self.next(), self.next(), self.next())
     }
 }

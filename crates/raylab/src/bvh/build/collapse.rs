@@ -89,8 +89,19 @@ impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Collapser<'_, T, I> {
         let leaf = self.binary.nodes[node];
         let first = leaf.first_or_right as usize;
         let prims = &self.binary.order[first..first + leaf.count as usize];
-        let triangles: Vec<(u32, [Vec3; 3])> =
-            prims.iter().map(|&prim| ((self.prim_ids)(prim), (self.triangle)(prim))).collect();
-        encode_leaf(wide.leaves.push_leaf(&triangles))
+        push_leaf(wide, prims, self.triangle, self.prim_ids)
     }
+}
+
+/// Writes build primitives `prims` (`triangle(i)` the vertices of primitive `i`, `prim_ids(i)`
+/// its caller's index) as one leaf's records; returns the leaf's reference.
+pub(super) fn push_leaf(
+    wide: &mut WideBvh,
+    prims: &[u32],
+    triangle: &impl Fn(u32) -> [Vec3; 3],
+    prim_ids: &impl Fn(u32) -> u32,
+) -> u32 {
+    let triangles: Vec<(u32, [Vec3; 3])> =
+        prims.iter().map(|&prim| (prim_ids(prim), triangle(prim))).collect();
+    encode_leaf(wide.leaves.push_leaf(&triangles))
 }

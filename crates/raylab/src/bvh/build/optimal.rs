@@ -36,10 +36,11 @@
 
 use glam::Vec3;
 
+use super::collapse::push_leaf;
 use super::{BinaryBvh, records, unit_shift};
 use crate::bvh::bounds::Bounds;
 use crate::bvh::leaf::Leaves;
-use crate::bvh::node::{WIDTH, WideBvh, WideNode, encode_leaf};
+use crate::bvh::node::{WIDTH, WideBvh, WideNode};
 
 /// The costs the collapse weighs: a wide node's test and a leaf record's, and the largest leaf.
 #[derive(Clone, Copy, Debug)]
@@ -219,9 +220,7 @@ impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Reader<'_, T, I> {
     fn emit_leaf(&self, node: usize, wide: &mut WideBvh) -> u32 {
         let Row { first, count, .. } = self.table[node];
         let prims = &self.binary.order[first as usize..(first + count) as usize];
-        let triangles: Vec<(u32, [Vec3; 3])> =
-            prims.iter().map(|&prim| ((self.prim_ids)(prim), (self.triangle)(prim))).collect();
-        encode_leaf(wide.leaves.push_leaf(&triangles))
+        push_leaf(wide, prims, self.triangle, self.prim_ids)
     }
 }
 
@@ -232,19 +231,7 @@ mod tests {
     use super::*;
     use crate::bvh::build::{BinaryNode, BuildSettings, build_triangles, collapse};
     use crate::bvh::node::{Child, decode};
-
-    /// A small random generator (no dependency).
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn next(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn vec(&mut self) -> Vec3 {
-            Vec3::new(self.next(), self.next(), self.next())
-        }
-    }
+    use crate::bvh::tests::Lcg;
 
     fn soup(count: usize, seed: u64) -> Vec<[Vec3; 3]> {
         let mut rng = Lcg(seed);

@@ -215,21 +215,9 @@ mod tests {
     use super::*;
     use crate::bvh::RayBoxTest;
     use crate::bvh::leaf::Leaves;
+    use crate::bvh::tests::Lcg;
     use crate::ray::Ray;
     use crate::triangle::WatertightRay;
-
-    /// A small deterministic generator.
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn next(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn vec(&mut self) -> Vec3 {
-            Vec3::new(self.next(), self.next(), self.next())
-        }
-    }
 
     fn bundle_of(rays: &[Ray]) -> Option<LineBundle> {
         LineBundle::of(&Frustum::of(rays.iter().map(RayBoxTest::new))?)
