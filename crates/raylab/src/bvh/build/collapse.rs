@@ -30,15 +30,7 @@ pub(crate) fn collapse(
         return wide;
     }
     let collapser = Collapser { binary, triangle: &triangle, prim_ids: &prim_ids };
-    if binary.nodes[0].is_leaf() {
-        // A single leaf: a root with one child.
-        let child = collapser.emit_leaf(0, &mut wide);
-        wide.nodes[0].children[0] = child;
-        wide.nodes[0].set_bounds(0, binary.nodes[0].bounds);
-    } else {
-        collapser.emit_node(0, 0, &mut wide);
-    }
-    wide.root = wide.root_bounds();
+    collapser.emit_root(&mut wide);
     wide
 }
 
@@ -48,9 +40,13 @@ struct Collapser<'a, T, I> {
     prim_ids: &'a I,
 }
 
-impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Collapser<'_, T, I> {
-    /// Fills wide node `slot` from binary interior node `node`.
-    fn emit_node(&self, node: usize, slot: usize, wide: &mut WideBvh) {
+impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Reading for Collapser<'_, T, I> {
+    fn binary(&self) -> &BinaryBvh {
+        self.binary
+    }
+
+    /// Opens the interior child of largest area until there are eight.
+    fn children(&self, node: usize) -> Vec<usize> {
         let nodes = &self.binary.nodes;
         let mut children = vec![node + 1, nodes[node].first_or_right as usize];
         while children.len() < WIDTH {
@@ -68,10 +64,59 @@ impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Collapser<'_, T, I> {
             children.push(opened + 1);
             children.push(nodes[opened].first_or_right as usize);
         }
+        children
+    }
+
+    fn is_leaf(&self, child: usize) -> bool {
+        self.binary.nodes[child].is_leaf()
+    }
+
+    /// Writes binary leaf `node`'s triangles as records.
+    fn emit_leaf(&self, node: usize, wide: &mut WideBvh) -> u32 {
+        let leaf = self.binary.nodes[node];
+        let first = leaf.first_or_right as usize;
+        let prims = &self.binary.order[first..first + leaf.count as usize];
+        push_leaf(wide, prims, self.triangle, self.prim_ids)
+    }
+}
+
+/// How a wide tree is read off a binary one (the greedy collapse and the one of least cost):
+/// which binary nodes become a wide node's children, and which of those are leaves.
+pub(super) trait Reading {
+    /// The binary tree read.
+    fn binary(&self) -> &BinaryBvh;
+
+    /// The binary nodes under interior node `node` that become its wide node's children (at
+    /// most eight).
+    fn children(&self, node: usize) -> Vec<usize>;
+
+    /// Whether binary node `child` becomes a leaf.
+    fn is_leaf(&self, child: usize) -> bool;
+
+    /// Writes binary node `child`'s triangles as one leaf; returns its reference.
+    fn emit_leaf(&self, child: usize, wide: &mut WideBvh) -> u32;
+
+    /// Fills the wide tree's root (node 0) from the binary root, and sets its bounds.
+    fn emit_root(&self, wide: &mut WideBvh) {
+        if self.is_leaf(0) {
+            // A single leaf: a root with one child.
+            let child = self.emit_leaf(0, wide);
+            wide.nodes[0].children[0] = child;
+            wide.nodes[0].set_bounds(0, self.binary().nodes[0].bounds);
+        } else {
+            self.emit_node(0, 0, wide);
+        }
+        wide.root = wide.root_bounds();
+    }
+
+    /// Fills wide node `slot` from binary interior node `node`, and the subtrees under it.
+    fn emit_node(&self, node: usize, slot: usize, wide: &mut WideBvh) {
+        let mut children = self.children(node);
+        debug_assert!(children.len() <= WIDTH);
         // Keep the depth-first order of the binary tree among siblings.
         children.sort_unstable();
         for (k, &child) in children.iter().enumerate() {
-            let reference = if nodes[child].is_leaf() {
+            let reference = if self.is_leaf(child) {
                 self.emit_leaf(child, wide)
             } else {
                 let index = wide.nodes.len();
@@ -80,16 +125,8 @@ impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Collapser<'_, T, I> {
                 index as u32
             };
             wide.nodes[slot].children[k] = reference;
-            wide.nodes[slot].set_bounds(k, nodes[child].bounds);
+            wide.nodes[slot].set_bounds(k, self.binary().nodes[child].bounds);
         }
-    }
-
-    /// Writes binary leaf `node`'s triangles as records; returns its reference.
-    fn emit_leaf(&self, node: usize, wide: &mut WideBvh) -> u32 {
-        let leaf = self.binary.nodes[node];
-        let first = leaf.first_or_right as usize;
-        let prims = &self.binary.order[first..first + leaf.count as usize];
-        push_leaf(wide, prims, self.triangle, self.prim_ids)
     }
 }
 

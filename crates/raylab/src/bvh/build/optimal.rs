@@ -36,7 +36,7 @@
 
 use glam::Vec3;
 
-use super::collapse::push_leaf;
+use super::collapse::{Reading, push_leaf};
 use super::{BinaryBvh, records, unit_shift};
 use crate::bvh::bounds::Bounds;
 use crate::bvh::leaf::Leaves;
@@ -86,15 +86,7 @@ pub(crate) fn collapse_optimal(
     }
     let table = table(binary, costs);
     let reader = Reader { binary, table: &table, triangle: &triangle, prim_ids: &prim_ids };
-    if binary.nodes[0].is_leaf() || table[0].leaf {
-        // One leaf: a root with one child.
-        let child = reader.emit_leaf(0, &mut wide);
-        wide.nodes[0].children[0] = child;
-        wide.nodes[0].set_bounds(0, binary.nodes[0].bounds);
-    } else {
-        reader.emit_node(0, 0, &mut wide);
-    }
-    wide.root = wide.root_bounds();
+    reader.emit_root(&mut wide);
     wide
 }
 
@@ -193,30 +185,26 @@ impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Reader<'_, T, I> {
         self.slots(n + 1, k, out);
         self.slots(self.binary.nodes[n].first_or_right as usize, j - k, out);
     }
+}
 
-    /// Fills wide node `slot` from binary interior node `node`, whose cheapest form is a node.
-    fn emit_node(&self, node: usize, slot: usize, wide: &mut WideBvh) {
-        let nodes = &self.binary.nodes;
-        let mut children = Vec::with_capacity(WIDTH);
-        self.distribute(node, WIDTH, &mut children);
-        debug_assert!(children.len() <= WIDTH);
-        // Keep the depth-first order of the binary tree among siblings.
-        children.sort_unstable();
-        for (k, &child) in children.iter().enumerate() {
-            let reference = if self.table[child].leaf {
-                self.emit_leaf(child, wide)
-            } else {
-                let index = wide.nodes.len();
-                wide.nodes.push(WideNode::UNUSED);
-                self.emit_node(child, index, wide);
-                index as u32
-            };
-            wide.nodes[slot].children[k] = reference;
-            wide.nodes[slot].set_bounds(k, nodes[child].bounds);
-        }
+impl<T: Fn(u32) -> [Vec3; 3], I: Fn(u32) -> u32> Reading for Reader<'_, T, I> {
+    fn binary(&self) -> &BinaryBvh {
+        self.binary
     }
 
-    /// Writes the triangles of binary node `node`'s subtree as one leaf; returns its reference.
+    /// The table's cut of `node` into up to eight slots.
+    fn children(&self, node: usize) -> Vec<usize> {
+        let mut children = Vec::with_capacity(WIDTH);
+        self.distribute(node, WIDTH, &mut children);
+        children
+    }
+
+    /// Binary leaves, and the subtrees whose cheapest form is one leaf.
+    fn is_leaf(&self, child: usize) -> bool {
+        self.table[child].leaf
+    }
+
+    /// Writes the triangles of binary node `node`'s subtree as one leaf.
     fn emit_leaf(&self, node: usize, wide: &mut WideBvh) -> u32 {
         let Row { first, count, .. } = self.table[node];
         let prims = &self.binary.order[first as usize..(first + count) as usize];
