@@ -22,6 +22,17 @@ impl Lcg {
     }
 }
 
+/// A xorshift64 stream of raw bits from `seed` (non-zero), for tests that want every bit
+/// pattern of a float (NaN payloads, subnormals, infinities).
+pub(in crate::bvh) fn xorshift(mut state: u64) -> impl FnMut() -> u64 {
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    }
+}
+
 /// Nodes with random boxes, including flat ones, boxes that share the ray's origin planes, and
 /// unused slots; rays with ±0 and tiny direction components.
 pub(in crate::bvh) fn hostile_cases() -> Vec<(WideNode, Ray, f32)> {

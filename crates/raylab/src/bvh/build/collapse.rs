@@ -20,18 +20,7 @@ pub(crate) fn collapse(
     triangle: impl Fn(u32) -> [Vec3; 3],
     prim_ids: impl Fn(u32) -> u32,
 ) -> WideBvh {
-    let mut wide = WideBvh {
-        nodes: Vec::with_capacity(binary.nodes.len() / 4 + 1),
-        leaves: Leaves::with_capacity(binary.order.len()),
-        root: Bounds::EMPTY,
-    };
-    wide.nodes.push(WideNode::UNUSED);
-    if binary.nodes.is_empty() {
-        return wide;
-    }
-    let collapser = Collapser { binary, triangle: &triangle, prim_ids: &prim_ids };
-    collapser.emit_root(&mut wide);
-    wide
+    Collapser { binary, triangle: &triangle, prim_ids: &prim_ids }.read()
 }
 
 struct Collapser<'a, T, I> {
@@ -96,17 +85,29 @@ pub(super) trait Reading {
     /// Writes binary node `child`'s triangles as one leaf; returns its reference.
     fn emit_leaf(&self, child: usize, wide: &mut WideBvh) -> u32;
 
-    /// Fills the wide tree's root (node 0) from the binary root, and sets its bounds.
-    fn emit_root(&self, wide: &mut WideBvh) {
+    /// The whole wide tree: a root (node 0) filled from the binary root, a root with one leaf
+    /// if that is a leaf, and an empty root for an empty tree.
+    fn read(&self) -> WideBvh {
+        let binary = self.binary();
+        let mut wide = WideBvh {
+            nodes: Vec::with_capacity(binary.nodes.len() / 4 + 1),
+            leaves: Leaves::with_capacity(binary.order.len()),
+            root: Bounds::EMPTY,
+        };
+        wide.nodes.push(WideNode::UNUSED);
+        if binary.nodes.is_empty() {
+            return wide;
+        }
         if self.is_leaf(0) {
             // A single leaf: a root with one child.
-            let child = self.emit_leaf(0, wide);
+            let child = self.emit_leaf(0, &mut wide);
             wide.nodes[0].children[0] = child;
-            wide.nodes[0].set_bounds(0, self.binary().nodes[0].bounds);
+            wide.nodes[0].set_bounds(0, binary.nodes[0].bounds);
         } else {
-            self.emit_node(0, 0, wide);
+            self.emit_node(0, 0, &mut wide);
         }
         wide.root = wide.root_bounds();
+        wide
     }
 
     /// Fills wide node `slot` from binary interior node `node`, and the subtrees under it.

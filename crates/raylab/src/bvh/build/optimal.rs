@@ -38,9 +38,7 @@ use glam::Vec3;
 
 use super::collapse::{Reading, push_leaf};
 use super::{BinaryBvh, records, unit_shift};
-use crate::bvh::bounds::Bounds;
-use crate::bvh::leaf::Leaves;
-use crate::bvh::node::{WIDTH, WideBvh, WideNode};
+use crate::bvh::node::{WIDTH, WideBvh};
 
 /// The costs the collapse weighs: a wide node's test and a leaf record's, and the largest leaf.
 #[derive(Clone, Copy, Debug)]
@@ -75,19 +73,8 @@ pub(crate) fn collapse_optimal(
     triangle: impl Fn(u32) -> [Vec3; 3],
     prim_ids: impl Fn(u32) -> u32,
 ) -> WideBvh {
-    let mut wide = WideBvh {
-        nodes: Vec::with_capacity(binary.nodes.len() / 8 + 1),
-        leaves: Leaves::with_capacity(binary.order.len()),
-        root: Bounds::EMPTY,
-    };
-    wide.nodes.push(WideNode::UNUSED);
-    if binary.nodes.is_empty() {
-        return wide;
-    }
     let table = table(binary, costs);
-    let reader = Reader { binary, table: &table, triangle: &triangle, prim_ids: &prim_ids };
-    reader.emit_root(&mut wide);
-    wide
+    Reader { binary, table: &table, triangle: &triangle, prim_ids: &prim_ids }.read()
 }
 
 /// The table of every node's costs and choices, children before parents.

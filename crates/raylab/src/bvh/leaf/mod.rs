@@ -410,13 +410,7 @@ mod tests {
     /// values with other bits (−0.0, NaN payloads), and leaves of 1 to 64 triangles.
     #[test]
     fn every_leaf_reads_back_exactly_within_the_record_limits() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = crate::bvh::tests::xorshift(0x2545_f491_4f6c_dd1du64);
         let mut leaves = Leaves::default();
         let mut expected = Vec::new();
         for case in 0..400u32 {

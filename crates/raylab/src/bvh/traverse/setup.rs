@@ -259,13 +259,7 @@ mod tests {
             eprintln!("skipped: this CPU has no AVX2");
             return;
         }
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = crate::bvh::tests::xorshift(0x2545_F491_4F6C_DD1Du64);
         let specials = [
             0.0,
             -0.0,
