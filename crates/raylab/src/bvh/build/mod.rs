@@ -468,6 +468,10 @@ impl Builder<'_> {
 
     /// Moves the primitives of bins `< split.bin` to the front; returns how many there are and
     /// the bounds of the two sides' centroids.
+    ///
+    /// Without branches on the side (Lomuto's scheme with an unconditional swap): which side a
+    /// primitive goes to is as unpredictable as a coin, and a mispredicted branch per primitive
+    /// cost more than the swap.
     fn partition(
         &self,
         refs: &mut [PrimRef],
@@ -476,17 +480,20 @@ impl Builder<'_> {
     ) -> (usize, Aabb, Aabb) {
         let binning = Binning::new(centroid_bounds, self.settings.bins);
         let (mut left, mut right) = (Aabb::EMPTY, Aabb::EMPTY);
-        let (mut lo, mut hi) = (0, refs.len());
-        while lo < hi {
-            let c = refs[lo].centroid();
-            if (binning.bins(c)[split.axis] as usize) < split.bin {
-                left = left.grow(c);
-                lo += 1;
-            } else {
-                right = right.grow(c);
-                hi -= 1;
-                refs.swap(lo, hi);
-            }
+        let mut lo = 0;
+        // Invariant: `refs[..lo]` go left, `refs[lo..i]` go right.
+        for i in 0..refs.len() {
+            let r = refs[i];
+            let c = r.centroid();
+            let goes_left = (binning.bins(c)[split.axis] as usize) < split.bin;
+            refs[i] = refs[lo];
+            refs[lo] = r;
+            lo += goes_left as usize;
+            let side = glam::BVec3A::splat(goes_left);
+            left.min = Vec3A::select(side, left.min.min(c), left.min);
+            left.max = Vec3A::select(side, left.max.max(c), left.max);
+            right.min = Vec3A::select(side, right.min, right.min.min(c));
+            right.max = Vec3A::select(side, right.max, right.max.max(c));
         }
         (lo, left, right)
     }
