@@ -8,8 +8,7 @@ use raylab::bvh::{BuildSettings, Bvh, Collapse, Isa};
 use raylab::{Accelerator, BruteForce, Ray};
 
 /// Every BVH variant over `triangles`: each preset's tree, small-scene leaves (one block), the
-/// collapse of least cost over the finest binary trees, spatial splits under both collapses
-/// (`high` makes them), and
+/// collapse of least cost over the finest binary trees, spatial splits under both collapses, and
 /// (up to 4,096 triangles) the flat list that small scenes answer single rays from.
 fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
     let mut all = Vec::new();
@@ -21,15 +20,14 @@ fn bvhs(triangles: &[[Vec3; 3]]) -> Vec<(String, Bvh)> {
         "small-optimal",
         BuildSettings { collapse: optimal(2), ..BuildSettings::for_triangles(0) },
     );
-    // Spatial splits with the whole budget they may have, under the greedy collapse.
-    let spatial_greedy = (
-        "spatial-greedy",
-        BuildSettings { spatial_splits: 1.0, ..BuildSettings::for_triangles(0) },
-    );
+    // Spatial splits with the whole budget they may have.
+    let spatial = |settings| BuildSettings { spatial_splits: 1.0, ..settings };
+    let spatial_optimal = ("spatial", spatial(BuildSettings::HIGH));
+    let spatial_greedy = ("spatial-greedy", spatial(BuildSettings::for_triangles(0)));
     let tree = |settings: BuildSettings| BuildSettings { flat_limit: 0, ..settings };
     let mut variants: Vec<(&str, BuildSettings)> = BuildSettings::PRESETS
         .into_iter()
-        .chain([small, finest, small_optimal, spatial_greedy])
+        .chain([small, finest, small_optimal, spatial_optimal, spatial_greedy])
         .map(|(n, s)| (n, tree(s)))
         .collect();
     if triangles.len() <= 4096 {

@@ -5,7 +5,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | `bounds` | boxes, the conservative slab test of one ray ([`RayBoxTest`]) and of a packet ([`Frustum`]) |
-//! | `build` | [`BuildSettings`]; the binned SAH build of a binary tree, in parallel on the current rayon pool (`build/sweep.rs`: the split sweep; `build/spatial.rs`: spatial splits, which cut triangles across a plane, the `high` preset); its collapse into the 8-wide tree: greedy (`build/collapse.rs`) or of least SAH cost by dynamic programming (`build/optimal.rs`, the `high` preset) |
+//! | `build` | [`BuildSettings`]; the binned SAH build of a binary tree, in parallel on the current rayon pool (`build/sweep.rs`: the split sweep); its collapse into the 8-wide tree: greedy (`build/collapse.rs`) or of least SAH cost by dynamic programming (`build/optimal.rs`, the `high` preset) |
 //! | `node` | the wide node's layout (eight boxes plane by plane, eight child references, drawn in its doc); `node/kernel.rs`: one ray or a packet's bound against eight boxes |
 //! | `leaf` | leaf records of up to eight triangles over a table of the vertices they share; `leaf/kernel.rs` and `leaf/lanes.rs`: a ray against a record in one pass |
 //! | `traverse` | single rays: nearest child first for the closest hit, first hit for occlusion; `traverse/flat.rs`: scenes of a few dozen triangles (the Cornell boxes) answer single rays without the tree, every triangle tested sixteen per instruction (up to [`BuildSettings::flat_limit`] triangles); `traverse/flat_rays.rs`: many incoherent rays against that list, sixteen rays per instruction |

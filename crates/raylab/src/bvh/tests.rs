@@ -434,9 +434,8 @@ fn the_tree_is_the_same_for_every_thread_count() {
 
 /// The collapse of least cost keeps its limits where costs overflow: boxes whose half area is
 /// infinite (coordinates near `f32::MAX`) or NaN (an infinite extent beside a zero one), many
-/// alike, with a node cost of zero too, with and without spatial splits. Every leaf fits the leaf
-/// limit, every triangle is in one leaf (in one or more with spatial splits), and rays get the
-/// brute-force answers.
+/// alike, with a node cost of zero too. Every leaf fits the leaf limit, every triangle is in one
+/// leaf, and rays get the brute-force answers.
 #[test]
 fn the_collapse_of_least_cost_keeps_its_limits_on_huge_boxes() {
     use crate::accel::{Accelerator, BruteForce};
@@ -449,16 +448,10 @@ fn the_collapse_of_least_cost_keeps_its_limits_on_huge_boxes() {
         let p = rng.vec() * 10.0;
         [p, p + rng.vec(), p + rng.vec()]
     }));
-    let cases = [(1.0, 4, 0.0), (0.0, 1, 0.0), (0.0, 4, 0.0), (1.0, 4, 1.0), (0.0, 1, 1.0)];
-    for (traversal_cost, binary_leaf_size, spatial_splits) in cases {
+    for (traversal_cost, binary_leaf_size) in [(1.0, 4), (0.0, 1), (0.0, 4)] {
         let collapse = Collapse::Optimal { binary_leaf_size };
-        let settings = BuildSettings {
-            traversal_cost,
-            collapse,
-            spatial_splits,
-            flat_limit: 0,
-            ..BuildSettings::HIGH
-        };
+        let settings =
+            BuildSettings { traversal_cost, collapse, flat_limit: 0, ..BuildSettings::HIGH };
         let bvh = Bvh::build(&triangles, &settings);
         let mut seen = vec![0u32; triangles.len()];
         let mut stack = vec![0u32];
@@ -478,9 +471,7 @@ fn the_collapse_of_least_cost_keeps_its_limits_on_huge_boxes() {
                 }
             }
         }
-        // Spatial splits may put a triangle in several leaves.
-        let once = |&s: &u32| if spatial_splits == 0.0 { s == 1 } else { s >= 1 };
-        assert!(seen.iter().all(once), "{traversal_cost} {binary_leaf_size} {spatial_splits}");
+        assert!(seen.iter().all(|&s| s == 1), "{traversal_cost} {binary_leaf_size}");
         let brute = BruteForce::new(&triangles);
         for i in 0..200 {
             let from = rng.vec() * 20.0 - 5.0;
@@ -505,17 +496,7 @@ fn wide_trees_cover_every_triangle_once() {
     for (_, settings) in BuildSettings::PRESETS {
         let bvh = Bvh::build(&triangles, &settings);
         let mut seen = vec![0u32; triangles.len()];
-        // With spatial splits a leaf's box holds its triangles' parts in it (checked in
-        // `build/spatial.rs`), and a cut triangle is in several leaves.
-        let whole = settings.spatial_splits == 0.0;
-        fn visit(
-            bvh: &Bvh,
-            node: u32,
-            within: Bounds,
-            seen: &mut [u32],
-            triangles: &[[Vec3; 3]],
-            whole: bool,
-        ) {
+        fn visit(bvh: &Bvh, node: u32, within: Bounds, seen: &mut [u32], triangles: &[[Vec3; 3]]) {
             let node: &WideNode = &bvh.wide.nodes[node as usize];
             for k in 0..8 {
                 let b = node.bounds(k);
@@ -523,31 +504,24 @@ fn wide_trees_cover_every_triangle_once() {
                     Child::Empty => assert!(b.is_empty()),
                     Child::Node(child) => {
                         assert!(within.min.cmple(b.min).all() && within.max.cmpge(b.max).all());
-                        visit(bvh, child, b, seen, triangles, whole);
+                        visit(bvh, child, b, seen, triangles);
                     }
                     Child::Leaf(offset) => {
                         for (id, t) in bvh.wide.leaves.leaf_triangles(offset) {
                             seen[id as usize] += 1;
                             assert_eq!(t, triangles[id as usize]);
                             let tb = Bounds::of_triangle(t);
-                            assert!(
-                                !whole || b.min.cmple(tb.min).all() && b.max.cmpge(tb.max).all()
-                            );
+                            assert!(b.min.cmple(tb.min).all() && b.max.cmpge(tb.max).all());
                         }
                     }
                 }
             }
         }
         let all = Bounds { min: Vec3::NEG_INFINITY, max: Vec3::INFINITY };
-        visit(&bvh, 0, all, &mut seen, &triangles, whole);
+        visit(&bvh, 0, all, &mut seen, &triangles);
         for (i, &count) in seen.iter().enumerate() {
-            match i {
-                10 | 11 => assert_eq!(count, 0, "triangle {i}"),
-                _ if whole => assert_eq!(count, 1, "triangle {i}"),
-                _ => assert!(count >= 1, "triangle {i}"),
-            }
+            assert_eq!(count, if i == 10 || i == 11 { 0 } else { 1 }, "triangle {i}");
         }
-        assert_eq!(seen.iter().sum::<u32>() as usize, bvh.stats().references);
         assert_eq!(bvh.stats().indexed_triangles, 2998);
     }
 }

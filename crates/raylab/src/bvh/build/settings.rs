@@ -68,8 +68,7 @@ impl BuildSettings {
         collapse: Collapse::Greedy,
         spatial_splits: 0.0,
     };
-    /// Best trees: 32 bins, spatial splits of up to a fifth more references (Embree's default
-    /// build allows as many), and the collapse of least cost over binary leaves of up to four.
+    /// Best trees: 32 bins, and the collapse of least cost over binary leaves of up to four.
     pub const HIGH: BuildSettings = BuildSettings {
         bins: 32,
         max_leaf_size: 8,
@@ -77,7 +76,7 @@ impl BuildSettings {
         record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
         collapse: Collapse::Optimal { binary_leaf_size: 4 },
-        spatial_splits: 0.2,
+        spatial_splits: 0.0,
     };
     /// Every preset with its name.
     pub const PRESETS: [(&'static str, BuildSettings); 3] =
