@@ -67,11 +67,6 @@ pub struct BenchArgs {
     #[arg(long, value_name = "HOW")]
     collapse: Option<String>,
 
-    /// Spatial splits: the most extra triangle references they may make, as a fraction of the
-    /// triangles, from 0 (none) to 1 [default: the build preset's].
-    #[arg(long, value_name = "FRACTION")]
-    spatial_splits: Option<f32>,
-
     /// Scenes of at most this many triangles answer single rays by testing every triangle, without
     /// the tree (0: always the tree) [default: the build preset's, 48].
     #[arg(long, value_name = "N")]
@@ -143,13 +138,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(limit) = args.flat_limit {
         settings.flat_limit = limit;
     }
-    if let Some(fraction) = args.spatial_splits {
-        let most = BuildSettings::MAX_SPATIAL_SPLITS;
-        if !(0.0..=most).contains(&fraction) {
-            bail!("--spatial-splits {fraction}: give a fraction of the triangles from 0 to {most}");
-        }
-        settings.spatial_splits = fraction;
-    }
     if let Some(collapse) = &args.collapse {
         // Binary leaves no larger than the wide tree's.
         let largest = settings.max_leaf_size;
@@ -206,16 +194,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let stats = bvh.stats();
 
     println!(
-        "{}: {} triangles ({} in the BVH{}), BVH {} preset ({} bins, leaves of up to {}, {} \
-         collapse{}), {} kernels",
+        "{}: {} triangles ({} in the BVH), BVH {} preset ({} bins, leaves of up to {}, {} \
+         collapse), {} kernels",
         args.mesh.display(),
         stats.triangles,
         stats.indexed_triangles,
-        if stats.references > stats.indexed_triangles {
-            format!(", {} in its leaves with those cut by spatial splits", stats.references)
-        } else {
-            String::new()
-        },
         args.build,
         settings.bins,
         settings.max_leaf_size,
@@ -223,14 +206,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             Collapse::Greedy => "greedy".to_string(),
             Collapse::Optimal { binary_leaf_size } =>
                 format!("optimal over binary leaves of up to {binary_leaf_size}"),
-        },
-        if settings.spatial_splits > 0.0 {
-            format!(
-                ", spatial splits up to {} extra references a triangle",
-                settings.spatial_splits
-            )
-        } else {
-            String::new()
         },
         bvh.isa().name()
     );

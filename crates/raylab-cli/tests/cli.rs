@@ -362,24 +362,6 @@ fn bench_generates_traces_and_reports() {
             "{stdout}"
         );
     }
-    // Spatial splits give the same answers; a budget outside 0 to 1 is refused.
-    let args = ["bench", mesh, "--rays", "rays", "--reps", "1", "--threads", "1"];
-    let out =
-        raylab(dir.path(), &[&args[..], &["--build", "high", "--spatial-splits", "0.5"]].concat());
-    let stdout = text(&out.stdout);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    assert!(
-        stdout.contains("spatial splits up to 0.5 extra references a triangle")
-            && stdout.contains("primary.hits: 768 of 768 agree"),
-        "{stdout}"
-    );
-    for bad in ["-0.1", "1.5", "NaN"] {
-        let flag = format!("--spatial-splits={bad}");
-        let out = raylab(dir.path(), &[&args[..], &[flag.as_str()]].concat());
-        assert_eq!(out.status.code(), Some(1));
-        let stderr = text(&out.stderr);
-        assert!(stderr.contains("--spatial-splits") && stderr.contains("from 0 to 1"), "{stderr}");
-    }
     for bad in ["best", "optimal:0", "optimal:x", "optimal:9"] {
         let out = raylab(dir.path(), &["bench", mesh, "--rays", "rays", "--collapse", bad]);
         assert_eq!(out.status.code(), Some(1));

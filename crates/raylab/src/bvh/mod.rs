@@ -83,9 +83,6 @@ pub struct BvhStats {
     /// Triangles in the tree: those with zero area or a non-finite vertex can never be hit and
     /// are left out.
     pub indexed_triangles: usize,
-    /// Triangles in the leaves, counted once per leaf that holds them: `indexed_triangles`,
-    /// and more where spatial splits ([`BuildSettings::spatial_splits`]) cut triangles.
-    pub references: usize,
     /// Wide nodes.
     pub nodes: usize,
     /// Bytes of the leaves' records: each leaf's distinct vertices, three byte indices and the
@@ -182,8 +179,7 @@ impl Bvh {
     /// copies of the triangles): for a caller to check against the memory it has before it
     /// builds.
     pub fn build_bytes_estimate(triangles: usize, settings: &BuildSettings) -> u64 {
-        let settings = settings.clamped();
-        let per_triangle = match settings.collapse {
+        let per_triangle = match settings.clamped().collapse {
             // About 90 bytes per triangle at the peak: the build records (32) with the binary
             // tree (about 25), then the wide tree (about 56, see `BvhStats::bytes`) while the
             // binary tree is collapsed. 160 leaves a margin.
@@ -192,9 +188,7 @@ impl Bvh {
             // as many table rows (52 bytes), beside the wide tree: about 230 at b = 1.
             Collapse::Optimal { binary_leaf_size } => 100 + 2 * 84 / binary_leaf_size as u64,
         };
-        // Spatial splits add up to that fraction of references, each as costly as a triangle.
-        let references = 1.0 + settings.spatial_splits as f64;
-        (triangles as f64 * references).ceil() as u64 * per_triangle
+        triangles as u64 * per_triangle
     }
 
     fn build_checked(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> Bvh {
@@ -206,12 +200,10 @@ impl Bvh {
                 &BuildSettings { max_leaf_size: binary_leaf_size, ..settings },
             ),
         };
-        let indexed_triangles = binary.prims;
+        let indexed_triangles = binary.order.len();
         let flat = (indexed_triangles <= settings.flat_limit).then(|| {
             let mut indices = binary.order.clone();
             indices.sort_unstable();
-            // A triangle cut by spatial splits is in several leaves, and once in the list.
-            indices.dedup();
             Flat::new(triangles, &indices)
         });
         let wide = match settings.collapse {
@@ -228,7 +220,6 @@ impl Bvh {
         let stats = BvhStats {
             triangles: triangles.len(),
             indexed_triangles,
-            references: wide.leaves.references(),
             nodes: wide.nodes.len(),
             leaf_bytes: wide.leaves.bytes(),
             flat_bytes: flat.as_ref().map_or(0, Flat::bytes),

@@ -89,9 +89,7 @@ impl Bvh {
         // The leaves written anew (which vertices are shared may change): hittable triangles as
         // given, the rest parked on NaN.
         let parked = [Vec3::NAN; 3];
-        // Distinct triangles: one cut by spatial splits is in several leaves.
-        let indexed =
-            (0..triangles.len()).filter(|&i| in_tree[i] && hittable(triangles[i])).count();
+        let mut indexed = 0;
         let mut leaves = Leaves::with_capacity(triangles.len());
         let mut child_bounds = vec![[Bounds::EMPTY; WIDTH]; self.wide.nodes.len()];
         let mut leaf = Vec::new();
@@ -101,6 +99,7 @@ impl Bvh {
             for (id, _) in self.wide.leaves.leaf_triangles(offset) {
                 let triangle = triangles[id as usize];
                 if hittable(triangle) {
+                    indexed += 1;
                     bounds = bounds.union(Bounds::of_triangle(triangle));
                     leaf.push((id, triangle));
                 } else {

@@ -132,21 +132,14 @@ pub(super) trait Reading {
 }
 
 /// Writes build primitives `prims` (`triangle(i)` the vertices of primitive `i`, `prim_ids(i)`
-/// its caller's index) as one leaf's records, each primitive once; returns the leaf's reference.
-///
-/// A primitive cut by a spatial split is in two subtrees, which the collapse of least cost may
-/// join into one leaf: it is written once there.
+/// its caller's index) as one leaf's records; returns the leaf's reference.
 pub(super) fn push_leaf(
     wide: &mut WideBvh,
     prims: &[u32],
     triangle: &impl Fn(u32) -> [Vec3; 3],
     prim_ids: &impl Fn(u32) -> u32,
 ) -> u32 {
-    let mut triangles: Vec<(u32, [Vec3; 3])> = Vec::with_capacity(prims.len());
-    for (k, &prim) in prims.iter().enumerate() {
-        if !prims[..k].contains(&prim) {
-            triangles.push((prim_ids(prim), triangle(prim)));
-        }
-    }
+    let triangles: Vec<(u32, [Vec3; 3])> =
+        prims.iter().map(|&prim| (prim_ids(prim), triangle(prim))).collect();
     encode_leaf(wide.leaves.push_leaf(&triangles))
 }

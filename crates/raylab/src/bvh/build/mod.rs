@@ -18,7 +18,6 @@ use glam::{Vec3, Vec3A, Vec4};
 mod collapse;
 mod optimal;
 mod settings;
-mod spatial;
 mod sweep;
 
 pub(crate) use collapse::collapse;
@@ -57,11 +56,8 @@ impl BinaryNode {
 pub(crate) struct BinaryBvh {
     /// Depth-first; the root is node 0.
     pub nodes: Vec<BinaryNode>,
-    /// Primitive indices in leaf order. With spatial splits a primitive may be in several
-    /// leaves (never twice in one).
+    /// Primitive indices in leaf order.
     pub order: Vec<u32>,
-    /// Distinct primitives in the tree.
-    pub prims: usize,
 }
 
 /// The most bins a build uses ([`BuildSettings::bins`] is clamped to it).
@@ -97,12 +93,8 @@ pub(crate) fn build(prims: &[Bounds], indices: Vec<u32>, settings: &BuildSetting
 }
 
 /// Builds over the triangles that can be hit (finite vertices, non-zero area); the others are
-/// left out of the tree, and of [`BinaryBvh::order`]. With [`BuildSettings::spatial_splits`],
-/// the build may also split triangles (`build/spatial.rs`).
+/// left out of the tree, and of [`BinaryBvh::order`].
 pub(crate) fn build_triangles(triangles: &[[Vec3; 3]], settings: &BuildSettings) -> BinaryBvh {
-    if settings.spatial_splits > 0.0 {
-        return spatial::build_triangles_spatial(triangles, settings);
-    }
     // One pass from the triangles to the build records (no array of boxes in between).
     let refs = (0u32..)
         .zip(triangles)
@@ -126,7 +118,7 @@ fn build_refs(mut refs: Vec<PrimRef>, settings: &BuildSettings) -> BinaryBvh {
         let (bounds, centroid_bounds) = builder.bounds_of(&refs);
         builder.build_node(&mut refs, 0, bounds, centroid_bounds, 0, &mut nodes);
     }
-    BinaryBvh { nodes, order: refs.iter().map(PrimRef::id).collect(), prims: refs.len() }
+    BinaryBvh { nodes, order: refs.iter().map(PrimRef::id).collect() }
 }
 
 /// A primitive during the build: its box and its index, in 32 bytes (the index rides in the
@@ -193,25 +185,6 @@ impl Aabb {
     #[inline]
     fn half_area(&self) -> f32 {
         self.bounds().half_area()
-    }
-
-    /// The common part of two boxes (not [`is_valid`](Self::is_valid) if they do not meet).
-    #[inline]
-    fn intersect(&self, other: &Aabb) -> Aabb {
-        Aabb { min: self.min.max(other.min), max: self.max.min(other.max) }
-    }
-
-    /// Whether the box holds a point (its minimum is nowhere above its maximum).
-    #[inline]
-    fn is_valid(&self) -> bool {
-        self.min.cmple(self.max).all()
-    }
-
-    /// The half area of the common part of two boxes, 0 if they do not meet.
-    #[inline]
-    fn overlap_half_area(&self, other: &Aabb) -> f32 {
-        let common = self.intersect(other);
-        if common.is_valid() { common.half_area() } else { 0.0 }
     }
 
     /// [`half_area`](Self::half_area) of a box known not to be empty (it holds a primitive):

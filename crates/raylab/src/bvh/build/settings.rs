@@ -22,11 +22,6 @@ pub struct BuildSettings {
     pub flat_limit: usize,
     /// How the binary tree becomes the 8-wide one.
     pub collapse: Collapse,
-    /// Spatial splits (`build/spatial.rs`): the most extra triangle references they may make,
-    /// as a fraction of the triangles (0 to [`MAX_SPATIAL_SPLITS`](Self::MAX_SPATIAL_SPLITS));
-    /// `0.0` builds without them. A triangle cut by a split sits in several leaves, each with the
-    /// box of its part there.
-    pub spatial_splits: f32,
 }
 
 /// How the binary tree becomes the 8-wide one. Never changes the answers.
@@ -56,7 +51,6 @@ impl BuildSettings {
         record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
         collapse: Collapse::Greedy,
-        spatial_splits: 0.0,
     };
     /// The default: 16 bins, leaves of up to 8 triangles.
     pub const MEDIUM: BuildSettings = BuildSettings {
@@ -66,7 +60,6 @@ impl BuildSettings {
         record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
         collapse: Collapse::Greedy,
-        spatial_splits: 0.0,
     };
     /// Best trees: 32 bins, and the collapse of least cost over binary leaves of up to four.
     pub const HIGH: BuildSettings = BuildSettings {
@@ -76,7 +69,6 @@ impl BuildSettings {
         record_cost: 1.0,
         flat_limit: Self::FLAT_LIMIT,
         collapse: Collapse::Optimal { binary_leaf_size: 4 },
-        spatial_splits: 0.0,
     };
     /// Every preset with its name.
     pub const PRESETS: [(&'static str, BuildSettings); 3] =
@@ -94,10 +86,6 @@ impl BuildSettings {
     /// which stays a few megabytes at 4,096 triangles, and a list that long is already many
     /// times slower than the tree.
     pub const MAX_FLAT_LIMIT: usize = 4096;
-
-    /// The largest [`spatial_splits`](Self::spatial_splits): twice as many references as
-    /// triangles.
-    pub const MAX_SPATIAL_SPLITS: f32 = 1.0;
 
     /// Scenes below this many triangles get leaves of at most four triangles (see
     /// [`for_triangles`](Self::for_triangles)).
@@ -141,11 +129,6 @@ impl BuildSettings {
                 Collapse::Optimal { binary_leaf_size } => {
                     Collapse::Optimal { binary_leaf_size: binary_leaf_size.clamp(1, max_leaf_size) }
                 }
-            },
-            spatial_splits: if self.spatial_splits.is_nan() {
-                0.0
-            } else {
-                self.spatial_splits.clamp(0.0, Self::MAX_SPATIAL_SPLITS)
             },
         }
     }

@@ -59,13 +59,11 @@ const MORE: u32 = 1 << 16;
 #[derive(Clone, Debug)]
 pub(crate) struct Leaves {
     words: Vec<u32>,
-    /// Triangles in every leaf, counted once per leaf that holds them.
-    references: usize,
 }
 
 impl Default for Leaves {
     fn default() -> Self {
-        Leaves { words: vec![0; PAD_WORDS], references: 0 }
+        Leaves { words: vec![0; PAD_WORDS] }
     }
 }
 
@@ -75,13 +73,7 @@ impl Leaves {
         // About 5.5 words per triangle on meshes (see the module documentation).
         let mut words = Vec::with_capacity(triangles * 11 / 2 + PAD_WORDS);
         words.resize(PAD_WORDS, 0);
-        Leaves { words, references: 0 }
-    }
-
-    /// Triangles in every leaf, counted once per leaf that holds them (a triangle cut by spatial
-    /// splits is in several).
-    pub fn references(&self) -> usize {
-        self.references
+        Leaves { words }
     }
 
     /// Appends a leaf of `triangles` (caller's index, corners), in order, as few records as
@@ -89,7 +81,6 @@ impl Leaves {
     /// one triangle.
     pub fn push_leaf(&mut self, triangles: &[(u32, [Vec3; 3])]) -> u32 {
         assert!(!triangles.is_empty(), "a leaf has triangles");
-        self.references += triangles.len();
         self.words.truncate(self.words.len() - PAD_WORDS);
         let first = self.words.len();
         let mut rest = triangles;
