@@ -582,6 +582,70 @@ mod tests {
         }
     }
 
+    fn prim_refs(n: usize, seed: u64) -> Vec<PrimRef> {
+        (0u32..)
+            .zip(random_prims(n, seed))
+            .map(|(id, b)| PrimRef::new(Aabb { min: b.min.into(), max: b.max.into() }, id))
+            .collect()
+    }
+
+    /// Binning into two sets in turn gives the bins of one set, bit for bit: lists above and
+    /// below the two-set length, odd and even, with 8, 32 and 256 bins (on the stack and not).
+    #[test]
+    fn two_sets_of_bins_give_the_bins_of_one() {
+        for (n, bins) in [(255, 8), (256, 32), (1001, 32), (4000, 256)] {
+            let refs = prim_refs(n, n as u64);
+            let (_, centroids) = Builder { settings: &BuildSettings::HIGH }.bounds_of(&refs);
+            let binning = Binning::new(&centroids, bins);
+            let add = |acc: &mut [[Bin; 3]], r: &PrimRef| {
+                let k = binning.bins(r.centroid());
+                for (axis, bin) in [k.x, k.y, k.z].into_iter().enumerate() {
+                    let bin = &mut acc[bin as usize][axis];
+                    bin.bounds = bin.bounds.union(r.bounds());
+                    bin.count += 1;
+                }
+            };
+            let mut one = vec![[Bin::default(); 3]; bins];
+            for r in &refs {
+                add(&mut one, r);
+            }
+            let mut two = vec![[Bin::default(); 3]; bins];
+            bin_all(&mut two, &refs, &add);
+            for (a, b) in one.iter().flatten().zip(two.iter().flatten()) {
+                assert_eq!(a.count, b.count, "{n} refs, {bins} bins");
+                assert_eq!(a.bounds.bounds(), b.bounds.bounds(), "{n} refs, {bins} bins");
+            }
+            assert_eq!(one.iter().map(|b| b[0].count).sum::<u32>(), n as u32);
+        }
+    }
+
+    /// The partition puts every primitive of the split's left bins first and the rest after,
+    /// loses none, and returns each side's centroid bounds.
+    #[test]
+    fn the_partition_separates_the_bins_and_keeps_every_primitive() {
+        let settings = BuildSettings::MEDIUM;
+        let builder = Builder { settings: &settings };
+        for n in [2, 3, 100, 5000] {
+            let mut refs = prim_refs(n, 7 + n as u64);
+            let (bounds, centroids) = builder.bounds_of(&refs);
+            let split = builder.best_split(&refs, &bounds, &centroids).expect("a split");
+            let mut before: Vec<u32> = refs.iter().map(PrimRef::id).collect();
+            let (mid, left, right) = builder.partition(&mut refs, &split, &centroids);
+            let binning = Binning::new(&centroids, settings.bins);
+            let goes_left =
+                |r: &PrimRef| (binning.bins(r.centroid())[split.axis] as usize) < split.bin;
+            assert!(refs[..mid].iter().all(goes_left) && !refs[mid..].iter().any(goes_left));
+            assert!(0 < mid && mid < n, "{n}: both sides hold primitives");
+            let mut after: Vec<u32> = refs.iter().map(PrimRef::id).collect();
+            before.sort_unstable();
+            after.sort_unstable();
+            assert_eq!(before, after);
+            let side =
+                |refs: &[PrimRef]| refs.iter().fold(Aabb::EMPTY, |b, r| b.grow(r.centroid()));
+            assert_eq!((side(&refs[..mid]), side(&refs[mid..])), (left, right));
+        }
+    }
+
     #[test]
     fn primitive_records_keep_their_index_bits_and_box() {
         assert_eq!(size_of::<PrimRef>(), 32);
