@@ -278,6 +278,18 @@ impl Binning {
             position.as_uvec3()
         }
     }
+
+    /// Adds primitive `r` to the bins of its centroid on each axis.
+    #[inline]
+    fn add(&self, bins: &mut [[Bin; 3]], r: &PrimRef) {
+        let b = r.bounds();
+        let k = self.bins(r.centroid());
+        for (axis, bin) in [k.x, k.y, k.z].into_iter().enumerate() {
+            let bin = &mut bins[bin as usize][axis];
+            bin.bounds = bin.bounds.union(b);
+            bin.count += 1;
+        }
+    }
 }
 
 impl Builder<'_> {
@@ -375,15 +387,6 @@ impl Builder<'_> {
         let bins = self.settings.bins;
         let binning = Binning::new(centroid_bounds, bins);
         let extent = centroid_bounds.max - centroid_bounds.min;
-        let add = |acc: &mut [[Bin; 3]], r: &PrimRef| {
-            let b = r.bounds();
-            let k = binning.bins(r.centroid());
-            for (axis, bin) in [k.x, k.y, k.z].into_iter().enumerate() {
-                let bin = &mut acc[bin as usize][axis];
-                bin.bounds = bin.bounds.union(b);
-                bin.count += 1;
-            }
-        };
         // Nodes binned on one thread with at most `STACK_BINS` bins (nearly all of them) use an
         // array on the stack; large nodes bin into vectors in parallel, and so do builds with
         // more bins than the array holds (on a node below `PARALLEL_MIN` that is one chunk).
@@ -393,25 +396,20 @@ impl Builder<'_> {
             use rayon::prelude::*;
             let empty = || vec![[Bin::default(); 3]; bins];
             let merge = |mut a: Vec<[Bin; 3]>, b: Vec<[Bin; 3]>| {
-                for (x, y) in a.iter_mut().zip(&b) {
-                    for axis in 0..3 {
-                        x[axis].bounds = x[axis].bounds.union(y[axis].bounds);
-                        x[axis].count += y[axis].count;
-                    }
-                }
+                merge_bins(&mut a, &b);
                 a
             };
             heap = refs
                 .par_chunks(8192)
                 .map(|chunk| {
                     let mut acc = empty();
-                    bin_all(&mut acc, chunk, &add);
+                    bin_all(&mut acc, chunk, &binning);
                     acc
                 })
                 .reduce(empty, merge);
             &heap
         } else {
-            bin_all(&mut on_stack[..bins], refs, &add);
+            bin_all(&mut on_stack[..bins], refs, &binning);
             &on_stack[..bins]
         };
 
@@ -468,16 +466,16 @@ impl Builder<'_> {
     }
 }
 
-/// Bins `refs` into `bins` with `add`. Long lists go into two sets of bins in turn, merged
+/// Bins `refs` into `bins` ([`Binning::add`]). Long lists go into two sets of bins in turn, merged
 /// after: neighbours in a node's list often fall into the same bins, and with one set each update
 /// waited for the store of the one before (the binning's hottest instruction was that load). The
 /// bins are the same either way: unions and counts do not depend on the order.
-fn bin_all(bins: &mut [[Bin; 3]], refs: &[PrimRef], add: &impl Fn(&mut [[Bin; 3]], &PrimRef)) {
+fn bin_all(bins: &mut [[Bin; 3]], refs: &[PrimRef], binning: &Binning) {
     /// Shorter lists use one set (the second's clearing would cost more than it saves).
     const TWO_SETS_MIN: usize = 256;
     if refs.len() < TWO_SETS_MIN {
         for r in refs {
-            add(bins, r);
+            binning.add(bins, r);
         }
         return;
     }
@@ -491,13 +489,18 @@ fn bin_all(bins: &mut [[Bin; 3]], refs: &[PrimRef], add: &impl Fn(&mut [[Bin; 3]
     };
     let mut pairs = refs.chunks_exact(2);
     for pair in &mut pairs {
-        add(bins, &pair[0]);
-        add(other, &pair[1]);
+        binning.add(bins, &pair[0]);
+        binning.add(other, &pair[1]);
     }
     for r in pairs.remainder() {
-        add(bins, r);
+        binning.add(bins, r);
     }
-    for (x, y) in bins.iter_mut().zip(other.iter()) {
+    merge_bins(bins, other);
+}
+
+/// Adds the primitives and boxes of bins `from` to `into`, bin by bin.
+fn merge_bins(into: &mut [[Bin; 3]], from: &[[Bin; 3]]) {
+    for (x, y) in into.iter_mut().zip(from) {
         for axis in 0..3 {
             x[axis].bounds = x[axis].bounds.union(y[axis].bounds);
             x[axis].count += y[axis].count;
@@ -597,20 +600,12 @@ mod tests {
             let refs = prim_refs(n, n as u64);
             let (_, centroids) = Builder { settings: &BuildSettings::HIGH }.bounds_of(&refs);
             let binning = Binning::new(&centroids, bins);
-            let add = |acc: &mut [[Bin; 3]], r: &PrimRef| {
-                let k = binning.bins(r.centroid());
-                for (axis, bin) in [k.x, k.y, k.z].into_iter().enumerate() {
-                    let bin = &mut acc[bin as usize][axis];
-                    bin.bounds = bin.bounds.union(r.bounds());
-                    bin.count += 1;
-                }
-            };
             let mut one = vec![[Bin::default(); 3]; bins];
             for r in &refs {
-                add(&mut one, r);
+                binning.add(&mut one, r);
             }
             let mut two = vec![[Bin::default(); 3]; bins];
-            bin_all(&mut two, &refs, &add);
+            bin_all(&mut two, &refs, &binning);
             for (a, b) in one.iter().flatten().zip(two.iter().flatten()) {
                 assert_eq!(a.count, b.count, "{n} refs, {bins} bins");
                 assert_eq!(a.bounds.bounds(), b.bounds.bounds(), "{n} refs, {bins} bins");
