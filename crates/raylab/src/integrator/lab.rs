@@ -472,6 +472,11 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
     fn sampler_kind(&self) -> SamplerKind {
         SamplerKind::Lab
     }
+
+    /// The lab's model draws no numbers: its pixel positions are its only samples.
+    fn draws_numbers(&self) -> bool {
+        false
+    }
 }
 
 #[cfg(test)]

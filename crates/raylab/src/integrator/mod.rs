@@ -92,6 +92,14 @@ pub trait Integrator: Sync {
         SamplerKind::Sobol
     }
 
+    /// Whether [`radiance_each`](Self::radiance_each) draws numbers from its samplers. An
+    /// integrator that never does (the lab's) says `false`, and the scheduler may then skip
+    /// making them: it is handed samplers that are not its pixels'. Its pixel positions are
+    /// still drawn as its samplers would draw them.
+    fn draws_numbers(&self) -> bool {
+        true
+    }
+
     /// How many samples so far it counted as black for not being a finite, non-negative colour
     /// (the path tracers: a NaN from a degenerate triangle, an overflow); `raylab render`
     /// warns when there are any.

@@ -18,7 +18,7 @@ use crate::film::Film;
 use crate::integrator::Integrator;
 use crate::ray::Ray;
 use crate::region::Region;
-use crate::sampling::{Grid, Sampler, SamplerKind};
+use crate::sampling::{Grid, Sampler, SamplerKind, sample_offset};
 
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
 const MAX_TILE_PIXELS: usize = 1024;
@@ -174,6 +174,9 @@ impl Band<'_> {
         let first_column = self.first_column;
         let rows = pixels.len() / width;
         let count = self.count;
+        // The lab's pixel positions need no sampler: where the integrator draws no numbers,
+        // none is made (it gets the stale ones below).
+        let skip_samplers = kind == SamplerKind::Lab && !has_lens && !integrator.draws_numbers();
         // The tile's columns shrink so that its pixels' samples fit the arrays.
         let (tile_width, _) = tile_shape(tile_or_default(settings.tile, integrator));
         let tile_width = (tile_width / count).max(1);
@@ -196,23 +199,42 @@ impl Band<'_> {
         for tile_x in (0..width).step_by(tile_width) {
             let columns = tile_x..(tile_x + tile_width).min(width);
             let n = columns.len() * rows * count;
-            let mut slot = samplers.iter_mut().zip(&mut film);
-            for y in first_row..first_row + rows {
-                for x in columns.clone() {
-                    let x = first_column + x;
-                    let pixel = (x as u32, y as u32);
-                    let indices = sample..sample + count as u32;
-                    for made in Sampler::counted_range(kind, settings.seed, pixel, indices, grid) {
-                        let (sampler, film) = slot.next().expect("a tile's rays fit");
-                        *sampler = made;
-                        *film = Vec2::new(x as f32, y as f32);
+            if skip_samplers {
+                // The lab's pixel positions, as its samplers' `pixel_2d` gives them.
+                let mut slot = drawn.iter_mut().zip(&mut film);
+                for y in first_row..first_row + rows {
+                    for x in columns.clone() {
+                        let x = first_column + x;
+                        for index in sample..sample + count as u32 {
+                            let (drawn, film) = slot.next().expect("a tile's rays fit");
+                            *drawn = sample_offset(x as u32, y as u32, index);
+                            *film = Vec2::new(x as f32, y as f32);
+                        }
+                    }
+                }
+            } else {
+                let mut slot = samplers.iter_mut().zip(&mut film);
+                for y in first_row..first_row + rows {
+                    for x in columns.clone() {
+                        let x = first_column + x;
+                        let pixel = (x as u32, y as u32);
+                        let indices = sample..sample + count as u32;
+                        for made in
+                            Sampler::counted_range(kind, settings.seed, pixel, indices, grid)
+                        {
+                            let (sampler, film) = slot.next().expect("a tile's rays fit");
+                            *sampler = made;
+                            *film = Vec2::new(x as f32, y as f32);
+                        }
                     }
                 }
             }
             // The pixel positions (and lens numbers): in lanes for the stratified kinds, the
             // same numbers as one by one (`pixel_2d` is their first `next_2d`; the lab's is not).
             let (samplers, lanes) = (&mut samplers[..n], &all_lanes[..n]);
-            if matches!(kind, SamplerKind::Sobol | SamplerKind::MultiJitter) {
+            if skip_samplers {
+                // Drawn above.
+            } else if matches!(kind, SamplerKind::Sobol | SamplerKind::MultiJitter) {
                 Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
             } else {
                 for (sampler, u) in samplers.iter_mut().zip(&mut drawn) {
@@ -228,9 +250,7 @@ impl Band<'_> {
                     *ray = rays.lens_ray(*film, u);
                 }
             } else {
-                for (ray, film) in tile_rays.iter_mut().zip(&film[..n]) {
-                    *ray = rays.ray(film.x, film.y);
-                }
+                rays.rays_through(&film[..n], &mut tile_rays[..n]);
             }
             if layer_count == 0 {
                 integrator.radiance_each(&tile_rays[..n], &mut samplers[..n], &mut colours[..n]);
@@ -335,6 +355,19 @@ mod tests {
                 self.0
             }
         }
+        /// The ray alone (the lab's integrator reads no sampler either).
+        struct Numberless(SamplerKind);
+        impl Integrator for Numberless {
+            fn radiance(&self, ray: &Ray, _: &mut Sampler) -> Vec3 {
+                ray.origin + ray.direction * 3.0
+            }
+            fn sampler_kind(&self) -> SamplerKind {
+                self.0
+            }
+            fn draws_numbers(&self) -> bool {
+                false
+            }
+        }
         let (width, height) = (45, 19);
         for lens in [false, true] {
             let mut camera = crate::Camera::lab(width, height);
@@ -354,6 +387,14 @@ mod tests {
                             band(&rays, camera.has_lens(), kind, &settings, sample, width, b);
                         assert_eq!(band.add(&Echo(kind), rows, &mut []), 0);
                     }
+                    // An integrator that draws no numbers is handed no samplers of its own,
+                    // but the same rays.
+                    let mut numberless = vec![Vec3::ZERO; width as usize * height as usize];
+                    for (b, rows) in numberless.chunks_mut(width as usize * band_rows).enumerate() {
+                        let band =
+                            band(&rays, camera.has_lens(), kind, &settings, sample, width, b);
+                        assert_eq!(band.add(&Numberless(kind), rows, &mut []), 0);
+                    }
                     for (i, &pixel) in pixels.iter().enumerate() {
                         let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
                         let grid = Grid::new(settings.count);
@@ -371,6 +412,12 @@ mod tests {
                             pixel.to_array().map(f32::to_bits),
                             expected.to_array().map(f32::to_bits),
                             "{kind:?}, lens {lens}, sample {sample}, pixel ({x}, {y})"
+                        );
+                        let expected = Numberless(kind).radiance(&ray, &mut sampler);
+                        assert_eq!(
+                            numberless[i].to_array().map(f32::to_bits),
+                            expected.to_array().map(f32::to_bits),
+                            "numberless, {kind:?}, lens {lens}, sample {sample}, ({x}, {y})"
                         );
                     }
                 }
