@@ -7,7 +7,7 @@ use super::rays::{PACKET, PacketRays};
 use crate::bvh::bounds::{Bounds, FAR_SCALE, SLAB_PAD};
 use crate::bvh::leaf::RECORD_VERTICES;
 use crate::bvh::node::WideBvh;
-use crate::bvh::simd::{Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
+use crate::bvh::simd::{LaneMask, Lanes, RayLanes, ShearedLanes, shear_point, watertight_sheared};
 
 /// The lanes of a packet row from `base` on.
 ///
@@ -222,6 +222,16 @@ pub(crate) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
                         }
                     } else {
                         let id = record.id(t);
+                        // The decided hits nearer than their ray's best a register at a time;
+                        // the rest (as near as the best, or decided by the scalar test) one by
+                        // one.
+                        let best = lanes::<V>(&rays.best_t, base);
+                        let nearer = decided.t.lt(best).bits() & decided.hits;
+                        if nearer != 0 {
+                            let found = [decided.t, decided.b1, decided.b2];
+                            rays.take_nearer::<V>(base, nearer, id, found);
+                            hits &= !nearer;
+                        }
                         while hits != 0 {
                             let j = hits.trailing_zeros() as usize;
                             hits &= hits - 1;

@@ -6,6 +6,8 @@ use glam::Vec3;
 use super::bundle::LineBundle;
 use crate::accel::Hit;
 use crate::bvh::bounds::{FAR_SCALE, Frustum, RayBoxTest};
+#[cfg(target_arch = "x86_64")]
+use crate::bvh::simd::Lanes;
 use crate::bvh::traverse::can_hit;
 use crate::float::next_float_up;
 use crate::ray::Ray;
@@ -173,6 +175,42 @@ impl PacketRays {
             self.best_b2[i] = b2;
             self.triangle_limit[i] = next_float_up(t);
             self.box_limit[i] = t * FAR_SCALE;
+        }
+    }
+
+    /// [`offer`](Self::offer) of hits on `triangle` to the rays `base..` (as many as `V`
+    /// has lanes) in `nearer`, whose `t` are below their best: each is kept, as `offer` keeps
+    /// it, with the same values, a register at a time.
+    ///
+    /// # Safety
+    /// The CPU must support `V`'s instruction set, and `base` plus `V`'s lanes must not pass
+    /// [`PACKET`]; the lanes of `t` in `nearer` are finite.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub unsafe fn take_nearer<V: Lanes>(
+        &mut self,
+        base: usize,
+        nearer: u32,
+        triangle: u32,
+        [t, b1, b2]: [V; 3],
+    ) {
+        // SAFETY: the caller's guarantee: every load and store is of `V`'s lanes from `base`.
+        // (Written out row by row: a closure would not inherit the target features.)
+        unsafe {
+            let keep = V::mask_of(nearer);
+            let row = self.best_t.as_mut_ptr().add(base);
+            V::select(keep, t, V::loadu(row)).store(row);
+            let row = self.best_b1.as_mut_ptr().add(base);
+            V::select(keep, b1, V::loadu(row)).store(row);
+            let row = self.best_b2.as_mut_ptr().add(base);
+            V::select(keep, b2, V::loadu(row)).store(row);
+            // The index's bits, moved as a float's (blends and moves keep every bit).
+            let row = self.best_triangle.as_mut_ptr().add(base).cast::<f32>();
+            V::select(keep, V::splat(f32::from_bits(triangle)), V::loadu(row)).store(row);
+            let row = self.triangle_limit.as_mut_ptr().add(base);
+            V::select(keep, t.next_up_finite(), V::loadu(row)).store(row);
+            let row = self.box_limit.as_mut_ptr().add(base);
+            V::select(keep, t.mul(V::splat(FAR_SCALE)), V::loadu(row)).store(row);
         }
     }
 

@@ -67,6 +67,13 @@ pub(crate) trait Lanes: Copy {
     unsafe fn lt(self, o: Self) -> Self::Mask;
     unsafe fn nlt(self, o: Self) -> Self::Mask;
     unsafe fn nle(self, o: Self) -> Self::Mask;
+    /// The mask of the lanes whose bits are set in `bits` (bit `k` for lane `k`).
+    unsafe fn mask_of(bits: u32) -> Self::Mask;
+    /// The next float above each lane, as [`next_float_up`](crate::float::next_float_up)
+    /// gives it for finite values (`−0` steps as `+0`): `x + 0` (which turns `−0` into `+0`
+    /// and leaves every other value), then its bits moved one away from zero if it is not
+    /// negative, one toward zero if it is. Infinite and NaN lanes give garbage.
+    unsafe fn next_up_finite(self) -> Self;
 }
 
 /// The lanes where a comparison holds.
@@ -130,6 +137,16 @@ impl Lanes for __m128 {
         fn lt(self, o: Self) -> Self::Mask = _mm_cmplt_ps(self, o);
         fn nlt(self, o: Self) -> Self::Mask = _mm_cmpnlt_ps(self, o);
         fn nle(self, o: Self) -> Self::Mask = _mm_cmpnle_ps(self, o);
+        fn mask_of(bits: u32) -> Self::Mask = {
+            let lanes = _mm_setr_epi32(1, 2, 4, 8);
+            let picked = _mm_and_si128(_mm_set1_epi32(bits as i32), lanes);
+            _mm_castsi128_ps(_mm_cmpeq_epi32(picked, lanes))
+        };
+        fn next_up_finite(self) -> Self = {
+            let v = _mm_castps_si128(_mm_add_ps(self, _mm_setzero_ps()));
+            let step = _mm_or_si128(_mm_srai_epi32::<31>(v), _mm_set1_epi32(1));
+            _mm_castsi128_ps(_mm_add_epi32(v, step))
+        };
     }
 }
 
@@ -177,6 +194,16 @@ impl Lanes for __m256 {
         fn lt(self, o: Self) -> Self::Mask = _mm256_cmp_ps::<_CMP_LT_OQ>(self, o);
         fn nlt(self, o: Self) -> Self::Mask = _mm256_cmp_ps::<_CMP_NLT_UQ>(self, o);
         fn nle(self, o: Self) -> Self::Mask = _mm256_cmp_ps::<_CMP_NLE_UQ>(self, o);
+        fn mask_of(bits: u32) -> Self::Mask = {
+            let lanes = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            let picked = _mm256_and_si256(_mm256_set1_epi32(bits as i32), lanes);
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(picked, lanes))
+        };
+        fn next_up_finite(self) -> Self = {
+            let v = _mm256_castps_si256(_mm256_add_ps(self, _mm256_setzero_ps()));
+            let step = _mm256_or_si256(_mm256_srai_epi32::<31>(v), _mm256_set1_epi32(1));
+            _mm256_castsi256_ps(_mm256_add_epi32(v, step))
+        };
     }
 }
 
@@ -229,6 +256,16 @@ impl Lanes for __m512 {
         fn lt(self, o: Self) -> Self::Mask = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self, o);
         fn nlt(self, o: Self) -> Self::Mask = _mm512_cmp_ps_mask::<_CMP_NLT_UQ>(self, o);
         fn nle(self, o: Self) -> Self::Mask = _mm512_cmp_ps_mask::<_CMP_NLE_UQ>(self, o);
+        fn next_up_finite(self) -> Self = {
+            let v = _mm512_castps_si512(_mm512_add_ps(self, _mm512_setzero_ps()));
+            let step = _mm512_or_si512(_mm512_srai_epi32::<31>(v), _mm512_set1_epi32(1));
+            _mm512_castsi512_ps(_mm512_add_epi32(v, step))
+        };
+    }
+
+    #[inline(always)]
+    unsafe fn mask_of(bits: u32) -> Self::Mask {
+        bits as __mmask16
     }
 }
 
@@ -249,5 +286,110 @@ impl LaneMask for __mmask16 {
     #[inline(always)]
     unsafe fn bits(self) -> u32 {
         self as u32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::float::next_float_up;
+
+    /// `mask_of` and `next_up_finite` of every width this CPU has, against their definitions:
+    /// every bit pattern of a register's lanes picks those lanes, and the next float up is
+    /// `next_float_up`'s for zeros of both signs, subnormals, the largest and smallest finite
+    /// values and ordinary ones of both signs.
+    #[test]
+    fn masks_from_bits_and_next_floats_up_in_every_width() {
+        let values = [
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MIN_POSITIVE,
+            1.0,
+            -1.0,
+            3.5e-20,
+            -7.25e12,
+            f32::MAX,
+            f32::MIN,
+            0.1,
+            -0.3,
+            1e30,
+            2.0,
+            -2.0,
+        ];
+        let expected = values.map(|v| next_float_up(v).to_bits());
+
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe {
+            for bits in 0..16u32 {
+                let picked =
+                    __m128::select(__m128::mask_of(bits), __m128::splat(1.0), __m128::splat(0.0));
+                assert_eq!(
+                    picked.le_mask(__m128::splat(0.5)) ^ 0xf,
+                    bits,
+                    "sse2 mask of {bits:#b}"
+                );
+            }
+            for chunk in 0..4 {
+                let mut out = [0.0f32; 4];
+                __m128::loadu(values[4 * chunk..].as_ptr())
+                    .next_up_finite()
+                    .store(out.as_mut_ptr());
+                assert_eq!(out.map(f32::to_bits), expected[4 * chunk..4 * chunk + 4], "sse2");
+            }
+        }
+
+        #[target_feature(enable = "avx2")]
+        fn avx2(values: &[f32; 16], expected: &[u32; 16]) {
+            // SAFETY: compiled with AVX2, called only after detection.
+            unsafe {
+                for bits in 0..256u32 {
+                    let picked = __m256::select(
+                        __m256::mask_of(bits),
+                        __m256::splat(1.0),
+                        __m256::splat(0.0),
+                    );
+                    assert_eq!(picked.le_mask(__m256::splat(0.5)) ^ 0xff, bits, "avx2 mask");
+                }
+                for chunk in 0..2 {
+                    let mut out = [0.0f32; 8];
+                    __m256::loadu(values[8 * chunk..].as_ptr())
+                        .next_up_finite()
+                        .store(out.as_mut_ptr());
+                    assert_eq!(out.map(f32::to_bits), expected[8 * chunk..8 * chunk + 8], "avx2");
+                }
+            }
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was detected just above.
+            unsafe { avx2(&values, &expected) };
+        } else {
+            eprintln!("note: this CPU lacks AVX2: its lanes are not tested here");
+        }
+
+        #[target_feature(enable = "avx512f")]
+        fn avx512(values: &[f32; 16], expected: &[u32; 16]) {
+            // SAFETY: compiled with AVX-512 F, called only after detection.
+            unsafe {
+                for bits in [0u32, 1, 0x8000, 0xffff, 0x1234, 0xa5a5] {
+                    let picked = __m512::select(
+                        __m512::mask_of(bits),
+                        __m512::splat(1.0),
+                        __m512::splat(0.0),
+                    );
+                    assert_eq!(picked.le_mask(__m512::splat(0.5)) ^ 0xffff, bits, "avx512 mask");
+                }
+                let mut out = [0.0f32; 16];
+                __m512::loadu(values.as_ptr()).next_up_finite().store(out.as_mut_ptr());
+                assert_eq!(out.map(f32::to_bits), *expected, "avx512");
+            }
+        }
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512 F was detected just above.
+            unsafe { avx512(&values, &expected) };
+        } else {
+            eprintln!("note: this CPU lacks AVX-512: its lanes are not tested here");
+        }
     }
 }
