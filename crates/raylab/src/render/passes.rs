@@ -200,15 +200,20 @@ impl Band<'_> {
             let columns = tile_x..(tile_x + tile_width).min(width);
             let n = columns.len() * rows * count;
             if skip_samplers {
-                // The lab's pixel positions, as its samplers' `pixel_2d` gives them.
-                let mut slot = drawn.iter_mut().zip(&mut film);
+                // The lab's film positions, from the pixel positions its samplers' `pixel_2d`
+                // gives: the first sample of every pixel at its centre, found once.
+                let centre = (sample == 0 && count == 1)
+                    .then(|| settings.filter.offset(sample_offset(0, 0, 0)));
+                let mut slot = film.iter_mut();
                 for y in first_row..first_row + rows {
                     for x in columns.clone() {
                         let x = first_column + x;
                         for index in sample..sample + count as u32 {
-                            let (drawn, film) = slot.next().expect("a tile's rays fit");
-                            *drawn = sample_offset(x as u32, y as u32, index);
-                            *film = Vec2::new(x as f32, y as f32);
+                            let offset = centre.unwrap_or_else(|| {
+                                settings.filter.offset(sample_offset(x as u32, y as u32, index))
+                            });
+                            let film = slot.next().expect("a tile's rays fit");
+                            *film = Vec2::new(x as f32, y as f32) + offset;
                         }
                     }
                 }
@@ -232,17 +237,17 @@ impl Band<'_> {
             // The pixel positions (and lens numbers): in lanes for the stratified kinds, the
             // same numbers as one by one (`pixel_2d` is their first `next_2d`; the lab's is not).
             let (samplers, lanes) = (&mut samplers[..n], &all_lanes[..n]);
-            if skip_samplers {
-                // Drawn above.
-            } else if matches!(kind, SamplerKind::Sobol | SamplerKind::MultiJitter) {
-                Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
-            } else {
-                for (sampler, u) in samplers.iter_mut().zip(&mut drawn) {
-                    *u = sampler.pixel_2d();
+            if !skip_samplers {
+                if matches!(kind, SamplerKind::Sobol | SamplerKind::MultiJitter) {
+                    Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
+                } else {
+                    for (sampler, u) in samplers.iter_mut().zip(&mut drawn) {
+                        *u = sampler.pixel_2d();
+                    }
                 }
-            }
-            for (film, &u) in film[..n].iter_mut().zip(&drawn) {
-                *film += settings.filter.offset(u);
+                for (film, &u) in film[..n].iter_mut().zip(&drawn) {
+                    *film += settings.filter.offset(u);
+                }
             }
             if has_lens {
                 Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
