@@ -239,12 +239,18 @@ impl TileShading {
             shadow_origin: [[0.0; TILE]; 3],
             unusual: [false; TILE],
         };
-        // Gathered: the corners, normal and barycentrics of each hit (zeros for misses).
-        let mut corner = [[[0.0f32; TILE]; 3]; 3];
-        let mut normal = [[0.0f32; TILE]; 3];
-        let mut direction = [[0.0f32; TILE]; 3];
-        let (mut b1, mut b2) = ([0.0f32; TILE], [0.0f32; TILE]);
-        let mut hit_mask = [false; TILE];
+        // Gathered: the corners, normal and barycentrics of each hit (zeros for misses). Filled
+        // in place: arrays moved into the struct afterwards were copied (`memmove`, 3 % of the
+        // lab frame).
+        let mut gathered = Gathered {
+            corner: [[[0.0f32; TILE]; 3]; 3],
+            normal: [[0.0f32; TILE]; 3],
+            direction: [[0.0f32; TILE]; 3],
+            b1: [0.0f32; TILE],
+            b2: [0.0f32; TILE],
+            hit_mask: [false; TILE],
+        };
+        let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut gathered;
         // Neighbouring hits mostly share a material: its albedo is looked up once for them
         // (unless it has a texture).
         let mut material = (u32::MAX, Vec3::ZERO, false);
@@ -274,7 +280,6 @@ impl TileShading {
         if lab.stage == Stage::Flat {
             return tile;
         }
-        let gathered = Gathered { corner, normal, direction, b1, b2, hit_mask };
         if instanced {
             tile.light_lanes::<true, A>(lab, hits, &gathered);
         } else {
