@@ -326,7 +326,7 @@ mod tests {
 
     /// The rays of a batch are `ray`'s bit for bit, compiled for the baseline and for AVX2
     /// (as the scheduler's AVX2 bands inline it), for turned cameras, huge and tiny focal
-    /// lengths, film positions off the image, and batches not a multiple of eight long.
+    /// lengths, film positions off the image, and batches shorter than 32 or not a multiple of it.
     #[test]
     fn rays_through_are_ray_bit_for_bit() {
         #[cfg(target_arch = "x86_64")]

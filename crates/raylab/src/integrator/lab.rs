@@ -240,8 +240,7 @@ impl TileShading {
             unusual: [false; TILE],
         };
         // Gathered: the corners, normal and barycentrics of each hit (zeros for misses). Filled
-        // in place: arrays moved into the struct afterwards were copied (`memmove`, 3 % of the
-        // lab frame).
+        // in place: arrays moved into the struct afterwards were copied (a 4.4 KB `memmove`).
         let mut gathered = Gathered {
             corner: [[[0.0f32; TILE]; 3]; 3],
             normal: [[0.0f32; TILE]; 3],

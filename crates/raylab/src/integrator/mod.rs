@@ -92,10 +92,11 @@ pub trait Integrator: Sync {
         SamplerKind::Sobol
     }
 
-    /// Whether [`radiance_each`](Self::radiance_each) draws numbers from its samplers. An
-    /// integrator that never does (the lab's) says `false`, and the scheduler may then skip
-    /// making them: it is handed samplers that are not its pixels'. Its pixel positions are
-    /// still drawn as its samplers would draw them.
+    /// Whether [`radiance_each`](Self::radiance_each) and
+    /// [`radiance_and_layers_each`](Self::radiance_and_layers_each) draw numbers from their
+    /// samplers. An integrator that never does (the lab's) says `false`, and the scheduler may
+    /// then skip making them: it is handed placeholder samplers, not its pixels'. Its pixel
+    /// positions are still drawn as its samplers would draw them.
     fn draws_numbers(&self) -> bool {
         true
     }

@@ -175,7 +175,7 @@ impl Band<'_> {
         let rows = pixels.len() / width;
         let count = self.count;
         // The lab's pixel positions need no sampler: where the integrator draws no numbers,
-        // none is made (it gets the stale ones below).
+        // none is made (it gets the placeholders made below).
         let skip_samplers = kind == SamplerKind::Lab && !has_lens && !integrator.draws_numbers();
         // The tile's columns shrink so that its pixels' samples fit the arrays.
         let (tile_width, _) = tile_shape(tile_or_default(settings.tile, integrator));
@@ -201,7 +201,8 @@ impl Band<'_> {
             let n = columns.len() * rows * count;
             if skip_samplers {
                 // The lab's film positions, from the pixel positions its samplers' `pixel_2d`
-                // gives: the first sample of every pixel at its centre, found once.
+                // gives; a pass of the first sample alone puts every pixel's at its centre,
+                // found once.
                 let centre = (sample == 0 && count == 1)
                     .then(|| settings.filter.offset(sample_offset(0, 0, 0)));
                 let mut slot = film.iter_mut();
@@ -425,6 +426,56 @@ mod tests {
                             "numberless, {kind:?}, lens {lens}, sample {sample}, ({x}, {y})"
                         );
                     }
+                }
+            }
+        }
+    }
+
+    /// An integrator that draws no numbers gets, with no samplers made, the rays that one that
+    /// draws them gets: several samples of each pixel side by side, of a band that starts off
+    /// the image's left edge, from the first sample and from a later one.
+    #[test]
+    fn bands_without_samplers_give_the_same_rays() {
+        struct Rays(bool);
+        impl Integrator for Rays {
+            fn radiance(&self, ray: &Ray, _: &mut Sampler) -> Vec3 {
+                ray.origin + ray.direction * 2.0
+            }
+            fn sampler_kind(&self) -> SamplerKind {
+                SamplerKind::Lab
+            }
+            fn draws_numbers(&self) -> bool {
+                self.0
+            }
+        }
+        let camera = crate::Camera::lab(45, 19);
+        let rays = camera.rays();
+        let settings = SampleSettings { seed: 7, count: 16, ..SampleSettings::default() };
+        let (_, band_rows) = tile_shape(settings.tile);
+        let width = 40;
+        for count in [1, 2, 3] {
+            for sample in [0, 5] {
+                for b in 0..3 {
+                    let band = Band {
+                        camera: &rays,
+                        has_lens: false,
+                        kind: SamplerKind::Lab,
+                        settings: &settings,
+                        sample,
+                        count,
+                        width,
+                        first_row: b * band_rows,
+                        first_column: 5,
+                    };
+                    let mut with = vec![Vec3::ZERO; width * band_rows];
+                    let mut without = with.clone();
+                    assert_eq!(band.add(&Rays(true), &mut with, &mut []), 0);
+                    assert_eq!(band.add(&Rays(false), &mut without, &mut []), 0);
+                    let bits = |p: &[Vec3]| -> Vec<[u32; 3]> {
+                        p.iter().map(|v| v.to_array().map(f32::to_bits)).collect()
+                    };
+                    assert!(with.iter().all(|p| *p != Vec3::ZERO));
+                    assert_eq!(bits(&with), bits(&without), "count {count}, sample {sample}");
                 }
             }
         }

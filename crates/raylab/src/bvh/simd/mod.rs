@@ -295,7 +295,7 @@ mod tests {
     use crate::float::next_float_up;
 
     /// `mask_of` and `next_up_finite` of every width this CPU has, against their definitions:
-    /// every bit pattern of a register's lanes picks those lanes, and the next float up is
+    /// every bit pattern of SSE's and AVX's lanes (six of AVX-512's) picks those lanes, and the next float up is
     /// `next_float_up`'s for zeros of both signs, subnormals, the largest and smallest finite
     /// values and ordinary ones of both signs.
     #[test]
