@@ -122,6 +122,17 @@ impl LineBundle {
         (bounds.max - bounds.min).max_element() > 2.0 * distance * self.spread
     }
 
+    /// Whether a leaf is so much larger than the packet's footprint at its distance (sixteen
+    /// times, eight times [`worth_culling`](Self::worth_culling)'s bound) that nearly every ray
+    /// of the packet enters it, so that testing each ray against its box would only cost: the
+    /// Cornell box's walls and boxes before a tile of the lab frame, not a scanned mesh's
+    /// leaves. A heuristic for speed: it never changes an answer (`packet/lanes.rs`).
+    #[inline(always)]
+    pub fn covers(&self, bounds: &Bounds) -> bool {
+        let distance = (bounds.centroid() - self.apex).length();
+        (bounds.max - bounds.min).max_element() > 16.0 * distance * self.spread
+    }
+
     /// The margin of the edge `pq` whose corners are `lp = ‖p − apex‖₁` and `lq` from the apex.
     ///
     /// The watertight test computes each edge function from the ray's own origin, so its

@@ -3,6 +3,7 @@
 //! [`packet_leaf_scalar`](super::leaf::packet_leaf_scalar); the kernel types that call it are in
 //! `packet/leaf.rs`, and the packet's node test (`FrustumBroadcast`) is with the node kernels.
 
+use super::bundle::LineBundle;
 use super::rays::{PACKET, PacketRays};
 use crate::bvh::bounds::{Bounds, FAR_SCALE, SLAB_PAD};
 use crate::bvh::leaf::RECORD_VERTICES;
@@ -21,9 +22,29 @@ unsafe fn lanes<V: Lanes>(row: &[f32; PACKET], base: usize) -> V {
     unsafe { V::loadu(row.as_ptr().add(base)) }
 }
 
-/// [`PacketKernel::packet_leaf`](super::leaf::PacketKernel::packet_leaf) with `L` rays per register `V`: the slab test of the leaf's box
-/// and the watertight test of each of its triangles, for `L` rays at a time, by the same
-/// operations as the single-ray tests ([`RayBoxTest::enter`](crate::bvh::RayBoxTest::enter), [`watertight_sheared`]).
+/// The triangles of the leaf at `offset` that some line of `bundle` may cross
+/// ([`LineBundle::may_cross_record`]): bit `k` for its `k`-th triangle.
+#[inline(always)]
+fn crossable(bundle: &LineBundle, bvh: &WideBvh, offset: u32) -> u64 {
+    let (mut live, mut first) = (0u64, 0);
+    for record in bvh.leaves.leaf(offset) {
+        live |= (bundle.may_cross_record(&record) as u64) << first;
+        first += record.triangles();
+    }
+    live
+}
+
+/// [`PacketKernel::packet_leaf`](super::leaf::PacketKernel::packet_leaf) with `L` rays per
+/// register `V`: the slab test of the leaf's box and the watertight test of each of its
+/// triangles, for `L` rays at a time, by the same operations as the single-ray tests
+/// ([`RayBoxTest::enter`](crate::bvh::RayBoxTest::enter), [`watertight_sheared`]).
+///
+/// Where the leaf covers the packet ([`LineBundle::covers`]) the slab test is left out and
+/// every open ray is tested against the triangles the bundle may cross. That changes no
+/// answer: the slab test is conservative (a ray that hits a triangle enters the box of its
+/// leaf, or the single-ray traversal would miss the hit that brute force finds), so it only
+/// ever spares triangle tests, and a ray tested against more triangles than its own traversal
+/// tests still gets the nearest hit below its limit, ties to the lowest index.
 ///
 /// # Safety
 /// The CPU must support `V`'s instruction set, which holds `L` (4, 8 or 16) floats.
@@ -55,54 +76,63 @@ pub(crate) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
     // after rows `0..nv` were written, and corners index below `nv`.
     // SAFETY: the caller's guarantee of the instruction set, and the bounds above.
     unsafe {
-        // The slab test of every group of `L` rays first, as `RayBoxTest::enter` per lane (no
-        // operand is NaN: packet rays have finite origins and `1/d`, and a leaf's box is
-        // finite): bit `k` of `active[g]` for ray `L·g + k`.
+        // Bit `k` of `active[g]` for ray `L·g + k`, where that ray is tested against the leaf's
+        // triangles; bit `k` of `live` for the leaf's `k`-th triangle (at most 64), where some
+        // ray is tested against it.
         let mut active = [0u32; PACKET / 4];
         let groups = rays.len.div_ceil(L);
-        let mut any = 0;
-        for (g, active) in active.iter_mut().enumerate().take(groups) {
-            let base = g * L;
-            let open = (*open >> base) as u32 & ((1 << L) - 1);
-            if open == 0 {
-                continue;
+        let bundle = rays.bundle.as_ref();
+        let live = if let Some(bundle) = bundle.filter(|b| b.covers(bounds)) {
+            // A leaf that covers the packet (a wall of a small scene before a tile): the
+            // triangles no line of the packet crosses culled once, the rest tested against
+            // every open ray, without the slab test that would only keep most of them.
+            let live = crossable(bundle, bvh, offset);
+            if live == 0 {
+                return;
             }
-            let mut near = lanes::<V>(&rays.box_t_min, base);
-            let mut far = lanes::<V>(&rays.box_limit, base);
-            let mut reach = V::splat(0.0);
-            for axis in 0..3 {
-                let o = lanes::<V>(&rays.origin[axis], base);
-                let inv = lanes::<V>(&rays.inv_direction[axis], base);
-                let t_near = V::splat(near_planes[axis]).sub(o).mul(inv);
-                let t_far = V::splat(far_planes[axis]).sub(o).mul(inv);
-                near = t_near.max(near);
-                far = t_far.mul(V::splat(FAR_SCALE)).min(far);
-                if axis == kz {
-                    reach = t_near.abs().max(t_far.abs());
+            for (g, active) in active.iter_mut().enumerate().take(groups) {
+                *active = (*open >> (g * L)) as u32 & ((1 << L) - 1);
+            }
+            live
+        } else {
+            // The slab test of every group of `L` rays, as `RayBoxTest::enter` per lane (no
+            // operand is NaN: packet rays have finite origins and `1/d`, and a leaf's box is
+            // finite).
+            let mut any = 0;
+            for (g, active) in active.iter_mut().enumerate().take(groups) {
+                let base = g * L;
+                let open = (*open >> base) as u32 & ((1 << L) - 1);
+                if open == 0 {
+                    continue;
                 }
-            }
-            let pad = reach.mul(V::splat(SLAB_PAD));
-            *active = open & near.sub(pad).le_mask(far.add(pad));
-            any |= *active;
-        }
-        if any == 0 {
-            return;
-        }
-        // The leaf's triangles some line of the packet may cross (bit `k` for its `k`-th
-        // triangle, at most 64): where the rays' lines meet in one point, the others are culled
-        // once for the whole packet (only now that some ray enters the leaf's box: in large
-        // meshes most leaves the packet's frustum reaches are entered by none of its rays), and
-        // only where the leaf is large beside the packet (`LineBundle::worth_culling`).
-        let live = match &rays.bundle {
-            Some(bundle) if bundle.worth_culling(bounds) => {
-                let (mut live, mut first) = (0u64, 0);
-                for record in bvh.leaves.leaf(offset) {
-                    live |= (bundle.may_cross_record(&record) as u64) << first;
-                    first += record.triangles();
+                let mut near = lanes::<V>(&rays.box_t_min, base);
+                let mut far = lanes::<V>(&rays.box_limit, base);
+                let mut reach = V::splat(0.0);
+                for axis in 0..3 {
+                    let o = lanes::<V>(&rays.origin[axis], base);
+                    let inv = lanes::<V>(&rays.inv_direction[axis], base);
+                    let t_near = V::splat(near_planes[axis]).sub(o).mul(inv);
+                    let t_far = V::splat(far_planes[axis]).sub(o).mul(inv);
+                    near = t_near.max(near);
+                    far = t_far.mul(V::splat(FAR_SCALE)).min(far);
+                    if axis == kz {
+                        reach = t_near.abs().max(t_far.abs());
+                    }
                 }
-                live
+                let pad = reach.mul(V::splat(SLAB_PAD));
+                *active = open & near.sub(pad).le_mask(far.add(pad));
+                any |= *active;
             }
-            _ => u64::MAX,
+            if any == 0 {
+                return;
+            }
+            // Culled only now that some ray enters the leaf's box (in large meshes most leaves
+            // the packet's frustum reaches are entered by none of its rays), and only where
+            // the leaf is large beside the packet.
+            match bundle {
+                Some(bundle) if bundle.worth_culling(bounds) => crossable(bundle, bvh, offset),
+                _ => u64::MAX,
+            }
         };
 
         // Record by record: its corners decoded and its vertices read once, then for each

@@ -4,9 +4,11 @@
 //! bound of its rays that is conservative in floating point), so the cost of the upper tree is
 //! shared by all the rays. A leaf's box is then tested per ray, exactly as single-ray traversal
 //! tests it, and its triangles are tested against the rays that enter it by the same watertight
-//! test, several rays per instruction ([`PacketKernel::packet_leaf`]). Every ray gets exactly the
-//! answer that [`closest_hit`] or [`occluded`] gives it alone: no box that one of its rays enters
-//! is ever pruned, and ties at equal `t` go to the lowest triangle index as always.
+//! test, several rays per instruction ([`PacketKernel::packet_leaf`]); a leaf far larger than
+//! the packet's footprint (a wall before a camera tile) skips the box test and tests every ray,
+//! which gives the same answers. Every ray gets exactly the answer that [`closest_hit`] or
+//! [`occluded`] gives it alone: no box that one of its rays enters is ever pruned, and ties at
+//! equal `t` go to the lowest triangle index as always.
 //!
 //! A packet's rays share their direction octant and dominant axis, so that the slab test's near
 //! planes and the watertight test's axis permutation are the same for all of them. A chunk of
@@ -376,4 +378,114 @@ unsafe fn occluded_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays)
         }
     }
     open
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::bvh::bounds::RayBoxTest;
+    use crate::bvh::node::WIDTH;
+    use crate::bvh::{Bvh, Isa};
+    use crate::accel::Accelerator;
+    use crate::scene::Scene;
+    use bundle::LineBundle;
+
+    /// The lab's Cornell box, whose leaves cover most tiles of camera and shadow rays: packets
+    /// that skip those leaves' box tests give every ray its single-ray answer, bit for bit, on
+    /// every instruction set, including the rays that enter such a leaf's box nowhere near a
+    /// triangle and those at the leaves' edges.
+    #[test]
+    fn leaves_that_cover_a_packet_give_the_single_ray_answers() {
+        let triangles = Scene::built_in("cornell").expect("built in").vertices();
+        let scalar = Bvh::new(&triangles).with_isa(Isa::Scalar).expect("scalar");
+        let light = Vec3::new(0.1, -0.6, 0.2);
+        let mut tiles: Vec<Vec<Ray>> = Vec::new();
+        for (c, origin) in [
+            Vec3::new(0.0, 0.0, -3.0),
+            Vec3::new(0.3, -0.4, -1.2),
+            Vec3::new(-0.7, 0.8, 0.5),
+            Vec3::new(0.999, 0.0, 0.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for ty in 0..12 {
+                for tx in 0..12 {
+                    // 8×8 pixels of a 96×96 image, some tiles across the view's axes.
+                    let step = [0.02, 0.011, 0.035, 0.02][c];
+                    let tile: Vec<Ray> = (0..64)
+                        .map(|i| {
+                            let x = (tx * 8 + i % 8) as f32 - 47.5;
+                            let y = (ty * 8 + i / 8) as f32 - 47.5;
+                            let d = Vec3::new(x * step, y * step, 1.0);
+                            let d = if c == 2 { Vec3::new(d.z, d.y, -d.x) } else { d };
+                            Ray::new(origin, d)
+                        })
+                        .collect();
+                    // Shadow segments from the tile's hits toward the light.
+                    let shadows: Vec<Ray> = tile
+                        .iter()
+                        .filter_map(|ray| scalar.closest_hit(ray).map(|h| ray.at(h.t * 0.9999)))
+                        .map(|p| Ray::segment(p, light - p, 1.0))
+                        .collect();
+                    tiles.push(tile);
+                    tiles.push(shadows);
+                }
+            }
+        }
+        // The tiles that meet a leaf that covers them, of the root's leaves.
+        let covered = tiles
+            .iter()
+            .filter(|tile| {
+                let Some(frustum) = Frustum::of(tile.iter().map(RayBoxTest::new)) else {
+                    return false;
+                };
+                let Some(bundle) = LineBundle::of(&frustum).or_else(|| {
+                    let ends = tile.iter().map(|r| r.origin + r.direction);
+                    let (lo, hi) = ends
+                        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), e| {
+                            (lo.min(e), hi.max(e))
+                        });
+                    LineBundle::through_ends(&frustum, lo, hi)
+                }) else {
+                    return false;
+                };
+                let root = &scalar.wide.nodes[0];
+                (0..WIDTH).any(|k| {
+                    matches!(decode(root.children[k]), Child::Leaf(_))
+                        && bundle.covers(&root.bounds(k))
+                })
+            })
+            .count();
+        assert!(covered > tiles.len() / 4, "{covered} of {} tiles", tiles.len());
+        let bits = |h: &Option<Hit>| {
+            h.map(|h| (h.t.to_bits(), h.triangle, h.b1.to_bits(), h.b2.to_bits()))
+        };
+        let mut hits = 0;
+        for isa in Isa::ALL {
+            let Some(bvh) = Bvh::new(&triangles).with_isa(isa) else {
+                continue;
+            };
+            for tile in &tiles {
+                let mut closest = vec![None; tile.len()];
+                let mut occluded = vec![false; tile.len()];
+                bvh.closest_hits(tile, &mut closest);
+                bvh.occluded_each(tile, &mut occluded);
+                for (i, ray) in tile.iter().enumerate() {
+                    let want = scalar.closest_hit(ray);
+                    hits += want.is_some() as usize;
+                    assert_eq!(bits(&closest[i]), bits(&want), "{} closest: {ray:?}", isa.name());
+                    assert_eq!(
+                        occluded[i],
+                        scalar.occluded(ray),
+                        "{} occluded: {ray:?}",
+                        isa.name()
+                    );
+                }
+            }
+        }
+        assert!(hits > 20_000, "{hits}");
+    }
 }
