@@ -385,10 +385,10 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+    use crate::accel::Accelerator;
     use crate::bvh::bounds::RayBoxTest;
     use crate::bvh::node::WIDTH;
     use crate::bvh::{Bvh, Isa};
-    use crate::accel::Accelerator;
     use crate::scene::Scene;
     use bundle::LineBundle;
 
