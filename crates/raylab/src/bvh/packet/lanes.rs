@@ -81,8 +81,13 @@ pub(crate) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
         // ray is tested against it.
         let mut active = [0u32; PACKET / 4];
         let groups = rays.len.div_ceil(L);
+        // Not `Option::filter` with a closure (a closure would not inherit the target features).
         let bundle = rays.bundle.as_ref();
-        let live = if let Some(bundle) = bundle.filter(|b| b.covers(bounds)) {
+        let covering = match bundle {
+            Some(bundle) if bundle.covers(bounds) => Some(bundle),
+            _ => None,
+        };
+        let live = if let Some(bundle) = covering {
             // A leaf that covers the packet (a wall of a small scene before a tile): the
             // triangles no line of the packet crosses culled once, the rest tested against
             // every open ray, without the slab test that would only keep most of them.
