@@ -33,6 +33,21 @@ use crate::bvh::leaf::{RECORD_TRIANGLES, RECORD_VERTICES, Record};
 /// The relative margin of the cull (see the module documentation).
 const MARGIN: f32 = 1e-4;
 
+/// A leaf's size beside a packet's footprint ([`LineBundle::size_of`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LeafSize {
+    /// At most twice the footprint: in a fine mesh the lines cross nearly every triangle of a
+    /// leaf they reach, so the cull would only cost.
+    Small,
+    /// Over twice the footprint (a scene of large triangles): the triangles no line crosses
+    /// are culled, for the rays that enter the box.
+    Large,
+    /// Over sixteen times the footprint (the Cornell box's walls and boxes before a tile):
+    /// culled, and the rest tested against every open ray without the per-ray box test, which
+    /// would keep most of them.
+    Covering,
+}
+
 /// The lines of a packet's rays: all through one point (within `spread`), a box of directions.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct LineBundle {
@@ -111,26 +126,24 @@ impl LineBundle {
             .then_some(bundle)
     }
 
-    /// Whether culling the triangles of a leaf in `bounds` is likely to pay: where the box is
-    /// larger than twice the packet's footprint at its distance (the Cornell box's walls seen
-    /// by a tile). In a fine mesh, whose leaves are smaller than a tile's footprint, the lines
-    /// cross nearly every triangle of a leaf they reach and the test would only cost. A
-    /// heuristic for speed: it never changes an answer.
+    /// How large a leaf's box is beside the packet's footprint at the box's distance (its
+    /// largest edge against the spread of the directions times the distance to the apex),
+    /// which decides what the packet leaf kernel does with it. A size heuristic for speed: it
+    /// never changes an answer (`packet/lanes.rs` says why). Compared squared, without a
+    /// square root, since it is asked for every leaf a packet with a bundle reaches.
     #[inline(always)]
-    pub fn worth_culling(&self, bounds: &Bounds) -> bool {
-        let distance = (bounds.centroid() - self.apex).length();
-        (bounds.max - bounds.min).max_element() > 2.0 * distance * self.spread
-    }
-
-    /// Whether a leaf is so much larger than the packet's footprint at its distance (sixteen
-    /// times, eight times [`worth_culling`](Self::worth_culling)'s bound) that nearly every ray
-    /// of the packet enters it, so that testing each ray against its box would only cost: the
-    /// Cornell box's walls and boxes before a tile of the lab frame, not a scanned mesh's
-    /// leaves. A heuristic for speed: it never changes an answer (`packet/lanes.rs`).
-    #[inline(always)]
-    pub fn covers(&self, bounds: &Bounds) -> bool {
-        let distance = (bounds.centroid() - self.apex).length();
-        (bounds.max - bounds.min).max_element() > 16.0 * distance * self.spread
+    pub fn size_of(&self, bounds: &Bounds) -> LeafSize {
+        let extent = (bounds.max - bounds.min).max_element();
+        let footprint =
+            (bounds.centroid() - self.apex).length_squared() * self.spread * self.spread;
+        let extent = extent * extent;
+        if extent > 256.0 * footprint {
+            LeafSize::Covering
+        } else if extent > 4.0 * footprint {
+            LeafSize::Large
+        } else {
+            LeafSize::Small
+        }
     }
 
     /// The margin of the edge `pq` whose corners are `lp = ‖p − apex‖₁` and `lq` from the apex.

@@ -3,7 +3,7 @@
 //! [`packet_leaf_scalar`](super::leaf::packet_leaf_scalar); the kernel types that call it are in
 //! `packet/leaf.rs`, and the packet's node test (`FrustumBroadcast`) is with the node kernels.
 
-use super::bundle::LineBundle;
+use super::bundle::{LeafSize, LineBundle};
 use super::rays::{PACKET, PacketRays};
 use crate::bvh::bounds::{Bounds, FAR_SCALE, SLAB_PAD};
 use crate::bvh::leaf::RECORD_VERTICES;
@@ -20,6 +20,12 @@ unsafe fn lanes<V: Lanes>(row: &[f32; PACKET], base: usize) -> V {
     debug_assert!(base < PACKET);
     // SAFETY: the caller's guarantee.
     unsafe { V::loadu(row.as_ptr().add(base)) }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// How many leaves this thread's packets tested without their box test (for the tests).
+    pub(super) static COVERING: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
 
 /// The triangles of the leaf at `offset` that some line of `bundle` may cross
@@ -39,8 +45,9 @@ fn crossable(bundle: &LineBundle, bvh: &WideBvh, offset: u32) -> u64 {
 /// triangles, for `L` rays at a time, by the same operations as the single-ray tests
 /// ([`RayBoxTest::enter`](crate::bvh::RayBoxTest::enter), [`watertight_sheared`]).
 ///
-/// Where the leaf covers the packet ([`LineBundle::covers`]) the slab test is left out and
-/// every open ray is tested against the triangles the bundle may cross. That changes no
+/// Where the rays' lines meet in one point and the leaf is far larger than the packet's
+/// footprint ([`LeafSize::Covering`]), the slab test is left out and every open ray is tested
+/// against the triangles the bundle may cross. That changes no
 /// answer: the slab test is conservative (a ray that hits a triangle enters the box of its
 /// leaf, or the single-ray traversal would miss the hit that brute force finds), so it only
 /// ever spares triangle tests, and a ray tested against more triangles than its own traversal
@@ -81,12 +88,12 @@ pub(crate) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
         // ray is tested against it.
         let mut active = [0u32; PACKET / 4];
         let groups = rays.len.div_ceil(L);
-        // Not `Option::filter` with a closure (a closure would not inherit the target features).
-        let bundle = rays.bundle.as_ref();
-        let covering = match bundle {
-            Some(bundle) if bundle.covers(bounds) => Some(bundle),
-            _ => None,
+        // The leaf's size beside the packet's footprint, where the rays' lines meet in a point.
+        let (bundle, size) = match &rays.bundle {
+            Some(bundle) => (Some(bundle), bundle.size_of(bounds)),
+            None => (None, LeafSize::Small),
         };
+        let covering = if size == LeafSize::Covering { bundle } else { None };
         let live = if let Some(bundle) = covering {
             // A leaf that covers the packet (a wall of a small scene before a tile): the
             // triangles no line of the packet crosses culled once, the rest tested against
@@ -95,6 +102,8 @@ pub(crate) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
             if live == 0 {
                 return;
             }
+            #[cfg(test)]
+            COVERING.set(COVERING.get() + 1);
             for (g, active) in active.iter_mut().enumerate().take(groups) {
                 *active = (*open >> (g * L)) as u32 & ((1 << L) - 1);
             }
@@ -135,7 +144,7 @@ pub(crate) unsafe fn packet_leaf_lanes<V: Lanes, const L: usize>(
             // the packet's frustum reaches are entered by none of its rays), and only where
             // the leaf is large beside the packet.
             match bundle {
-                Some(bundle) if bundle.worth_culling(bounds) => crossable(bundle, bvh, offset),
+                Some(bundle) if size == LeafSize::Large => crossable(bundle, bvh, offset),
                 _ => u64::MAX,
             }
         };

@@ -14,7 +14,9 @@ pub(crate) trait PacketKernel: Kernel {
     /// Tests the rays of a packet in `open` that enter `bounds` against the triangles of the
     /// leaf inside it: for the closest hit (`occlusion` false: each ray's best hit is offered
     /// every hit), or for occlusion (rays hit are taken out of `open`). Decides exactly as the
-    /// single-ray tests do; the scalar twin is [`packet_leaf_scalar`].
+    /// single-ray tests do; the scalar twin is [`packet_leaf_scalar`]. (The lane kernels test
+    /// every open ray, without the box test, against a leaf far larger than the packet's
+    /// footprint: the same answers, `packet/lanes.rs` says why.)
     ///
     /// # Safety
     /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).

@@ -51,7 +51,9 @@ pub(crate) struct PacketRays {
     /// (whose `kz` is the dominant axis).
     pub negative: [bool; 3],
     pub k: [usize; 3],
-    /// The rays' lines, when they share their origin: culls a leaf's triangles for all of them.
+    /// The rays' lines, when they meet in one point (a shared origin, or the light that shadow
+    /// rays end at): culls a leaf's triangles for all of them, and sizes leaves against the
+    /// packet's footprint ([`LineBundle::size_of`]).
     pub bundle: Option<LineBundle>,
 }
 
