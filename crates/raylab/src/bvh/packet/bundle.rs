@@ -386,6 +386,39 @@ mod tests {
         tally.assert_culls(3);
     }
 
+    /// A leaf is sized by its largest edge against the footprint `distance·spread` of the
+    /// packet at the leaf's centre: above twice it `Large`, above sixteen times `Covering`.
+    #[test]
+    fn leaves_are_sized_against_the_packet_footprint() {
+        // A 9×9 tile from the origin, directions over [0.01, 0.03] in x and y (one octant) and 1
+        // in z: the footprint at distance 10 is about 10·0.02 = 0.2 (the spread is the
+        // direction box's largest edge over the largest component).
+        let rays: Vec<Ray> = (0..81)
+            .map(|i| {
+                let (x, y) = ((i % 9) as f32 - 4.0, (i / 9) as f32 - 4.0);
+                Ray::new(Vec3::ZERO, Vec3::new(0.02 + x * 0.0025, 0.02 + y * 0.0025, 1.0))
+            })
+            .collect();
+        let bundle = bundle_of(&rays).expect("a bundle");
+        let leaf = |edge: f32| {
+            let centre = Vec3::new(0.2, 0.2, 10.0);
+            Bounds {
+                min: centre - Vec3::new(edge / 2.0, 0.0, 0.0),
+                max: centre + Vec3::new(edge / 2.0, 0.0, 0.0),
+            }
+        };
+        for (edge, size) in [
+            (0.1, LeafSize::Small),
+            (0.39, LeafSize::Small),
+            (0.41, LeafSize::Large),
+            (3.1, LeafSize::Large),
+            (3.3, LeafSize::Covering),
+            (100.0, LeafSize::Covering),
+        ] {
+            assert_eq!(bundle.size_of(&leaf(edge)), size, "edge {edge}");
+        }
+    }
+
     #[test]
     fn packets_from_several_origins_have_no_bundle() {
         let rays = [Ray::new(Vec3::ZERO, Vec3::ONE), Ray::new(Vec3::X, Vec3::ONE)];

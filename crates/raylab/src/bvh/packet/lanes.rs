@@ -47,8 +47,8 @@ fn crossable(bundle: &LineBundle, bvh: &WideBvh, offset: u32) -> u64 {
 ///
 /// Where the rays' lines meet in one point and the leaf is far larger than the packet's
 /// footprint ([`LeafSize::Covering`]), the slab test is left out and every open ray is tested
-/// against the triangles the bundle may cross. That changes no
-/// answer: the slab test is conservative (a ray that hits a triangle enters the box of its
+/// against the triangles the bundle may cross. That changes no answer: the slab test is
+/// conservative (a ray that hits a triangle enters the box of its
 /// leaf, or the single-ray traversal would miss the hit that brute force finds), so it only
 /// ever spares triangle tests, and a ray tested against more triangles than its own traversal
 /// tests still gets the nearest hit below its limit, ties to the lowest index.
