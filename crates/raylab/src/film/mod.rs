@@ -7,6 +7,7 @@ use image::RgbImage;
 
 mod display;
 
+pub(crate) use display::to_8bit_clamped_lane;
 pub use display::{Display, ToneMap, to_8bit_clamped};
 
 /// Why a film cannot be made.
