@@ -3,11 +3,13 @@
 //! twin, [`packet_leaf_scalar`], runs them ray by ray.
 
 use super::rays::PacketRays;
+use super::setup::RayRows;
 use crate::bvh::bounds::Bounds;
 use crate::bvh::isa::Scalar;
 use crate::bvh::leaf::kernel::prepare_triangle_ray;
 use crate::bvh::node::WideBvh;
 use crate::bvh::traverse::{Closest, Kernel, leaf_occluded};
+use crate::ray::Ray;
 
 /// The packet leaf test, per instruction set: by default [`packet_leaf_scalar`].
 pub(crate) trait PacketKernel: Kernel {
@@ -31,6 +33,21 @@ pub(crate) trait PacketKernel: Kernel {
     ) {
         // SAFETY: the caller's guarantee.
         unsafe { packet_leaf_scalar::<Self>(rays, open, occlusion, bvh, bounds, offset) }
+    }
+
+    /// Copies `rays` (at most [`PACKET`](super::rays::PACKET)) into rows for
+    /// [`fill`](super::setup::fill): by default one ray at a time
+    /// ([`rows_portable`](super::setup::rows_portable)).
+    ///
+    /// # Safety
+    /// The CPU must support the kernel's instruction set.
+    #[inline(always)]
+    unsafe fn rows_of_rays(
+        rays: &[Ray],
+        origin: &mut [[f32; super::rays::PACKET]; 3],
+        rest: &mut RayRows,
+    ) {
+        super::setup::rows_portable(rays, origin, rest)
     }
 }
 
@@ -90,7 +107,7 @@ mod x86 {
     /// The packet leaf `$lanes` rays per register `$register`: SSE2's four, AVX2's eight and
     /// AVX-512's sixteen.
     macro_rules! packet_kernel {
-        ($isa:ty, $register:ty, $lanes:literal) => {
+        ($isa:ty, $register:ty, $lanes:literal, $transpose:literal) => {
             impl PacketKernel for $isa {
                 #[inline(always)]
                 unsafe fn packet_leaf(
@@ -109,10 +126,25 @@ mod x86 {
                         )
                     }
                 }
+
+                /// SSE2 copies the rays one by one; AVX2 and AVX-512 by an AVX transposition.
+                #[inline(always)]
+                unsafe fn rows_of_rays(
+                    rays: &[Ray],
+                    origin: &mut [[f32; crate::bvh::packet::rays::PACKET]; 3],
+                    rest: &mut RayRows,
+                ) {
+                    if $transpose {
+                        // SAFETY: the caller's guarantee of the instruction set, which has AVX.
+                        unsafe { crate::bvh::packet::setup::rows_avx(rays, origin, rest) }
+                    } else {
+                        crate::bvh::packet::setup::rows_portable(rays, origin, rest)
+                    }
+                }
             }
         };
     }
-    packet_kernel!(Sse, __m128, 4);
-    packet_kernel!(Avx2, __m256, 8);
-    packet_kernel!(Avx512, __m512, 16);
+    packet_kernel!(Sse, __m128, 4, false);
+    packet_kernel!(Avx2, __m256, 8, true);
+    packet_kernel!(Avx512, __m512, 16, true);
 }

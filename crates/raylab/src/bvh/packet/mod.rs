@@ -46,6 +46,8 @@ struct Chunk {
     alone: u64,
     /// A second packet for a group that is not the whole chunk, made when first needed.
     gathered: Option<PacketRays>,
+    /// The rays' directions and ranges in rows, on their way into `lanes` ([`setup::fill`]).
+    rows: setup::RayRows,
 }
 
 thread_local! {
@@ -89,16 +91,21 @@ impl Chunk {
             shared: [([false; 3], [0, 1, 2]); 24],
             alone: 0,
             gathered: None,
+            rows: [[0.0; PACKET]; 5],
         }
     }
 
     /// Prepares `rays` (at most [`PACKET`]).
+    ///
+    /// # Safety
+    /// The CPU must support `K`'s instruction set.
     #[inline(always)]
-    fn prepare(&mut self, rays: &[Ray]) {
+    unsafe fn prepare<K: PacketKernel>(&mut self, rays: &[Ray]) {
         self.groups = [0; 24];
         self.present = 0;
         self.alone = 0;
-        let groups = setup::fill(&mut self.lanes, rays);
+        // SAFETY: the caller's guarantee.
+        let groups = unsafe { setup::fill::<K>(&mut self.lanes, &mut self.rows, rays) };
         let groups = &groups[..rays.len()];
         // Camera and shadow rays are nearly always one group: found without a loop through
         // memory (each `|=` below waits on the one before it).
@@ -256,7 +263,8 @@ pub(crate) unsafe fn closest_hits<K: PacketKernel>(
     assert_eq!(rays.len(), out.len(), "one answer per ray");
     let mut chunk = Chunk::take();
     for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-        chunk.prepare(rays);
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        unsafe { chunk.prepare::<K>(rays) };
         // SAFETY: the caller guarantees `K`'s instruction set.
         unsafe { chunk.trace::<K, ClosestHits>(bvh, rays, out) };
     }
@@ -331,7 +339,8 @@ pub(crate) unsafe fn occluded_each<K: PacketKernel>(bvh: &WideBvh, rays: &[Ray],
     assert_eq!(rays.len(), out.len(), "one answer per ray");
     let mut chunk = Chunk::take();
     for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-        chunk.prepare(rays);
+        // SAFETY: the caller guarantees `K`'s instruction set.
+        unsafe { chunk.prepare::<K>(rays) };
         // SAFETY: the caller guarantees `K`'s instruction set.
         unsafe { chunk.trace::<K, OccludedEach>(bvh, rays, out) };
     }

@@ -8,6 +8,7 @@
 //! (selects only), sixteen lanes per AVX-512 instruction in the instruction sets' entry points.
 //! The values are those of `set_lane`, bit for bit (the test below compares them).
 
+use super::leaf::PacketKernel;
 use super::rays::{PACKET, PacketRays};
 use crate::bvh::bounds::FAR_SCALE;
 use crate::ray::Ray;
@@ -16,27 +17,106 @@ use crate::ray::Ray;
 /// non-finite value): its ray is traced alone.
 pub(super) const ALONE: u8 = u8::MAX;
 
-/// Fills `lanes` from `rays` (at most [`PACKET`]) and returns each lane's group: its direction
-/// octant and dominant axis as `octant·3 + axis`, `0..24`, or [`ALONE`]. Lanes from
-/// `rays.len()` on hold values of no meaning.
+/// A packet's rays' directions (three rows), `t_min` and `t_max`, lane `i` for ray `i`: what
+/// [`fill`] reads besides the origins, which it copies straight into the packet's lanes.
+pub(super) type RayRows = [[f32; PACKET]; 5];
+
+/// Copies `rays` (at most [`PACKET`]) into rows: their origins into `origin`, their directions,
+/// `t_min` and `t_max` into `rest` (the scalar twin of [`rows_avx`]).
 #[inline(always)]
-pub(super) fn fill(lanes: &mut PacketRays, rays: &[Ray]) -> [u8; PACKET] {
-    assert!(rays.len() <= PACKET, "a packet holds at most {PACKET} rays");
-    lanes.len = rays.len();
-    let mut direction = [[0.0f32; PACKET]; 3];
-    let mut t_min = [0.0f32; PACKET];
-    let mut t_max = [0.0f32; PACKET];
+pub(super) fn rows_portable(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RayRows) {
     for (i, ray) in rays.iter().enumerate() {
         let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
-        for ((origin, direction), (o, d)) in
-            lanes.origin.iter_mut().zip(&mut direction).zip(o.into_iter().zip(d))
-        {
-            origin[i] = o;
-            direction[i] = d;
+        for axis in 0..3 {
+            origin[axis][i] = o[axis];
+            rest[axis][i] = d[axis];
         }
-        t_min[i] = ray.t_min;
-        t_max[i] = ray.t_max;
+        rest[3][i] = ray.t_min;
+        rest[4][i] = ray.t_max;
     }
+}
+
+/// [`rows_portable`] eight rays at a time: a ray is eight floats (`Ray` is `repr(C)`: origin,
+/// direction, `t_min`, `t_max`), so eight rays are an 8×8 matrix, loaded as eight AVX
+/// registers and transposed by unpacks, shuffles and lane permutes into eight rows (the
+/// transposition writes each float where the portable copy does; no arithmetic).
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RayRows) {
+    use std::arch::x86_64::*;
+    const _: () = assert!(std::mem::size_of::<Ray>() == 32);
+    assert!(rays.len() <= PACKET, "a packet holds at most {PACKET} rays");
+    let (blocks, tail) = rays.as_chunks::<8>();
+    for (b, block) in blocks.iter().enumerate() {
+        let base = 8 * b;
+        // SAFETY: the caller guarantees AVX; each load reads one `Ray`, 32 bytes of `f32`s
+        // (`repr(C)`, asserted above); each store writes 8 floats of a row from `base`, and
+        // `base + 8 ≤ rays.len() ≤ PACKET`.
+        unsafe {
+            let r = block.each_ref().map(|ray| _mm256_loadu_ps((ray as *const Ray).cast()));
+            let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+            let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+            let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+            let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+            let t4 = _mm256_unpacklo_ps(r[4], r[5]);
+            let t5 = _mm256_unpackhi_ps(r[4], r[5]);
+            let t6 = _mm256_unpacklo_ps(r[6], r[7]);
+            let t7 = _mm256_unpackhi_ps(r[6], r[7]);
+            // Words (0, 4), (1, 5), (2, 6), (3, 7) of rays 0–3 and of rays 4–7.
+            let u0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+            let u1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+            let u2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+            let u3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+            let u4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+            let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+            let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+            let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+            let store = |row: &mut [f32; PACKET], v: __m256| {
+                _mm256_storeu_ps(row.as_mut_ptr().add(base), v)
+            };
+            store(&mut origin[0], _mm256_permute2f128_ps::<0x20>(u0, u4));
+            store(&mut origin[1], _mm256_permute2f128_ps::<0x20>(u1, u5));
+            store(&mut origin[2], _mm256_permute2f128_ps::<0x20>(u2, u6));
+            store(&mut rest[0], _mm256_permute2f128_ps::<0x20>(u3, u7));
+            store(&mut rest[1], _mm256_permute2f128_ps::<0x31>(u0, u4));
+            store(&mut rest[2], _mm256_permute2f128_ps::<0x31>(u1, u5));
+            store(&mut rest[3], _mm256_permute2f128_ps::<0x31>(u2, u6));
+            store(&mut rest[4], _mm256_permute2f128_ps::<0x31>(u3, u7));
+        }
+    }
+    let base = 8 * blocks.len();
+    for (i, ray) in tail.iter().enumerate() {
+        let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
+        for axis in 0..3 {
+            origin[axis][base + i] = o[axis];
+            rest[axis][base + i] = d[axis];
+        }
+        rest[3][base + i] = ray.t_min;
+        rest[4][base + i] = ray.t_max;
+    }
+}
+
+/// Fills `lanes` from `rays` (at most [`PACKET`]), through `rows` (`K`'s copy of the rays into
+/// rows), and returns each lane's group: its direction octant and dominant axis as
+/// `octant·3 + axis`, `0..24`, or [`ALONE`]. Lanes from `rays.len()` on hold values of no
+/// meaning.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(super) unsafe fn fill<K: PacketKernel>(
+    lanes: &mut PacketRays,
+    rows: &mut RayRows,
+    rays: &[Ray],
+) -> [u8; PACKET] {
+    assert!(rays.len() <= PACKET, "a packet holds at most {PACKET} rays");
+    lanes.len = rays.len();
+    // SAFETY: the caller's guarantee.
+    unsafe { K::rows_of_rays(rays, &mut lanes.origin, rows) };
+    let [direction @ .., t_min, t_max] = &*rows;
     let mut groups = [ALONE; PACKET];
     for i in 0..PACKET {
         let (ox, oy, oz) = (lanes.origin[0][i], lanes.origin[1][i], lanes.origin[2][i]);
@@ -111,6 +191,95 @@ mod tests {
 
     use super::*;
 
+    /// [`fill`] by every instruction set this CPU has (their rows of rays by their own
+    /// copies: the portable loop or the AVX transposition), checked to fill every lane below
+    /// `rays.len()` alike; returns the first set's lanes in `lanes` and its groups.
+    fn fill_each_isa(lanes: &mut PacketRays, rays: &[Ray]) -> [u8; PACKET] {
+        use crate::bvh::isa::Scalar;
+        let mut rows = [[f32::NAN; PACKET]; 5];
+        // SAFETY: the scalar kernel needs no instruction set.
+        let groups = unsafe { fill::<Scalar>(lanes, &mut rows, rays) };
+        #[cfg(target_arch = "x86_64")]
+        {
+            use crate::bvh::isa::{Avx2, Avx512, Sse};
+            use crate::cpu::Isa;
+            let n = rays.len();
+            let check = |other: &PacketRays, other_groups: [u8; PACKET], isa: Isa| {
+                assert_eq!(groups[..n], other_groups[..n], "{isa:?}");
+                let bits = |rows: &[[f32; PACKET]]| -> Vec<u32> {
+                    rows.iter().flat_map(|row| row[..n].iter().map(|v| v.to_bits())).collect()
+                };
+                assert_eq!(bits(&lanes.origin), bits(&other.origin), "{isa:?}");
+                assert_eq!(bits(&lanes.inv_direction), bits(&other.inv_direction), "{isa:?}");
+                assert_eq!(bits(&lanes.shear), bits(&other.shear), "{isa:?}");
+                for (a, b) in [
+                    (&lanes.box_t_min, &other.box_t_min),
+                    (&lanes.triangle_t_min, &other.triangle_t_min),
+                    (&lanes.triangle_limit, &other.triangle_limit),
+                    (&lanes.box_limit, &other.box_limit),
+                ] {
+                    assert_eq!(bits(&[*a]), bits(&[*b]), "{isa:?}");
+                }
+            };
+            let mut other = PacketRays::new();
+            // Rows left from a longer packet must not leak into a shorter one.
+            let mut other_rows = [[f32::NAN; PACKET]; 5];
+            for isa in [Isa::Sse2, Isa::Avx2, Isa::Avx512].into_iter().filter(|i| i.is_supported())
+            {
+                // SAFETY: each set runs only where `is_supported` says this CPU has it.
+                let other_groups = unsafe {
+                    match isa {
+                        Isa::Sse2 => fill::<Sse>(&mut other, &mut other_rows, rays),
+                        Isa::Avx2 => fill::<Avx2>(&mut other, &mut other_rows, rays),
+                        _ => fill::<Avx512>(&mut other, &mut other_rows, rays),
+                    }
+                };
+                check(&other, other_groups, isa);
+            }
+        }
+        groups
+    }
+
+    /// The AVX transposition puts every float of every ray where the portable copy puts it,
+    /// for every packet length (whole blocks of eight and a tail).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn rays_are_transposed_into_rows_as_copied() {
+        if !crate::cpu::Isa::Avx2.is_supported() {
+            eprintln!("skipped: this CPU has no AVX2 (the transposition never runs on it)");
+            return;
+        }
+        let rays: Vec<Ray> = (0..PACKET)
+            .map(|i| {
+                let f = |k: usize| (i * 8 + k) as f32;
+                let mut ray = Ray::new(Vec3::new(f(0), f(1), f(2)), Vec3::new(f(3), f(4), f(5)));
+                (ray.t_min, ray.t_max) = (f(6), f(7));
+                ray
+            })
+            .collect();
+        for n in 0..=PACKET {
+            let (mut origin, mut rest) = ([[-1.0; PACKET]; 3], [[-1.0; PACKET]; 5]);
+            let (mut origin_avx, mut rest_avx) = ([[-2.0; PACKET]; 3], [[-2.0; PACKET]; 5]);
+            rows_portable(&rays[..n], &mut origin, &mut rest);
+            // SAFETY: AVX2 (so AVX) was checked above.
+            unsafe { rows_avx(&rays[..n], &mut origin_avx, &mut rest_avx) };
+            for i in 0..n {
+                let words = [origin[0][i], origin[1][i], origin[2][i]]
+                    .into_iter()
+                    .chain(rest.iter().map(|row| row[i]));
+                for (k, word) in words.enumerate() {
+                    assert_eq!(word, (i * 8 + k) as f32, "ray {i} word {k} of {n}");
+                }
+                assert_eq!(origin.map(|r| r[i]), origin_avx.map(|r| r[i]), "ray {i} of {n}");
+                assert_eq!(rest.map(|r| r[i]), rest_avx.map(|r| r[i]), "ray {i} of {n}");
+            }
+            // Nothing past the rays is written.
+            assert!(
+                origin_avx.iter().chain(&rest_avx).all(|row| row[n..].iter().all(|&v| v == -2.0))
+            );
+        }
+    }
+
     /// Every lane is filled as `set_lane` fills it, and grouped alike, for hostile rays: zero
     /// and negative-zero components, NaN and infinite values, reversed ranges, each octant and
     /// dominant axis, and ties between axes.
@@ -141,7 +310,7 @@ mod tests {
                 })
                 .collect();
             let mut vector = PacketRays::new();
-            let groups = fill(&mut vector, &rays);
+            let groups = fill_each_isa(&mut vector, &rays);
             let mut scalar = PacketRays::new();
             for (i, ray) in rays.iter().enumerate() {
                 let expected = scalar.set_lane(i, ray);
