@@ -69,6 +69,16 @@ pub struct Geometry {
     scene_triangles: usize,
 }
 
+/// A flat geometry's stored arrays ([`Geometry::flat_arrays`]), one entry per triangle except
+/// `positions`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FlatArrays<'a> {
+    pub triangles: &'a [[u32; 3]],
+    pub positions: &'a [Vec3],
+    pub normals: &'a [Vec3],
+    pub material_ids: &'a [u32],
+}
+
 impl Geometry {
     /// Feeds every triangle's vertices, normals, shading normals, texture coordinates and
     /// material into `hasher`, as their bits.
@@ -319,6 +329,22 @@ impl Geometry {
             return None;
         }
         Some((self.stored_triangle(i), self.normals[i], self.material_ids[i]))
+    }
+
+    /// Where the geometry is not instanced, its stored arrays, scene triangle `i` being stored
+    /// triangle `i`: the triangles' corner indices, the positions they index (every index is in
+    /// range: [`add_mesh`](Self::add_mesh) checks them), the geometric normals and the
+    /// material ids. For kernels that gather them in lanes.
+    pub(crate) fn flat_arrays(&self) -> Option<FlatArrays<'_>> {
+        if self.placed {
+            return None;
+        }
+        Some(FlatArrays {
+            triangles: &self.triangles,
+            positions: &self.positions,
+            normals: &self.normals,
+            material_ids: &self.material_ids,
+        })
     }
 
     /// The three world corners of scene triangle `i`.

@@ -1,193 +1,37 @@
-//! `lab`: the lab's light model (KTH DH2323 Lab 2, §"Illumination").
-//!
-//! A point light gives a surface the power per area `D = P·max(r̂·n̂, 0) / (4πr²)` (eq. 27),
-//! zero when a shadow ray toward the light is blocked; a constant `N` stands in for indirect
-//! light; the colour is `R = ρ ∗ (D + N)` (eq. 30). Shown as the lab shows it: each channel
-//! clamped to `[0, 1]`, no gamma (see [`Film::to_rgb8_clamped`](crate::Film::to_rgb8_clamped)).
-//!
-//! [`Stage`] replays the lab step by step for learners, from flat colours to the full model.
-//! Surfaces are two-sided: the normal is turned toward the viewer, so a wall seen from behind is
-//! lit only by a light on that side. Shadow rays leave the surface with a rounding-error-aware offset (see [`crate::ray`]) rather
-//! than a magic epsilon, so there is no shadow acne at any scene scale.
+//! The lab's shading of a tile of hits, lane by lane in arrays ([`TileShading`]): what
+//! [`Lab::shade`] computes for one hit, bit for bit, for 64 at a time.
 
 use std::f32::consts::PI;
-use std::fmt;
-use std::str::FromStr;
 
 use glam::Vec3;
 
-use super::Integrator;
+use super::{Lab, Shading, Stage};
 use crate::accel::{Accelerator, Hit};
-use crate::camera::Camera;
 use crate::float::gamma;
-use crate::light::PointLight;
+use crate::geometry::FlatArrays;
 use crate::ray::{Ray, step_away};
-use crate::sampling::{Sampler, SamplerKind};
-use crate::scene::Scene;
-
-/// One step of the lab, each adding one idea to the previous.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
-#[cfg_attr(feature = "io", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "io", serde(rename_all = "lowercase"))]
-pub enum Stage {
-    /// The colour ρ of the closest triangle, black where nothing is hit.
-    Flat,
-    /// The light's power per area `D` alone (eq. 27), no colour and no shadows.
-    Direct,
-    /// Reflected light `ρ ∗ D`, no shadows.
-    Reflected,
-    /// `ρ ∗ D` with shadow rays.
-    Shadows,
-    /// The full model `ρ ∗ (D + N)` with shadows (eq. 30).
-    #[default]
-    Ambient,
-}
-
-impl Stage {
-    /// Every stage, in the lab's order.
-    pub const ALL: [Stage; 5] =
-        [Stage::Flat, Stage::Direct, Stage::Reflected, Stage::Shadows, Stage::Ambient];
-
-    /// The name used on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Flat => "flat",
-            Stage::Direct => "direct",
-            Stage::Reflected => "reflected",
-            Stage::Shadows => "shadows",
-            Stage::Ambient => "ambient",
-        }
-    }
-
-    /// What the stage shows, in a few words.
-    pub fn description(self) -> &'static str {
-        match self {
-            Stage::Flat => "flat triangle colour ρ",
-            Stage::Direct => "direct light D only (eq. 27)",
-            Stage::Reflected => "reflected light ρ∗D",
-            Stage::Shadows => "ρ∗D with shadows",
-            Stage::Ambient => "ρ∗(D+N) with shadows and ambient (eq. 30)",
-        }
-    }
-}
-
-impl fmt::Display for Stage {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// The stage name was not one of [`Stage::ALL`].
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
-#[error("unknown stage '{0}': expected one of flat, direct, reflected, shadows, ambient (or 1–5)")]
-pub struct UnknownStage(pub String);
-
-impl FromStr for Stage {
-    type Err = UnknownStage;
-
-    /// A stage by name or by its number in the lab's order, 1 to 5.
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Stage::ALL
-            .into_iter()
-            .enumerate()
-            .find(|(i, stage)| s == stage.name() || s == (i + 1).to_string())
-            .map(|(_, stage)| stage)
-            .ok_or_else(|| UnknownStage(s.to_string()))
-    }
-}
-
-/// The lab's integrator over a scene and an accelerator built from its
-/// [`vertices`](Scene::vertices).
-#[derive(Debug)]
-pub struct Lab<'a, A: ?Sized> {
-    scene: &'a Scene,
-    accel: &'a A,
-    stage: Stage,
-    /// The point light: the scene's, unless moved (as `raylab view` moves it).
-    pub light: PointLight,
-    /// The constant indirect light `N` of eq. (30).
-    pub ambient: Vec3,
-    /// The angle one pixel subtends, in radians ([`Camera::pixel_spread`]): textures are
-    /// filtered over the ray cone it gives (see [`crate::texture`]), so that one sample per
-    /// pixel does not alias. 0 reads them at a point.
-    pub pixel_spread: f32,
-}
-
-// By hand: the derive would ask `A: Copy`, but a `Lab` only holds a reference to it.
-impl<A: ?Sized> Clone for Lab<'_, A> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-
-impl<A: ?Sized> Copy for Lab<'_, A> {}
-
-impl<'a, A: Accelerator + ?Sized> Lab<'a, A> {
-    /// The lab's model at `stage`, with the scene's [`lab_light`](Scene::lab_light) and the lab's
-    /// ambient light `N = 0.5`.
-    pub fn new(scene: &'a Scene, accel: &'a A, stage: Stage) -> Self {
-        Lab {
-            scene,
-            accel,
-            stage,
-            light: scene.lab_light(),
-            ambient: Vec3::splat(0.5),
-            pixel_spread: 0.0,
-        }
-    }
-
-    /// Reads textures over the ray cone of a camera's pixels ([`pixel_spread`](Self::pixel_spread)).
-    pub fn for_camera(mut self, camera: &Camera) -> Self {
-        self.pixel_spread = camera.pixel_spread();
-        self
-    }
-
-    /// The colour of material `id` where `ray` meets `hit`.
-    #[inline]
-    fn albedo(&self, ray: &Ray, hit: &Hit, id: u32) -> Vec3 {
-        let material = &self.scene.materials[id as usize];
-        if material.textures.is_empty() {
-            material.bsdf.albedo()
-        } else {
-            material.albedo_at(&self.scene.geometry.texture_query(ray, hit, self.pixel_spread))
-        }
-    }
-}
-
-/// What a camera ray sees before the shadow test: the colour, the light's `D` and the shadow
-/// ray that decides whether `D` counts.
-struct Shading {
-    albedo: Vec3,
-    direct: Vec3,
-    shadow_ray: Option<Ray>,
-}
-
-impl Shading {
-    /// Nothing seen.
-    const NONE: Shading = Shading { albedo: Vec3::ZERO, direct: Vec3::ZERO, shadow_ray: None };
-}
 
 /// Rays shaded together: one tile of [`Integrator::radiance_each`].
-const TILE: usize = 64;
+pub(super) const TILE: usize = 64;
 
 /// [`Lab::shade`] for a tile's hits, lane by lane in arrays: the triangles' data gathered
 /// first, then every lane computed by the same operations as `shade` (and
 /// [`SurfacePoint::spawn_ray_to`](crate::ray::SurfacePoint::spawn_ray_to)), in the same order and without branches, which the compiler
 /// vectorizes. The values are `shade`'s bit for bit (the test below compares them).
-struct TileShading {
-    albedo: [[f32; TILE]; 3],
-    direct: [[f32; TILE]; 3],
+pub(super) struct TileShading {
+    pub(super) albedo: [[f32; TILE]; 3],
+    pub(super) direct: [[f32; TILE]; 3],
     /// Whether the lane's shadow ray decides its `direct`.
-    shadow: [bool; TILE],
+    pub(super) shadow: [bool; TILE],
     /// The shadow rays' origins, moved off their surfaces, where `shadow` is set.
-    shadow_origin: [[f32; TILE]; 3],
+    pub(super) shadow_origin: [[f32; TILE]; 3],
     /// Lanes whose moved origin is not finite: their shadow ray is `shade`'s own.
-    unusual: [bool; TILE],
+    pub(super) unusual: [bool; TILE],
 }
 
 /// The hits of a tile gathered for [`TileShading`]: corners, normals, ray directions and
 /// barycentrics, row by row (zeros where a lane misses).
-struct Gathered {
+pub(super) struct Gathered {
     corner: [[[f32; TILE]; 3]; 3],
     normal: [[f32; TILE]; 3],
     direction: [[f32; TILE]; 3],
@@ -199,12 +43,12 @@ struct Gathered {
 /// A thread's arrays for the lab's tiles, kept from tile to tile and call to call (as the
 /// packets keep theirs): made afresh for each tile of 64 rays, their 10 KB were zeroed and
 /// moved every time.
-struct TileArrays {
-    hits: [Option<Hit>; TILE],
-    shading: TileShading,
-    gathered: Gathered,
-    shadow_rays: [Ray; TILE],
-    occluded: [bool; TILE],
+pub(super) struct TileArrays {
+    pub(super) hits: [Option<Hit>; TILE],
+    pub(super) shading: TileShading,
+    pub(super) gathered: Gathered,
+    pub(super) shadow_rays: [Ray; TILE],
+    pub(super) occluded: [bool; TILE],
 }
 
 thread_local! {
@@ -215,7 +59,7 @@ thread_local! {
 
 impl TileArrays {
     /// This thread's arrays, or new ones.
-    fn take() -> Box<TileArrays> {
+    pub(super) fn take() -> Box<TileArrays> {
         SPARE_TILE.take().unwrap_or_else(|| {
             Box::new(TileArrays {
                 hits: [None; TILE],
@@ -241,7 +85,7 @@ impl TileArrays {
     }
 
     /// Keeps `arrays` for this thread's next call.
-    fn give_back(arrays: Box<TileArrays>) {
+    pub(super) fn give_back(arrays: Box<TileArrays>) {
         SPARE_TILE.set(Some(arrays));
     }
 }
@@ -252,7 +96,7 @@ impl TileShading {
     /// operations either way: Rust never fuses a multiply and an add, so the lanes are the
     /// same bits; the test below checks both forms). Lanes from `rays.len()` on hold values of
     /// no meaning.
-    fn shade<A: Accelerator + ?Sized>(
+    pub(super) fn shade<A: Accelerator + ?Sized>(
         &mut self,
         gathered: &mut Gathered,
         lab: &Lab<'_, A>,
@@ -267,7 +111,8 @@ impl TileShading {
         self.shade_portable(gathered, lab, rays, hits)
     }
 
-    /// [`shade`](Self::shade) with AVX2 enabled.
+    /// [`shade`](Self::shade) with AVX2 enabled, its hits gathered by AVX2's gathers where
+    /// the geometry is flat ([`gather_avx2`](Self::gather_avx2)).
     ///
     /// # Safety
     /// The CPU must support AVX2.
@@ -280,12 +125,32 @@ impl TileShading {
         rays: &[Ray],
         hits: &[Option<Hit>],
     ) {
-        self.shade_portable(gathered, lab, rays, hits)
+        match lab.scene.geometry.flat_arrays() {
+            // SAFETY: the caller guarantees AVX2.
+            Some(arrays) => unsafe { self.gather_avx2(gathered, lab, arrays, rays, hits) },
+            None => self.gather_portable(gathered, lab, rays, hits),
+        }
+        self.light(gathered, lab, hits);
     }
 
     /// [`shade`](Self::shade) for any instruction set.
     #[inline(always)]
     fn shade_portable<A: Accelerator + ?Sized>(
+        &mut self,
+        gathered: &mut Gathered,
+        lab: &Lab<'_, A>,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+    ) {
+        self.gather_portable(gathered, lab, rays, hits);
+        self.light(gathered, lab, hits);
+    }
+
+    /// Gathers the tile's hits into `gathered` (and their albedo into `self`) one lane at a
+    /// time: the twin of [`gather_avx2`](Self::gather_avx2), and the form for instanced
+    /// geometry.
+    #[inline(always)]
+    fn gather_portable<A: Accelerator + ?Sized>(
         &mut self,
         gathered: &mut Gathered,
         lab: &Lab<'_, A>,
@@ -301,7 +166,6 @@ impl TileShading {
         // Neighbouring hits mostly share a material: its albedo is looked up once for them
         // (unless it has a texture).
         let mut material = (u32::MAX, Vec3::ZERO, false);
-        let instanced = geometry.is_instanced();
         for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
             let Some(hit) = hit else {
                 for axis in 0..3 {
@@ -341,20 +205,152 @@ impl TileShading {
             (b1[i], b2[i]) = (hit.b1, hit.b2);
             hit_mask[i] = true;
         }
+    }
+
+    /// [`gather_portable`](Self::gather_portable) for a flat geometry's `arrays`, eight lanes
+    /// at a time by AVX2's gathers: the hits' triangle indices first (a miss reads triangle 0,
+    /// its lanes zeroed after), then each corner's index, the corners' coordinates, the normal
+    /// and the material id, each an 8-lane gather, where one lane at a time they were 16
+    /// dependent loads and as many stores per hit. The same values (moved, not computed).
+    /// Lanes beyond the rays are gathered too, from triangle 0.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn gather_avx2<A: Accelerator + ?Sized>(
+        &mut self,
+        gathered: &mut Gathered,
+        lab: &Lab<'_, A>,
+        arrays: FlatArrays<'_>,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+    ) {
+        use std::arch::x86_64::*;
+        assert!(rays.len() <= TILE && hits.len() == rays.len(), "a tile of rays and hits");
+        let n = rays.len();
+        let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
+        // The hits' triangles (0 for a miss and past the rays), in range of every per-triangle
+        // array: checked here, since the gathers below read unchecked.
+        let triangles = arrays.triangles.len();
+        assert!(
+            arrays.normals.len() == triangles && arrays.material_ids.len() == triangles,
+            "one normal and material per triangle"
+        );
+        let mut index = [0u32; TILE];
+        for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
+            let (t, u, v, hit) = match hit {
+                Some(h) => (h.triangle, h.b1, h.b2, true),
+                None => (0, 0.0, 0.0, false),
+            };
+            assert!((t as usize) < triangles, "the hit's triangle {t} is in the geometry");
+            index[i] = t;
+            (b1[i], b2[i], hit_mask[i]) = (u, v, hit);
+            let d = if hit { ray.direction } else { Vec3::ZERO };
+            for axis in 0..3 {
+                direction[axis][i] = d[axis];
+            }
+        }
+        if triangles == 0 {
+            // Every lane missed (the checks above passed): nothing to gather from.
+            self.albedo = [[0.0; TILE]; 3];
+            *corner = [[[0.0; TILE]; 3]; 3];
+            *normal = [[0.0; TILE]; 3];
+            return;
+        }
+        let vertices = arrays.positions.len();
+        let corners = arrays.triangles.as_ptr().cast::<i32>();
+        let positions = arrays.positions.as_ptr().cast::<f32>();
+        let normals = arrays.normals.as_ptr().cast::<f32>();
+        let ids = arrays.material_ids.as_ptr().cast::<i32>();
+        let mut material = [0u32; TILE];
+        for base in (0..TILE).step_by(8) {
+            // SAFETY: AVX2 is the caller's guarantee. Every gather reads inside its array:
+            // `index` holds triangle indices below `triangles` (asserted above), so
+            // `3·t + c < 3·triangles` words of `triangles`, `normals` (`Vec3` is three `f32`)
+            // and `t < triangles` of the material ids; the corners' indices are below
+            // `vertices` (asserted below before use), so `3·v + axis < 3·vertices` floats of
+            // `positions`. Loads and stores of rows are 8 lanes from `base ≤ TILE − 8`.
+            unsafe {
+                let t = _mm256_loadu_si256(index.as_ptr().add(base).cast());
+                let hit = _mm256_castsi256_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
+                    hit_mask.as_ptr().add(base).cast(),
+                )));
+                // A hit's lane is all ones: `bool` is the byte 1, so compare, not shift.
+                let hit = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                    _mm256_castps_si256(hit),
+                    _mm256_set1_epi32(1),
+                ));
+                let t3 = _mm256_add_epi32(_mm256_add_epi32(t, t), t);
+                let id = _mm256_i32gather_epi32::<4>(ids, t);
+                _mm256_storeu_si256(material.as_mut_ptr().add(base).cast(), id);
+                for (axis, row) in normal.iter_mut().enumerate() {
+                    let k = _mm256_add_epi32(t3, _mm256_set1_epi32(axis as i32));
+                    let g = _mm256_i32gather_ps::<4>(normals, k);
+                    _mm256_storeu_ps(row.as_mut_ptr().add(base), _mm256_and_ps(g, hit));
+                }
+                for (c, corner) in corner.iter_mut().enumerate() {
+                    let k = _mm256_add_epi32(t3, _mm256_set1_epi32(c as i32));
+                    let v = _mm256_i32gather_epi32::<4>(corners, k);
+                    // In range of the positions (unsigned: the indices are `u32`).
+                    let limit = _mm256_set1_epi32(vertices as i32);
+                    let beyond = _mm256_cmpeq_epi32(_mm256_max_epu32(v, limit), v);
+                    assert!(
+                        _mm256_movemask_epi8(beyond) == 0,
+                        "a triangle's corner is in the positions"
+                    );
+                    let v3 = _mm256_add_epi32(_mm256_add_epi32(v, v), v);
+                    for (axis, row) in corner.iter_mut().enumerate() {
+                        let k = _mm256_add_epi32(v3, _mm256_set1_epi32(axis as i32));
+                        let g = _mm256_i32gather_ps::<4>(positions, k);
+                        _mm256_storeu_ps(row.as_mut_ptr().add(base), _mm256_and_ps(g, hit));
+                    }
+                }
+            }
+        }
+        // The albedo, by material, one lane at a time (a texture's is looked up per hit).
+        let mut last = (u32::MAX, Vec3::ZERO, false);
+        for i in 0..n {
+            let albedo = match &hits[i] {
+                None => Vec3::ZERO,
+                Some(hit) => {
+                    let id = material[i];
+                    if id != last.0 {
+                        let m = &lab.scene.materials[id as usize];
+                        last = (id, m.bsdf.albedo(), !m.textures.is_empty());
+                    }
+                    if last.2 { lab.albedo(&rays[i], hit, id) } else { last.1 }
+                }
+            };
+            for axis in 0..3 {
+                self.albedo[axis][i] = albedo[axis];
+            }
+        }
+    }
+
+    /// The light's part of [`shade`](Self::shade), on the gathered hits.
+    #[inline(always)]
+    fn light<A: Accelerator + ?Sized>(
+        &mut self,
+        gathered: &Gathered,
+        lab: &Lab<'_, A>,
+        hits: &[Option<Hit>],
+    ) {
+        let tile = self;
         if lab.stage == Stage::Flat {
             // No light: no direct term, no shadow rays.
             tile.direct = [[0.0; TILE]; 3];
             tile.shadow = [false; TILE];
             return;
         }
-        if instanced {
+        if lab.scene.geometry.is_instanced() {
             tile.light_lanes::<true, A>(lab, hits, gathered);
         } else {
             tile.light_lanes::<false, A>(lab, hits, gathered);
         }
     }
 
-    /// The light's part of [`new`](Self::new) for the hits gathered in `g`: the loop has no
+    /// The light's part of [`shade`](Self::shade) for the hits gathered in `g`: the loop has no
     /// call where the geometry is not instanced, so that the compiler vectorizes it.
     #[inline(always)]
     fn light_lanes<const INSTANCED: bool, A: Accelerator + ?Sized>(
@@ -423,14 +419,14 @@ impl TileShading {
 
     /// Lane `i` as `shade` returns it (its shadow ray as a flag).
     #[inline]
-    fn lane(&self, i: usize) -> Shading {
+    pub(super) fn lane(&self, i: usize) -> Shading {
         let get = |rows: &[[f32; TILE]; 3]| Vec3::new(rows[0][i], rows[1][i], rows[2][i]);
         Shading { albedo: get(&self.albedo), direct: get(&self.direct), shadow_ray: None }
     }
 
     /// Lane `i`'s shadow ray, as `shade` makes it for `ray` and `hit` (that lane's).
     #[inline]
-    fn shadow_ray<A: Accelerator + ?Sized>(
+    pub(super) fn shadow_ray<A: Accelerator + ?Sized>(
         &self,
         i: usize,
         lab: &Lab<'_, A>,
@@ -446,114 +442,10 @@ impl TileShading {
     }
 }
 
-impl<A: Accelerator + ?Sized> Lab<'_, A> {
-    /// Shades a hit up to the shadow test (inlined into the tile loop: it returns a large
-    /// value, which a call would copy through memory).
-    #[inline(always)]
-    fn shade(&self, ray: &Ray, hit: Option<Hit>) -> Shading {
-        let Some(hit) = hit else {
-            return Shading::NONE;
-        };
-        // The lab needs the point, its normal and the colour: not the whole interaction.
-        let geometry = &self.scene.geometry;
-        let albedo = self.albedo(ray, &hit, geometry.material_id(hit.triangle as usize));
-        if self.stage == Stage::Flat {
-            return Shading { albedo, direct: Vec3::ZERO, shadow_ray: None };
-        }
-        let mut point = geometry.surface_point(&hit);
-        // Triangles are hit from both sides: light the side the ray sees. (With a one-sided
-        // normal, a wall seen from behind would be lit through itself by a light on its front.)
-        // A grazing ray (a zero product) gets the lab's own normal `(v2 − v0) × (v1 − v0)`, the
-        // opposite of the geometric one.
-        if point.normal.dot(ray.direction) >= 0.0 {
-            point.normal = -point.normal;
-        }
-        let light = &self.light;
-        // Lab eq. (27): D = P max(r̂·n̂, 0) / (4πr²).
-        let direct = light.direct(point.p, point.normal);
-        let shadows = matches!(self.stage, Stage::Shadows | Stage::Ambient);
-        let shadow_ray =
-            (shadows && direct != Vec3::ZERO).then(|| point.spawn_ray_to(light.position));
-        Shading { albedo, direct, shadow_ray }
-    }
-
-    /// The colour of a shaded hit, given whether its shadow ray is blocked.
-    #[inline]
-    fn finish(&self, hit: bool, shading: &Shading, occluded: bool) -> Vec3 {
-        if !hit {
-            return Vec3::ZERO;
-        }
-        let direct = if occluded { Vec3::ZERO } else { shading.direct };
-        match self.stage {
-            Stage::Flat => shading.albedo,
-            Stage::Direct => direct,
-            Stage::Reflected | Stage::Shadows => shading.albedo * direct,
-            // Lab eq. (30): R = ρ ∗ (D + N).
-            Stage::Ambient => shading.albedo * (direct + self.ambient),
-        }
-    }
-}
-
-impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
-    fn radiance(&self, ray: &Ray, _sampler: &mut Sampler) -> Vec3 {
-        let hit = super::closest_opaque_hit(self.scene, self.accel, ray);
-        let shading = self.shade(ray, hit);
-        let occluded = shading
-            .shadow_ray
-            .is_some_and(|shadow| super::occluded_opaque(self.scene, self.accel, &shadow));
-        self.finish(hit.is_some(), &shading, occluded)
-    }
-
-    /// Camera rays together, then their shadow rays together (toward one light, so they are
-    /// coherent too), the shading in between lane by lane over the tile (`TileShading`).
-    fn radiance_each(&self, rays: &[Ray], samplers: &mut [Sampler], out: &mut [Vec3]) {
-        assert_eq!(rays.len(), out.len(), "one colour per ray");
-        assert_eq!(rays.len(), samplers.len(), "one sampler per ray");
-        // Cut-out holes are passed ray by ray.
-        if self.scene.has_cut_outs() {
-            for ((ray, sampler), colour) in rays.iter().zip(samplers).zip(out) {
-                *colour = self.radiance(ray, sampler);
-            }
-            return;
-        }
-        // A tile at a time, in this thread's arrays: no allocation or clearing per tile.
-        let mut arrays = TileArrays::take();
-        let TileArrays { hits, shading, gathered, shadow_rays, occluded } = &mut *arrays;
-        for (rays, out) in rays.chunks(TILE).zip(out.chunks_mut(TILE)) {
-            let n = rays.len();
-            let hits = &mut hits[..n];
-            self.accel.closest_hits(rays, hits);
-            shading.shade(gathered, self, rays, hits);
-            let mut shadows = 0;
-            for i in (0..n).filter(|&i| shading.shadow[i]) {
-                shadow_rays[shadows] = shading.shadow_ray(i, self, &rays[i], hits[i]);
-                shadows += 1;
-            }
-            self.accel.occluded_each(&shadow_rays[..shadows], &mut occluded[..shadows]);
-            let mut blocked = occluded[..shadows].iter();
-            for (i, (colour, hit)) in out.iter_mut().zip(hits.iter()).enumerate() {
-                let occluded =
-                    shading.shadow[i] && *blocked.next().expect("one answer per shadow ray");
-                *colour = self.finish(hit.is_some(), &shading.lane(i), occluded);
-            }
-        }
-        TileArrays::give_back(arrays);
-    }
-
-    /// The lab's pixel sampling: one sample is the ray through the pixel's centre.
-    fn sampler_kind(&self) -> SamplerKind {
-        SamplerKind::Lab
-    }
-
-    /// The lab's model draws no numbers: its pixel positions are its only samples.
-    fn draws_numbers(&self) -> bool {
-        false
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
 
     /// The tile's lanes are `shade`'s values bit for bit, shadow rays included, for rays from
     /// inside and outside the lab's box in every direction, at every stage, with the light
@@ -585,46 +477,50 @@ mod tests {
         assert!(shadows > 300, "only {shadows} shadow rays");
     }
 
-    /// The same on instanced geometry (the glTF boxes kept instanced: one box drawn 18 times),
-    /// whose tiles take the other copy of the light loop (the instance's own surface point).
+    /// The same on textured glTF boxes, kept instanced (one box drawn 18 times: the tiles take
+    /// the other copy of the light loop, the instance's own surface point) and flattened (a
+    /// flat geometry with textures: the AVX2 gathers, and the albedo looked up per hit).
     #[test]
-    fn tile_shading_is_shade_lane_by_lane_on_instances() {
+    fn tile_shading_is_shade_lane_by_lane_on_textured_instances() {
         use crate::bvh::SceneBvh;
         use crate::scene::{Instancing, LoadOptions};
         let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mitsuba-gltf/boxes.gltf");
-        let options = LoadOptions { instancing: Instancing::Keep };
-        let scene = Scene::open(file, &options).expect("the glTF boxes").scene;
-        assert!(scene.geometry.is_instanced());
-        let accel = SceneBvh::build(&scene.geometry).expect("a tree");
-        let bounds = (0..scene.geometry.len())
-            .flat_map(|i| scene.geometry.triangle(i))
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
-        let (centre, size) = ((bounds.0 + bounds.1) * 0.5, (bounds.1 - bounds.0).length());
-        let mut seed = 11u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
-        let (mut shadows, mut hits) = (0, 0);
-        for (k, stage) in Stage::ALL.into_iter().cycle().take(20).enumerate() {
-            let mut lab = Lab::new(&scene, &accel, stage);
-            lab.light.position = centre + Vec3::new(next(), 1.0, next()) * size;
-            // Rays from around the boxes toward a random triangle's centre.
-            let rays: Vec<Ray> = (0..TILE - k % 3)
-                .map(|_| {
-                    let origin = centre + Vec3::new(next(), next(), next()) * size;
-                    let pick = ((next() * 0.5 + 0.5) * scene.geometry.len() as f32) as usize;
-                    let [a, b, c] = scene.geometry.triangle(pick.min(scene.geometry.len() - 1));
-                    Ray::new(origin, (a + b + c) / 3.0 - origin)
-                })
-                .collect();
-            hits += rays.iter().filter(|r| accel.closest_hit(r).is_some()).count();
-            shadows += tile_matches_shade(&lab, &rays);
+        for instancing in [Instancing::Keep, Instancing::Flatten] {
+            let options = LoadOptions { instancing };
+            let scene = Scene::open(file, &options).expect("the glTF boxes").scene;
+            assert_eq!(scene.geometry.is_instanced(), instancing == Instancing::Keep);
+            assert!(scene.materials.iter().any(|m| !m.textures.is_empty()), "a texture");
+            let accel = SceneBvh::build(&scene.geometry).expect("a tree");
+            let bounds = (0..scene.geometry.len())
+                .flat_map(|i| scene.geometry.triangle(i))
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+            let (centre, size) = ((bounds.0 + bounds.1) * 0.5, (bounds.1 - bounds.0).length());
+            let mut seed = 11u64;
+            let mut next = || {
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+            };
+            let (mut shadows, mut hits) = (0, 0);
+            for (k, stage) in Stage::ALL.into_iter().cycle().take(20).enumerate() {
+                let mut lab = Lab::new(&scene, &accel, stage);
+                lab.light.position = centre + Vec3::new(next(), 1.0, next()) * size;
+                // Rays from around the boxes toward a random triangle's centre.
+                let rays: Vec<Ray> = (0..TILE - k % 3)
+                    .map(|_| {
+                        let origin = centre + Vec3::new(next(), next(), next()) * size;
+                        let pick = ((next() * 0.5 + 0.5) * scene.geometry.len() as f32) as usize;
+                        let [a, b, c] = scene.geometry.triangle(pick.min(scene.geometry.len() - 1));
+                        Ray::new(origin, (a + b + c) / 3.0 - origin)
+                    })
+                    .collect();
+                hits += rays.iter().filter(|r| accel.closest_hit(r).is_some()).count();
+                shadows += tile_matches_shade(&lab, &rays);
+            }
+            assert!(hits > 600 && shadows > 200, "only {hits} hits and {shadows} shadow rays");
         }
-        assert!(hits > 600 && shadows > 200, "only {hits} hits and {shadows} shadow rays");
     }
 
-    /// Checks a tile of `rays` lane by lane: `TileShading::new` (AVX2 where the CPU has it) and
+    /// Checks a tile of `rays` lane by lane: `TileShading::shade` (AVX2 where the CPU has it) and
     /// its portable form against `shade`, bit for bit; returns how many shadow rays it compared.
     fn tile_matches_shade<A: Accelerator + ?Sized>(lab: &Lab<'_, A>, rays: &[Ray]) -> usize {
         let mut shadows = 0;
@@ -670,16 +566,5 @@ mod tests {
         // Kept for the next tile, whose rays are others (as `radiance_each` keeps them).
         TileArrays::give_back(arrays);
         shadows
-    }
-
-    #[test]
-    fn stages_parse_by_name_and_number() {
-        for (i, stage) in Stage::ALL.into_iter().enumerate() {
-            assert_eq!(stage.name().parse::<Stage>(), Ok(stage));
-            assert_eq!((i + 1).to_string().parse::<Stage>(), Ok(stage));
-        }
-        assert!("6".parse::<Stage>().is_err());
-        assert!("Flat".parse::<Stage>().is_err());
-        assert_eq!(Stage::default(), Stage::Ambient);
     }
 }
