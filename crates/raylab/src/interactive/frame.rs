@@ -213,13 +213,15 @@ impl FrameRenderer {
         let moving = !refining && self.picture.as_ref().is_some_and(|(shown, ..)| shown != view);
         let scale = if moving && self.budget.is_some() { self.scale } else { 1 };
         let camera = view.camera(scale);
+        // The old picture's memory is used again for a new one of the same size: its sums are
+        // zeroed by the frame's pass itself, band by band (`restart_with_sample`).
+        let mut restart = false;
         if !refining {
-            // A new picture, in the old one's memory when the size is the same.
             match &mut self.picture {
                 Some((shown, shown_scale, picture))
                     if (picture.width(), picture.height()) == (camera.width, camera.height) =>
                 {
-                    picture.clear();
+                    restart = true;
                     (*shown, *shown_scale) = (*view, scale);
                 }
                 _ => {
@@ -235,7 +237,7 @@ impl FrameRenderer {
             ViewMode::Lab(stage) => {
                 let mut lab = Lab::new(scene, accel, stage).for_camera(&camera);
                 lab.light.position = view.pose.light;
-                picture.add_sample(&camera, &lab);
+                add(picture, restart, &camera, &lab);
             }
             ViewMode::Path => {
                 let light = view.pose.light;
@@ -246,24 +248,27 @@ impl FrameRenderer {
                     self.lights = Some((light, moved));
                 }
                 let lights = &self.lights.as_ref().expect("made above").1;
-                picture.add_sample(
-                    &camera,
-                    &PathWavefront::with_lights(scene, accel, lights, self.path_settings),
-                );
+                let path = PathWavefront::with_lights(scene, accel, lights, self.path_settings);
+                add(picture, restart, &camera, &path);
             }
             ViewMode::Albedo => {
-                picture.add_sample(&camera, &Aov::new(scene, accel, AovKind::Albedo))
+                add(picture, restart, &camera, &Aov::new(scene, accel, AovKind::Albedo))
             }
             ViewMode::Normals => {
-                picture.add_sample(&camera, &ShownNormals(Aov::new(scene, accel, AovKind::Normals)))
+                let normals = ShownNormals(Aov::new(scene, accel, AovKind::Normals));
+                add(picture, restart, &camera, &normals)
             }
             ViewMode::Depth => {
                 let size = scene
                     .bounds()
                     .map_or(1.0, |(lo, hi)| (hi - lo).length())
                     .max(f32::MIN_POSITIVE);
-                picture
-                    .add_sample(&camera, &ShownDepth(Aov::new(scene, accel, AovKind::Depth), size));
+                add(
+                    picture,
+                    restart,
+                    &camera,
+                    &ShownDepth(Aov::new(scene, accel, AovKind::Depth), size),
+                );
             }
         }
         let words = view.width as usize * view.height as usize;
@@ -297,6 +302,21 @@ impl FrameRenderer {
             }
             None => out.fill(0),
         }
+    }
+}
+
+/// Adds the next sample of `integrator` to `picture`, or makes it the first where `restart`
+/// says the picture starts again ([`Accumulator::restart_with_sample`]).
+fn add(
+    picture: &mut Accumulator,
+    restart: bool,
+    camera: &Camera,
+    integrator: &(impl Integrator + ?Sized),
+) {
+    if restart {
+        picture.restart_with_sample(camera, integrator);
+    } else {
+        picture.add_sample(camera, integrator);
     }
 }
 

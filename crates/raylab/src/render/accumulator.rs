@@ -188,6 +188,22 @@ impl Accumulator {
         self.add_sample_with_progress(camera, integrator, &|_| {});
     }
 
+    /// [`clear`](Self::clear) and then [`add_sample`](Self::add_sample), the same sums to the
+    /// bit, in one pass: each band of rows is zeroed just before its first sample is added
+    /// (`raylab view` starts a new picture every frame while the camera moves).
+    ///
+    /// # Panics
+    /// If the camera's image size is not the accumulator's.
+    pub fn restart_with_sample(
+        &mut self,
+        camera: &Camera,
+        integrator: &(impl Integrator + ?Sized),
+    ) {
+        self.discarded = 0;
+        self.samples = 0;
+        self.add_pass_of(camera, integrator, 1, true, &|_| {});
+    }
+
     /// [`add_sample`](Self::add_sample), calling `progress` with the rows finished.
     pub fn add_sample_with_progress(
         &mut self,
@@ -210,6 +226,19 @@ impl Accumulator {
         count: u32,
         progress: &(dyn Fn(u32) + Sync),
     ) {
+        self.add_pass_of(camera, integrator, count, false, progress);
+    }
+
+    /// [`add_samples_with_progress`](Self::add_samples_with_progress), the sums first zeroed
+    /// band by band where `restart` is set.
+    fn add_pass_of(
+        &mut self,
+        camera: &Camera,
+        integrator: &(impl Integrator + ?Sized),
+        count: u32,
+        restart: bool,
+        progress: &(dyn Fn(u32) + Sync),
+    ) {
         // At least one; no more than the sample indices hold.
         let count = count.max(1).min(u32::MAX - self.samples);
         if count == 0 {
@@ -227,7 +256,7 @@ impl Accumulator {
         );
         let (settings, sample, region) = (&self.settings, self.samples, self.region);
         let (sum, layers) = (self.sum.pixels_mut(), &mut self.layers);
-        let pass = Pass { settings, sample, count, region };
+        let pass = Pass { settings, sample, count, region, restart };
         self.discarded += add_pass(camera, integrator, pass, sum, layers, progress);
         self.samples += count;
     }

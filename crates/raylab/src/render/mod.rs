@@ -208,6 +208,17 @@ mod tests {
                     let pixels = films.flat_map(|f| f.pixels().iter().flat_map(|p| p.to_array()));
                     pixels.map(f32::to_bits).collect::<Vec<_>>()
                 };
+                // A picture started again in used memory is a fresh picture's first sample.
+                let (mut once, mut restarted) = (accumulator(), accumulator());
+                once.add_sample(camera, integrator);
+                for _ in 0..3 {
+                    restarted.add_sample(camera, integrator);
+                }
+                restarted.restart_with_sample(camera, integrator);
+                let case = format!("{kind:?} {tile:?} restarted");
+                assert_eq!(restarted.samples(), 1, "{case}");
+                assert_eq!(restarted.discarded_samples(), once.discarded_samples(), "{case}");
+                assert!(bits(&restarted) == bits(&once), "{case}");
                 for group in 1..=PASS_GROUP + 1 {
                     let mut grouped = accumulator();
                     while grouped.samples() < SPP {

@@ -31,6 +31,9 @@ pub(super) struct Pass<'a> {
     /// How many passes, from `sample` on (at least 1).
     pub count: u32,
     pub region: Region,
+    /// The sums start again from zero: each band zeroes its rows (and its layers' rows) before
+    /// adding the pass's first samples, rather than the whole picture being cleared first.
+    pub restart: bool,
 }
 
 /// Adds `pass`'s samples of every pixel of its region to `pixels` (the region's pixels row by
@@ -39,7 +42,7 @@ pub(super) struct Pass<'a> {
 pub(super) fn add_pass(
     camera: &Camera,
     integrator: &(impl Integrator + ?Sized),
-    Pass { settings, sample, count, region }: Pass,
+    Pass { settings, sample, count, region, restart }: Pass,
     pixels: &mut [Vec3],
     layers: &mut [Film],
     progress: &(dyn Fn(u32) + Sync),
@@ -53,7 +56,9 @@ pub(super) fn add_pass(
     let mut first = sample;
     while first < end {
         let group = most.min(end - first);
-        let pass = Pass { settings, sample: first, count: group, region };
+        // Only the first group restarts the sums.
+        let restart = restart && first == sample;
+        let pass = Pass { settings, sample: first, count: group, region, restart };
         discarded += add_group(camera, integrator, pass, pixels, layers, progress);
         first += group;
     }
@@ -64,7 +69,7 @@ pub(super) fn add_pass(
 fn add_group(
     camera: &Camera,
     integrator: &(impl Integrator + ?Sized),
-    Pass { settings, sample, count, region }: Pass,
+    Pass { settings, sample, count, region, restart }: Pass,
     pixels: &mut [Vec3],
     layers: &mut [Film],
     progress: &(dyn Fn(u32) + Sync),
@@ -96,6 +101,13 @@ fn add_group(
     }
     let bands = pixels.par_chunks_mut(band_pixels).zip(band_layers.into_par_iter()).enumerate();
     bands.for_each(|(band, (pixels, mut layers))| {
+        if restart {
+            // While the band's rows are about to be used: in the cache, on this thread.
+            pixels.fill(Vec3::ZERO);
+            for rows in layers.iter_mut() {
+                rows.fill(Vec3::ZERO);
+            }
+        }
         let band = Band {
             camera: &rays,
             has_lens: camera.has_lens(),
