@@ -312,8 +312,8 @@ impl Geometry {
     /// The three corners of stored triangle `s`, in its own space.
     #[inline(always)]
     pub fn stored_triangle(&self, s: usize) -> [Vec3; 3] {
-        // Written out: `array::map` here was compiled as a loop through `try_from_fn`, not
-        // inlined into the lab's tile shading (8 % of a lab frame).
+        // Written out: `array::map` here compiles to a loop through `try_from_fn` that is not
+        // inlined into the lab's tile shading.
         let [a, b, c] = self.triangles[s];
         [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }

@@ -199,8 +199,6 @@ impl Accumulator {
         camera: &Camera,
         integrator: &(impl Integrator + ?Sized),
     ) {
-        self.discarded = 0;
-        self.samples = 0;
         self.add_pass_of(camera, integrator, 1, true, &|_| {});
     }
 
@@ -239,11 +237,6 @@ impl Accumulator {
         restart: bool,
         progress: &(dyn Fn(u32) + Sync),
     ) {
-        // At least one; no more than the sample indices hold.
-        let count = count.max(1).min(u32::MAX - self.samples);
-        if count == 0 {
-            return;
-        }
         assert_eq!(
             (camera.width, camera.height),
             self.image,
@@ -254,6 +247,16 @@ impl Accumulator {
             self.layers.len(),
             "the accumulator must have the integrator's layers"
         );
+        if restart {
+            // (After the checks: a failed one leaves the picture as it was.)
+            self.discarded = 0;
+            self.samples = 0;
+        }
+        // At least one; no more than the sample indices hold.
+        let count = count.max(1).min(u32::MAX - self.samples);
+        if count == 0 {
+            return;
+        }
         let (settings, sample, region) = (&self.settings, self.samples, self.region);
         let (sum, layers) = (self.sum.pixels_mut(), &mut self.layers);
         let pass = Pass { settings, sample, count, region, restart };

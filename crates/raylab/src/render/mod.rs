@@ -22,6 +22,7 @@ use crate::sampling::SamplerKind;
 
 mod accumulator;
 mod passes;
+mod sums;
 mod window;
 
 pub use accumulator::Accumulator;

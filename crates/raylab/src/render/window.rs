@@ -178,15 +178,9 @@ mod tests {
         assert_eq!(one, [left]);
     }
 
-    /// Window words are the same compiled for AVX2 as for the baseline instruction set, for
-    /// values below 0, inside [0, 1], above 1, infinite and NaN, through the lab's clamp.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn window_words_are_the_same_with_avx2() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            eprintln!("skipped: this CPU has no AVX2 (its words are never written so)");
-            return;
-        }
+    /// Sums below 0, inside [0, 1], above 1, infinite and NaN, and the words of the lab's clamp
+    /// of them written one by one (`write_run`).
+    fn special_sums() -> (Vec<Vec3>, f32, Vec<u32>) {
         let special = [-1.0, 0.0, 0.5, 1.0, 3.0, f32::INFINITY, f32::NAN, 1e-9, 0.999];
         let sums: Vec<Vec3> = (0..999)
             .map(|i| {
@@ -200,20 +194,60 @@ mod tests {
             let [r, g, b] = (*sum * factor).to_array().map(to_8bit_clamped);
             (r as u32) << 16 | (g as u32) << 8 | b as u32
         };
-        let (mut base, mut wide) = (vec![0u32; sums.len()], vec![1u32; sums.len()]);
+        let mut base = vec![0u32; sums.len()];
         write_run(&mut base, &sums, &word);
+        assert!(base.iter().any(|&w| w & 0xFF == 0xFF) && base.iter().any(|&w| w & 0xFF == 0));
+        (sums, factor, base)
+    }
+
+    /// The lab's runs, eight pixels at a time, give the one-by-one words, on runs of every
+    /// length modulo 8; and a window of the picture's own size takes them.
+    #[test]
+    fn lab_runs_are_the_words_one_by_one() {
+        let (sums, factor, base) = special_sums();
+        for start in 0..8 {
+            let mut lanes = vec![2u32; sums.len()];
+            write_run_lab(&mut lanes[start..], &sums[start..], factor);
+            assert_eq!(base[start..], lanes[start..]);
+        }
+        // The same-size branch of `write_0rgb`, through the accumulator (factor 1/2).
+        let mut accumulator = Accumulator::new(37, 27).unwrap();
+        accumulator.sum.pixels_mut().copy_from_slice(&sums);
+        accumulator.samples = 2;
+        let mut out = vec![0u32; sums.len()];
+        accumulator.write_0rgb(&mut out, 37, 27);
+        let half: Vec<u32> = sums
+            .iter()
+            .map(|s| {
+                let [r, g, b] = (*s * 0.5).to_array().map(to_8bit_clamped);
+                (r as u32) << 16 | (g as u32) << 8 | b as u32
+            })
+            .collect();
+        assert_eq!(out, half);
+    }
+
+    /// Window words are the same compiled for AVX2 as for the baseline instruction set.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn window_words_are_the_same_with_avx2() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("skipped: this CPU has no AVX2 (its words are never written so)");
+            return;
+        }
+        let (sums, factor, base) = special_sums();
+        let word = |sum: &Vec3| {
+            let [r, g, b] = (*sum * factor).to_array().map(to_8bit_clamped);
+            (r as u32) << 16 | (g as u32) << 8 | b as u32
+        };
+        let mut wide = vec![1u32; sums.len()];
         // SAFETY: AVX2 was detected above.
         unsafe { write_run_avx2(&mut wide, &sums, &word) };
         assert_eq!(base, wide);
-        // The lab's runs, eight pixels at a time, on runs of every length modulo 8.
         for start in 0..8 {
-            let (mut lanes, mut lanes_avx2) = (vec![2u32; sums.len()], vec![3u32; sums.len()]);
-            write_run_lab(&mut lanes[start..], &sums[start..], factor);
+            let mut lanes_avx2 = vec![3u32; sums.len()];
             // SAFETY: AVX2 was detected above.
             unsafe { write_run_lab_avx2(&mut lanes_avx2[start..], &sums[start..], factor) };
-            assert_eq!(base[start..], lanes[start..]);
             assert_eq!(base[start..], lanes_avx2[start..]);
         }
-        assert!(base.iter().any(|&w| w & 0xFF == 0xFF) && base.iter().any(|&w| w & 0xFF == 0));
     }
 }

@@ -56,7 +56,18 @@ pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], res
         // (`repr(C)`, asserted above); each store writes 8 floats of a row from `base`, and
         // `base + 8 ≤ rays.len() ≤ PACKET`.
         unsafe {
-            let r = block.each_ref().map(|ray| _mm256_loadu_ps((ray as *const Ray).cast()));
+            // (No closures here: they would be compiled without the caller's AVX.)
+            let p = block.as_ptr().cast::<f32>();
+            let r = [
+                _mm256_loadu_ps(p),
+                _mm256_loadu_ps(p.add(8)),
+                _mm256_loadu_ps(p.add(16)),
+                _mm256_loadu_ps(p.add(24)),
+                _mm256_loadu_ps(p.add(32)),
+                _mm256_loadu_ps(p.add(40)),
+                _mm256_loadu_ps(p.add(48)),
+                _mm256_loadu_ps(p.add(56)),
+            ];
             let t0 = _mm256_unpacklo_ps(r[0], r[1]);
             let t1 = _mm256_unpackhi_ps(r[0], r[1]);
             let t2 = _mm256_unpacklo_ps(r[2], r[3]);
@@ -74,17 +85,18 @@ pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], res
             let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
             let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
             let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
-            let store = |row: &mut [f32; PACKET], v: __m256| {
-                _mm256_storeu_ps(row.as_mut_ptr().add(base), v)
-            };
-            store(&mut origin[0], _mm256_permute2f128_ps::<0x20>(u0, u4));
-            store(&mut origin[1], _mm256_permute2f128_ps::<0x20>(u1, u5));
-            store(&mut origin[2], _mm256_permute2f128_ps::<0x20>(u2, u6));
-            store(&mut rest[0], _mm256_permute2f128_ps::<0x20>(u3, u7));
-            store(&mut rest[1], _mm256_permute2f128_ps::<0x31>(u0, u4));
-            store(&mut rest[2], _mm256_permute2f128_ps::<0x31>(u1, u5));
-            store(&mut rest[3], _mm256_permute2f128_ps::<0x31>(u2, u6));
-            store(&mut rest[4], _mm256_permute2f128_ps::<0x31>(u3, u7));
+            let row = |rows: &mut [[f32; PACKET]], k: usize| rows[k].as_mut_ptr().add(base);
+            let (ox, oy, oz) = (row(origin, 0), row(origin, 1), row(origin, 2));
+            let (dx, dy, dz) = (row(rest, 0), row(rest, 1), row(rest, 2));
+            let (t_min, t_max) = (row(rest, 3), row(rest, 4));
+            _mm256_storeu_ps(ox, _mm256_permute2f128_ps::<0x20>(u0, u4));
+            _mm256_storeu_ps(oy, _mm256_permute2f128_ps::<0x20>(u1, u5));
+            _mm256_storeu_ps(oz, _mm256_permute2f128_ps::<0x20>(u2, u6));
+            _mm256_storeu_ps(dx, _mm256_permute2f128_ps::<0x20>(u3, u7));
+            _mm256_storeu_ps(dy, _mm256_permute2f128_ps::<0x31>(u0, u4));
+            _mm256_storeu_ps(dz, _mm256_permute2f128_ps::<0x31>(u1, u5));
+            _mm256_storeu_ps(t_min, _mm256_permute2f128_ps::<0x31>(u2, u6));
+            _mm256_storeu_ps(t_max, _mm256_permute2f128_ps::<0x31>(u3, u7));
         }
     }
     let base = 8 * blocks.len();
@@ -194,7 +206,11 @@ mod tests {
     /// [`fill`] by every instruction set this CPU has (their rows of rays by their own
     /// copies: the portable loop or the AVX transposition), checked to fill every lane below
     /// `rays.len()` alike; returns the first set's lanes in `lanes` and its groups.
-    fn fill_each_isa(lanes: &mut PacketRays, rays: &[Ray]) -> [u8; PACKET] {
+    fn fill_each_isa(
+        lanes: &mut PacketRays,
+        other_rows: &mut RayRows,
+        rays: &[Ray],
+    ) -> [u8; PACKET] {
         use crate::bvh::isa::Scalar;
         let mut rows = [[f32::NAN; PACKET]; 5];
         // SAFETY: the scalar kernel needs no instruction set.
@@ -222,16 +238,14 @@ mod tests {
                 }
             };
             let mut other = PacketRays::new();
-            // Rows left from a longer packet must not leak into a shorter one.
-            let mut other_rows = [[f32::NAN; PACKET]; 5];
             for isa in [Isa::Sse2, Isa::Avx2, Isa::Avx512].into_iter().filter(|i| i.is_supported())
             {
                 // SAFETY: each set runs only where `is_supported` says this CPU has it.
                 let other_groups = unsafe {
                     match isa {
-                        Isa::Sse2 => fill::<Sse>(&mut other, &mut other_rows, rays),
-                        Isa::Avx2 => fill::<Avx2>(&mut other, &mut other_rows, rays),
-                        _ => fill::<Avx512>(&mut other, &mut other_rows, rays),
+                        Isa::Sse2 => fill::<Sse>(&mut other, other_rows, rays),
+                        Isa::Avx2 => fill::<Avx2>(&mut other, other_rows, rays),
+                        _ => fill::<Avx512>(&mut other, other_rows, rays),
                     }
                 };
                 check(&other, other_groups, isa);
@@ -293,6 +307,9 @@ mod tests {
             (seed >> 33) as usize % n
         };
         let mut grouped = 0;
+        // Rows kept from packet to packet, as a chunk keeps them: a longer packet's must not leak
+        // into a shorter one's lanes.
+        let mut kept_rows = [[f32::NAN; PACKET]; 5];
         for _ in 0..400 {
             let rays: Vec<Ray> = (0..1 + next(PACKET))
                 .map(|_| {
@@ -310,7 +327,7 @@ mod tests {
                 })
                 .collect();
             let mut vector = PacketRays::new();
-            let groups = fill_each_isa(&mut vector, &rays);
+            let groups = fill_each_isa(&mut vector, &mut kept_rows, &rays);
             let mut scalar = PacketRays::new();
             for (i, ray) in rays.iter().enumerate() {
                 let expected = scalar.set_lane(i, ray);

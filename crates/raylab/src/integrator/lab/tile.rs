@@ -11,13 +11,16 @@ use crate::float::gamma;
 use crate::geometry::FlatArrays;
 use crate::ray::{Ray, step_away};
 
-/// Rays shaded together: one tile of [`Integrator::radiance_each`].
+/// Rays shaded together: one tile of
+/// [`Integrator::radiance_each`](crate::integrator::Integrator::radiance_each).
 pub(super) const TILE: usize = 64;
 
 /// [`Lab::shade`] for a tile's hits, lane by lane in arrays: the triangles' data gathered
 /// first, then every lane computed by the same operations as `shade` (and
-/// [`SurfacePoint::spawn_ray_to`](crate::ray::SurfacePoint::spawn_ray_to)), in the same order and without branches, which the compiler
-/// vectorizes. The values are `shade`'s bit for bit (the test below compares them).
+/// [`SurfacePoint::spawn_ray_to`](crate::ray::SurfacePoint::spawn_ray_to)), in the same order
+/// and without branches, which the compiler vectorizes. The values are `shade`'s bit for bit
+/// (the test below compares them). Only the lanes of the tile's rays mean something: the
+/// arrays are kept from tile to tile, so lanes past them hold another tile's values.
 pub(super) struct TileShading {
     pub(super) albedo: [[f32; TILE]; 3],
     pub(super) direct: [[f32; TILE]; 3],
@@ -40,9 +43,8 @@ pub(super) struct Gathered {
     hit_mask: [bool; TILE],
 }
 
-/// A thread's arrays for the lab's tiles, kept from tile to tile and call to call (as the
-/// packets keep theirs): made afresh for each tile of 64 rays, their 10 KB were zeroed and
-/// moved every time.
+/// A thread's arrays for the lab's tiles (10 KB), kept from tile to tile and call to call, as
+/// the packets keep theirs: nothing is allocated, cleared or moved per tile.
 pub(super) struct TileArrays {
     pub(super) hits: [Option<Hit>; TILE],
     pub(super) shading: TileShading,
@@ -125,8 +127,8 @@ impl TileShading {
         rays: &[Ray],
         hits: &[Option<Hit>],
     ) {
-        match lab.scene.geometry.flat_arrays() {
-            // SAFETY: the caller guarantees AVX2.
+        match lab.scene.geometry.flat_arrays().filter(gathers_reach) {
+            // SAFETY: the caller guarantees AVX2; `gathers_reach` holds.
             Some(arrays) => unsafe { self.gather_avx2(gathered, lab, arrays, rays, hits) },
             None => self.gather_portable(gathered, lab, rays, hits),
         }
@@ -210,12 +212,13 @@ impl TileShading {
     /// [`gather_portable`](Self::gather_portable) for a flat geometry's `arrays`, eight lanes
     /// at a time by AVX2's gathers: the hits' triangle indices first (a miss reads triangle 0,
     /// its lanes zeroed after), then each corner's index, the corners' coordinates, the normal
-    /// and the material id, each an 8-lane gather, where one lane at a time they were 16
-    /// dependent loads and as many stores per hit. The same values (moved, not computed).
-    /// Lanes beyond the rays are gathered too, from triangle 0.
+    /// and the material id, each an 8-lane gather (one lane at a time, these are 16
+    /// dependent loads and as many stores per hit). The same values (moved, not computed).
+    /// Lanes beyond the rays are gathered too, from triangle 0. The arrays must be indexable
+    /// by `i32` lanes ([`gathers_reach`]).
     ///
     /// # Safety
-    /// The CPU must support AVX2.
+    /// The CPU must support AVX2, and `gathers_reach(&arrays)` must hold.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn gather_avx2<A: Accelerator + ?Sized>(
@@ -243,7 +246,7 @@ impl TileShading {
                 Some(h) => (h.triangle, h.b1, h.b2, true),
                 None => (0, 0.0, 0.0, false),
             };
-            assert!((t as usize) < triangles, "the hit's triangle {t} is in the geometry");
+            assert!(!hit || (t as usize) < triangles, "the hit's triangle {t} is in the geometry");
             index[i] = t;
             (b1[i], b2[i], hit_mask[i]) = (u, v, hit);
             let d = if hit { ray.direction } else { Vec3::ZERO };
@@ -270,7 +273,9 @@ impl TileShading {
             // `3·t + c < 3·triangles` words of `triangles`, `normals` (`Vec3` is three `f32`)
             // and `t < triangles` of the material ids; the corners' indices are below
             // `vertices` (asserted below before use), so `3·v + axis < 3·vertices` floats of
-            // `positions`. Loads and stores of rows are 8 lanes from `base ≤ TILE − 8`.
+            // `positions`; and both bounds are at most `i32::MAX` (`gathers_reach`, the
+            // caller's guarantee), so no lane's index overflows or turns negative. Loads and
+            // stores of rows are 8 lanes from `base ≤ TILE − 8`.
             unsafe {
                 let t = _mm256_loadu_si256(index.as_ptr().add(base).cast());
                 let hit = _mm256_castsi256_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
@@ -442,6 +447,14 @@ impl TileShading {
     }
 }
 
+/// Whether AVX2's gathers, whose indices are signed 32-bit lanes, reach every word of a flat
+/// geometry's arrays: `3·triangles` and `3·positions` at most `i32::MAX` (715 million
+/// triangles and as many vertices). Larger geometry is gathered one lane at a time.
+fn gathers_reach(arrays: &FlatArrays<'_>) -> bool {
+    let most = i32::MAX as usize / 3;
+    arrays.triangles.len() <= most && arrays.positions.len() <= most
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -454,6 +467,7 @@ mod tests {
     fn tile_shading_is_shade_lane_by_lane() {
         use crate::bvh::Bvh;
         let scene = Scene::built_in("cornell").expect("the lab scene");
+        assert!(scene.geometry.flat_arrays().is_some(), "the lab's box takes the gathers");
         let bvh = Bvh::new(&scene.vertices());
         let mut seed = 5u64;
         let mut next = || {
@@ -489,6 +503,7 @@ mod tests {
             let options = LoadOptions { instancing };
             let scene = Scene::open(file, &options).expect("the glTF boxes").scene;
             assert_eq!(scene.geometry.is_instanced(), instancing == Instancing::Keep);
+            assert_eq!(scene.geometry.flat_arrays().is_some(), instancing == Instancing::Flatten);
             assert!(scene.materials.iter().any(|m| !m.textures.is_empty()), "a texture");
             let accel = SceneBvh::build(&scene.geometry).expect("a tree");
             let bounds = (0..scene.geometry.len())
@@ -520,6 +535,20 @@ mod tests {
         }
     }
 
+    /// A scene without triangles: every lane misses, and the gathers have nothing to read.
+    #[test]
+    fn tile_shading_of_an_empty_scene_is_black() {
+        use crate::geometry::Geometry;
+        let mut scene = Scene::built_in("cornell").expect("the lab scene");
+        scene.geometry = Geometry::new();
+        let accel = crate::BruteForce::new(&[]);
+        let rays: Vec<Ray> =
+            (0..TILE).map(|i| Ray::new(Vec3::ZERO, Vec3::new(1.0, i as f32, 0.5))).collect();
+        for stage in Stage::ALL {
+            assert_eq!(tile_matches_shade(&Lab::new(&scene, &accel, stage), &rays), 0);
+        }
+    }
+
     /// Checks a tile of `rays` lane by lane: `TileShading::shade` (AVX2 where the CPU has it) and
     /// its portable form against `shade`, bit for bit; returns how many shadow rays it compared.
     fn tile_matches_shade<A: Accelerator + ?Sized>(lab: &Lab<'_, A>, rays: &[Ray]) -> usize {
@@ -529,8 +558,17 @@ mod tests {
         // Arrays left from another tile (lanes of other values) must not leak into this one.
         let mut arrays = TileArrays::take();
         let TileArrays { shading: tile, gathered, .. } = &mut *arrays;
+        // The AVX2 form wherever the CPU has it, whatever `RAYLAB_ISA` asks of `shade`.
+        #[cfg(target_arch = "x86_64")]
+        if crate::cpu::Isa::Avx2.is_supported() {
+            // SAFETY: AVX2 is supported (checked just above).
+            unsafe { tile.shade_avx2(gathered, lab, rays, &hits) };
+        } else {
+            tile.shade(gathered, lab, rays, &hits);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
         tile.shade(gathered, lab, rays, &hits);
-        // The form for any instruction set too, where `shade` picked AVX2, in arrays of NaN.
+        // The form for any instruction set too, in arrays of NaN.
         let mut fresh = TileArrays::take();
         fresh.shading.albedo = [[f32::NAN; TILE]; 3];
         fresh.shading.direct = [[f32::NAN; TILE]; 3];
