@@ -85,18 +85,23 @@ pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], res
             let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
             let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
             let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
-            let row = |rows: &mut [[f32; PACKET]], k: usize| rows[k].as_mut_ptr().add(base);
-            let (ox, oy, oz) = (row(origin, 0), row(origin, 1), row(origin, 2));
-            let (dx, dy, dz) = (row(rest, 0), row(rest, 1), row(rest, 2));
-            let (t_min, t_max) = (row(rest, 3), row(rest, 4));
-            _mm256_storeu_ps(ox, _mm256_permute2f128_ps::<0x20>(u0, u4));
-            _mm256_storeu_ps(oy, _mm256_permute2f128_ps::<0x20>(u1, u5));
-            _mm256_storeu_ps(oz, _mm256_permute2f128_ps::<0x20>(u2, u6));
-            _mm256_storeu_ps(dx, _mm256_permute2f128_ps::<0x20>(u3, u7));
-            _mm256_storeu_ps(dy, _mm256_permute2f128_ps::<0x31>(u0, u4));
-            _mm256_storeu_ps(dz, _mm256_permute2f128_ps::<0x31>(u1, u5));
-            _mm256_storeu_ps(t_min, _mm256_permute2f128_ps::<0x31>(u2, u6));
-            _mm256_storeu_ps(t_max, _mm256_permute2f128_ps::<0x31>(u3, u7));
+            // Each row's pointer made at its own store (one borrow at a time).
+            let v = _mm256_permute2f128_ps::<0x20>(u0, u4);
+            _mm256_storeu_ps(origin[0].as_mut_ptr().add(base), v);
+            let v = _mm256_permute2f128_ps::<0x20>(u1, u5);
+            _mm256_storeu_ps(origin[1].as_mut_ptr().add(base), v);
+            let v = _mm256_permute2f128_ps::<0x20>(u2, u6);
+            _mm256_storeu_ps(origin[2].as_mut_ptr().add(base), v);
+            let v = _mm256_permute2f128_ps::<0x20>(u3, u7);
+            _mm256_storeu_ps(rest[0].as_mut_ptr().add(base), v);
+            let v = _mm256_permute2f128_ps::<0x31>(u0, u4);
+            _mm256_storeu_ps(rest[1].as_mut_ptr().add(base), v);
+            let v = _mm256_permute2f128_ps::<0x31>(u1, u5);
+            _mm256_storeu_ps(rest[2].as_mut_ptr().add(base), v);
+            let v = _mm256_permute2f128_ps::<0x31>(u2, u6);
+            _mm256_storeu_ps(rest[3].as_mut_ptr().add(base), v);
+            let v = _mm256_permute2f128_ps::<0x31>(u3, u7);
+            _mm256_storeu_ps(rest[4].as_mut_ptr().add(base), v);
         }
     }
     let base = 8 * blocks.len();

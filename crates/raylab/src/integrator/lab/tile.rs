@@ -541,6 +541,7 @@ mod tests {
         use crate::geometry::Geometry;
         let mut scene = Scene::built_in("cornell").expect("the lab scene");
         scene.geometry = Geometry::new();
+        assert!(scene.geometry.flat_arrays().is_some(), "an empty geometry takes the gathers");
         let accel = crate::BruteForce::new(&[]);
         let rays: Vec<Ray> =
             (0..TILE).map(|i| Ray::new(Vec3::ZERO, Vec3::new(1.0, i as f32, 0.5))).collect();
