@@ -268,7 +268,7 @@ impl TileShading {
         let ids = arrays.material_ids.as_ptr().cast::<i32>();
         let mut material = [0u32; TILE];
         for base in (0..TILE).step_by(8) {
-            // SAFETY: AVX2 is the caller's guarantee. Every gather reads inside its array:
+            // Every gather reads inside its array:
             // `index` holds triangle indices below `triangles` (asserted above), so
             // `3·t + c < 3·triangles` words of `triangles`, `normals` (`Vec3` is three `f32`)
             // and `t < triangles` of the material ids; the corners' indices are below
@@ -276,6 +276,7 @@ impl TileShading {
             // `positions`; and both bounds are at most `i32::MAX` (`gathers_reach`, the
             // caller's guarantee), so no lane's index overflows or turns negative. Loads and
             // stores of rows are 8 lanes from `base ≤ TILE − 8`.
+            // SAFETY: AVX2 is the caller's guarantee; every read and write is in bounds (above).
             unsafe {
                 let t = _mm256_loadu_si256(index.as_ptr().add(base).cast());
                 let hit = _mm256_castsi256_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
