@@ -25,14 +25,20 @@ pub(super) type RayRows = [[f32; PACKET]; 5];
 /// `t_min` and `t_max` into `rest` (the scalar twin of [`rows_avx`]).
 #[inline(always)]
 pub(super) fn rows_portable(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RayRows) {
+    rows_from(0, rays, origin, rest);
+}
+
+/// [`rows_portable`] into lanes `first..`: ray `i` into lane `first + i`.
+#[inline(always)]
+fn rows_from(first: usize, rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RayRows) {
     for (i, ray) in rays.iter().enumerate() {
         let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
         for axis in 0..3 {
-            origin[axis][i] = o[axis];
-            rest[axis][i] = d[axis];
+            origin[axis][first + i] = o[axis];
+            rest[axis][first + i] = d[axis];
         }
-        rest[3][i] = ray.t_min;
-        rest[4][i] = ray.t_max;
+        rest[3][first + i] = ray.t_min;
+        rest[4][first + i] = ray.t_max;
     }
 }
 
@@ -104,16 +110,7 @@ pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], res
             _mm256_storeu_ps(rest[4].as_mut_ptr().add(base), v);
         }
     }
-    let base = 8 * blocks.len();
-    for (i, ray) in tail.iter().enumerate() {
-        let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
-        for axis in 0..3 {
-            origin[axis][base + i] = o[axis];
-            rest[axis][base + i] = d[axis];
-        }
-        rest[3][base + i] = ray.t_min;
-        rest[4][base + i] = ray.t_max;
-    }
+    rows_from(8 * blocks.len(), tail, origin, rest);
 }
 
 /// Fills `lanes` from `rays` (at most [`PACKET`]), through `rows` (`K`'s copy of the rays into

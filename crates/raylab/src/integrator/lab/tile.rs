@@ -165,9 +165,7 @@ impl TileShading {
         // Gathered: the corners, normal and barycentrics of each hit, zeros for misses (every
         // lane of the tile written, so nothing needs clearing first).
         let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
-        // Neighbouring hits mostly share a material: its albedo is looked up once for them
-        // (unless it has a texture).
-        let mut material = (u32::MAX, Vec3::ZERO, false);
+        let mut materials = Albedos::new();
         for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
             let Some(hit) = hit else {
                 for axis in 0..3 {
@@ -191,11 +189,7 @@ impl TileShading {
                     (geometry.triangle(triangle), geometry.normal(triangle), id)
                 }
             };
-            if id != material.0 {
-                let m = &lab.scene.materials[id as usize];
-                material = (id, m.bsdf.albedo(), !m.textures.is_empty());
-            }
-            let albedo = if material.2 { lab.albedo(ray, hit, id) } else { material.1 };
+            let albedo = materials.albedo(lab, ray, hit, id);
             for axis in 0..3 {
                 tile.albedo[axis][i] = albedo[axis];
                 for (j, v) in vertices.iter().enumerate() {
@@ -315,18 +309,11 @@ impl TileShading {
             }
         }
         // The albedo, by material, one lane at a time (a texture's is looked up per hit).
-        let mut last = (u32::MAX, Vec3::ZERO, false);
+        let mut materials = Albedos::new();
         for i in 0..n {
             let albedo = match &hits[i] {
                 None => Vec3::ZERO,
-                Some(hit) => {
-                    let id = material[i];
-                    if id != last.0 {
-                        let m = &lab.scene.materials[id as usize];
-                        last = (id, m.bsdf.albedo(), !m.textures.is_empty());
-                    }
-                    if last.2 { lab.albedo(&rays[i], hit, id) } else { last.1 }
-                }
+                Some(hit) => materials.albedo(lab, &rays[i], hit, material[i]),
             };
             for axis in 0..3 {
                 self.albedo[axis][i] = albedo[axis];
@@ -445,6 +432,35 @@ impl TileShading {
         let get = |axis: usize| self.shadow_origin[axis][i];
         let origin = Vec3::new(get(0), get(1), get(2));
         Ray::segment(origin, lab.light.position - origin, 1.0)
+    }
+}
+
+/// The albedo of hits one after another: neighbouring hits mostly share a material, whose
+/// albedo is looked up once for them (unless it has a texture, which is read per hit).
+struct Albedos {
+    /// The last material's id, albedo and whether it has textures.
+    last: (u32, Vec3, bool),
+}
+
+impl Albedos {
+    fn new() -> Self {
+        Albedos { last: (u32::MAX, Vec3::ZERO, false) }
+    }
+
+    /// The albedo of material `id` where `ray` meets `hit` ([`Lab::albedo`]).
+    #[inline(always)]
+    fn albedo<A: Accelerator + ?Sized>(
+        &mut self,
+        lab: &Lab<'_, A>,
+        ray: &Ray,
+        hit: &Hit,
+        id: u32,
+    ) -> Vec3 {
+        if id != self.last.0 {
+            let m = &lab.scene.materials[id as usize];
+            self.last = (id, m.bsdf.albedo(), !m.textures.is_empty());
+        }
+        if self.last.2 { lab.albedo(ray, hit, id) } else { self.last.1 }
     }
 }
 
