@@ -53,7 +53,7 @@ mod queries;
 mod refit;
 mod scene;
 #[cfg(target_arch = "x86_64")]
-mod simd;
+pub(crate) mod simd;
 mod traverse;
 mod two_level;
 

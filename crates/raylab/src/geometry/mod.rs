@@ -23,12 +23,15 @@
 
 mod corners;
 pub mod instance;
+mod lines;
 mod surface;
 
 use glam::{Affine3A, Vec2, Vec3, Vec4};
 
 use corners::CornerTable;
 pub use instance::{Instance, Placement};
+pub(crate) use lines::TriangleLine;
+use lines::{LazyLines, MOST_LINES};
 
 use crate::mesh::Mesh;
 use crate::triangle::geometric_normal;
@@ -67,16 +70,8 @@ pub struct Geometry {
     placed: bool,
     /// The number of scene triangles.
     scene_triangles: usize,
-}
-
-/// A flat geometry's stored arrays ([`Geometry::flat_arrays`]), one entry per triangle except
-/// `positions`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct FlatArrays<'a> {
-    pub triangles: &'a [[u32; 3]],
-    pub positions: &'a [Vec3],
-    pub normals: &'a [Vec3],
-    pub material_ids: &'a [u32],
+    /// Each triangle in one cache line, made on first use ([`triangle_lines`](Self::triangle_lines)).
+    lines: LazyLines,
 }
 
 impl Geometry {
@@ -167,6 +162,7 @@ impl Geometry {
     }
 
     fn push_instance(&mut self, stored_first: u32, count: u32, placement: Option<Placement>) {
+        self.lines.forget();
         if count == 0 {
             return;
         }
@@ -183,6 +179,7 @@ impl Geometry {
         transform: &Affine3A,
         mut material_of: impl FnMut(usize) -> u32,
     ) -> u32 {
+        self.lines.forget();
         let (name, positions, triangles) = (&mesh.name, &mesh.positions, &mesh.triangles);
         let (normals, uvs) = (mesh.normals.as_ref(), mesh.uvs.as_ref());
         let base = self.positions.len() as u32;
@@ -254,7 +251,8 @@ impl Geometry {
         self.add_mesh(&mesh, &Affine3A::IDENTITY, |i| materials[i]);
     }
 
-    /// The bytes its tables take (their lengths, not their spare capacity).
+    /// The bytes its tables take (their lengths, not their spare capacity), the triangles'
+    /// lines included once made.
     pub fn bytes(&self) -> u64 {
         use std::mem::size_of_val;
         let bytes = size_of_val(self.positions.as_slice())
@@ -264,7 +262,8 @@ impl Geometry {
             + self.uvs.bytes()
             + self.tangents.bytes()
             + size_of_val(self.material_ids.as_slice())
-            + size_of_val(self.instances.as_slice());
+            + size_of_val(self.instances.as_slice())
+            + self.lines.bytes();
         bytes as u64
     }
 
@@ -331,20 +330,24 @@ impl Geometry {
         Some((self.stored_triangle(i), self.normals[i], self.material_ids[i]))
     }
 
-    /// Where the geometry is not instanced, its stored arrays, scene triangle `i` being stored
-    /// triangle `i`: the triangles' corner indices, the positions they index (every index is in
-    /// range: [`add_mesh`](Self::add_mesh) checks them), the geometric normals and the
-    /// material ids. For kernels that gather them in lanes.
-    pub(crate) fn flat_arrays(&self) -> Option<FlatArrays<'_>> {
-        if self.placed {
+    /// Where the geometry is not instanced and has at most 2^20 triangles, each triangle's
+    /// corners, normal and material in one cache line ([`TriangleLine`]), scene triangle `i`
+    /// at `i`: made on first use (64 bytes per triangle) and kept until the geometry changes.
+    pub(crate) fn triangle_lines(&self) -> Option<&[TriangleLine]> {
+        if self.placed || self.triangles.len() > MOST_LINES {
             return None;
         }
-        Some(FlatArrays {
-            triangles: &self.triangles,
-            positions: &self.positions,
-            normals: &self.normals,
-            material_ids: &self.material_ids,
-        })
+        Some(self.lines.get_or_make(|| {
+            (0..self.triangles.len())
+                .map(|i| {
+                    TriangleLine::new(
+                        self.stored_triangle(i),
+                        self.normals[i],
+                        self.material_ids[i],
+                    )
+                })
+                .collect()
+        }))
     }
 
     /// The three world corners of scene triangle `i`.
@@ -394,6 +397,7 @@ impl Geometry {
 
     /// Sets the material of every stored triangle (for scenes that restyle loaded meshes).
     pub fn material_ids_mut(&mut self) -> &mut [u32] {
+        self.lines.forget();
         &mut self.material_ids
     }
 
@@ -436,6 +440,7 @@ impl Geometry {
     /// instanced mesh's positions are in its own space.
     pub fn map_positions(&self, f: impl Fn(Vec3) -> Vec3) -> Geometry {
         let mut geometry = self.clone();
+        geometry.lines.forget();
         for p in &mut geometry.positions {
             *p = f(*p);
         }

@@ -74,40 +74,16 @@ pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], res
                 _mm256_loadu_ps(p.add(48)),
                 _mm256_loadu_ps(p.add(56)),
             ];
-            let t0 = _mm256_unpacklo_ps(r[0], r[1]);
-            let t1 = _mm256_unpackhi_ps(r[0], r[1]);
-            let t2 = _mm256_unpacklo_ps(r[2], r[3]);
-            let t3 = _mm256_unpackhi_ps(r[2], r[3]);
-            let t4 = _mm256_unpacklo_ps(r[4], r[5]);
-            let t5 = _mm256_unpackhi_ps(r[4], r[5]);
-            let t6 = _mm256_unpacklo_ps(r[6], r[7]);
-            let t7 = _mm256_unpackhi_ps(r[6], r[7]);
-            // Words (0, 4), (1, 5), (2, 6), (3, 7) of rays 0–3 and of rays 4–7.
-            let u0 = _mm256_shuffle_ps::<0x44>(t0, t2);
-            let u1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
-            let u2 = _mm256_shuffle_ps::<0x44>(t1, t3);
-            let u3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
-            let u4 = _mm256_shuffle_ps::<0x44>(t4, t6);
-            let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
-            let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
-            let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+            let w = crate::bvh::simd::transpose8(r);
             // Each row's pointer made at its own store (one borrow at a time).
-            let v = _mm256_permute2f128_ps::<0x20>(u0, u4);
-            _mm256_storeu_ps(origin[0].as_mut_ptr().add(base), v);
-            let v = _mm256_permute2f128_ps::<0x20>(u1, u5);
-            _mm256_storeu_ps(origin[1].as_mut_ptr().add(base), v);
-            let v = _mm256_permute2f128_ps::<0x20>(u2, u6);
-            _mm256_storeu_ps(origin[2].as_mut_ptr().add(base), v);
-            let v = _mm256_permute2f128_ps::<0x20>(u3, u7);
-            _mm256_storeu_ps(rest[0].as_mut_ptr().add(base), v);
-            let v = _mm256_permute2f128_ps::<0x31>(u0, u4);
-            _mm256_storeu_ps(rest[1].as_mut_ptr().add(base), v);
-            let v = _mm256_permute2f128_ps::<0x31>(u1, u5);
-            _mm256_storeu_ps(rest[2].as_mut_ptr().add(base), v);
-            let v = _mm256_permute2f128_ps::<0x31>(u2, u6);
-            _mm256_storeu_ps(rest[3].as_mut_ptr().add(base), v);
-            let v = _mm256_permute2f128_ps::<0x31>(u3, u7);
-            _mm256_storeu_ps(rest[4].as_mut_ptr().add(base), v);
+            _mm256_storeu_ps(origin[0].as_mut_ptr().add(base), w[0]);
+            _mm256_storeu_ps(origin[1].as_mut_ptr().add(base), w[1]);
+            _mm256_storeu_ps(origin[2].as_mut_ptr().add(base), w[2]);
+            _mm256_storeu_ps(rest[0].as_mut_ptr().add(base), w[3]);
+            _mm256_storeu_ps(rest[1].as_mut_ptr().add(base), w[4]);
+            _mm256_storeu_ps(rest[2].as_mut_ptr().add(base), w[5]);
+            _mm256_storeu_ps(rest[3].as_mut_ptr().add(base), w[6]);
+            _mm256_storeu_ps(rest[4].as_mut_ptr().add(base), w[7]);
         }
     }
     rows_from(8 * blocks.len(), tail, origin, rest);

@@ -289,6 +289,45 @@ impl LaneMask for __mmask16 {
     }
 }
 
+/// The 8×8 transposition of eight AVX registers: word `k` of `r[i]` becomes word `i` of the
+/// result's register `k` (three rounds of eight shuffles). It moves bits, it computes nothing.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[inline(always)]
+pub(crate) unsafe fn transpose8(r: [__m256; 8]) -> [__m256; 8] {
+    // SAFETY: the caller guarantees AVX; register operations only.
+    unsafe {
+        let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+        let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+        let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+        let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+        let t4 = _mm256_unpacklo_ps(r[4], r[5]);
+        let t5 = _mm256_unpackhi_ps(r[4], r[5]);
+        let t6 = _mm256_unpacklo_ps(r[6], r[7]);
+        let t7 = _mm256_unpackhi_ps(r[6], r[7]);
+        // Words (0, 4), (1, 5), (2, 6), (3, 7) of registers 0–3 and of registers 4–7.
+        let u0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+        let u1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+        let u2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+        let u3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+        let u4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+        let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+        let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+        let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+        [
+            _mm256_permute2f128_ps::<0x20>(u0, u4),
+            _mm256_permute2f128_ps::<0x20>(u1, u5),
+            _mm256_permute2f128_ps::<0x20>(u2, u6),
+            _mm256_permute2f128_ps::<0x20>(u3, u7),
+            _mm256_permute2f128_ps::<0x31>(u0, u4),
+            _mm256_permute2f128_ps::<0x31>(u1, u5),
+            _mm256_permute2f128_ps::<0x31>(u2, u6),
+            _mm256_permute2f128_ps::<0x31>(u3, u7),
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -390,6 +429,40 @@ mod tests {
             unsafe { avx512(&values, &expected) };
         } else {
             eprintln!("note: this CPU lacks AVX-512: its lanes are not tested here");
+        }
+    }
+
+    /// Word `k` of register `i` goes to word `i` of register `k`, every bit kept (NaN
+    /// payloads and signed zeros included).
+    #[test]
+    fn eight_registers_are_transposed() {
+        #[target_feature(enable = "avx")]
+        fn transposed(words: &[[u32; 8]; 8]) -> [[u32; 8]; 8] {
+            // SAFETY: compiled with AVX, called only after detection; loads and stores of
+            // eight words each.
+            unsafe {
+                let r = words.map(|row| _mm256_loadu_ps(row.as_ptr().cast()));
+                let mut out = [[0u32; 8]; 8];
+                for (row, v) in out.iter_mut().zip(transpose8(r)) {
+                    _mm256_storeu_ps(row.as_mut_ptr().cast(), v);
+                }
+                out
+            }
+        }
+        if !std::arch::is_x86_feature_detected!("avx") {
+            eprintln!("note: this CPU lacks AVX: the transposition is not tested here");
+            return;
+        }
+        let mut words: [[u32; 8]; 8] = std::array::from_fn(|i| {
+            std::array::from_fn(|k| 0x7FC0_0000 | (i as u32) << 8 | k as u32)
+        });
+        words[3][5] = 0x8000_0000;
+        // SAFETY: AVX was detected just above.
+        let out = unsafe { transposed(&words) };
+        for (i, row) in words.iter().enumerate() {
+            for (k, &w) in row.iter().enumerate() {
+                assert_eq!(out[k][i], w, "word {k} of register {i}");
+            }
         }
     }
 }

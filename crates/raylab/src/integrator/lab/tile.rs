@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::{Lab, Shading, Stage};
 use crate::accel::{Accelerator, Hit};
 use crate::float::gamma;
-use crate::geometry::FlatArrays;
+use crate::geometry::TriangleLine;
 use crate::ray::{Ray, step_away};
 
 /// Rays shaded together: one tile of
@@ -113,8 +113,8 @@ impl TileShading {
         self.shade_portable(gathered, lab, rays, hits)
     }
 
-    /// [`shade`](Self::shade) with AVX2 enabled, its hits gathered by AVX2's gathers where
-    /// the geometry is flat ([`gather_avx2`](Self::gather_avx2)).
+    /// [`shade`](Self::shade) with AVX2 enabled, its hits gathered from the triangles' lines
+    /// where the geometry has them ([`gather_avx2`](Self::gather_avx2)).
     ///
     /// # Safety
     /// The CPU must support AVX2.
@@ -127,9 +127,9 @@ impl TileShading {
         rays: &[Ray],
         hits: &[Option<Hit>],
     ) {
-        match lab.scene.geometry.flat_arrays().filter(gathers_reach) {
-            // SAFETY: the caller guarantees AVX2; `gathers_reach` holds.
-            Some(arrays) => unsafe { self.gather_avx2(gathered, lab, arrays, rays, hits) },
+        match lab.scene.geometry.triangle_lines() {
+            // SAFETY: the caller guarantees AVX2.
+            Some(lines) => unsafe { self.gather_avx2(gathered, lab, lines, rays, hits) },
             None => self.gather_portable(gathered, lab, rays, hits),
         }
         self.light(gathered, lab, hits);
@@ -203,44 +203,39 @@ impl TileShading {
         }
     }
 
-    /// [`gather_portable`](Self::gather_portable) for a flat geometry's `arrays`, eight lanes
-    /// at a time by AVX2's gathers: the hits' triangle indices first (a miss reads triangle 0,
-    /// its lanes zeroed after), then each corner's index, the corners' coordinates, the normal
-    /// and the material id, each an 8-lane gather (one lane at a time, these are 16
-    /// dependent loads and as many stores per hit). The same values (moved, not computed).
-    /// Lanes beyond the rays are gathered too, from triangle 0. The arrays must be indexable
-    /// by `i32` lanes ([`gathers_reach`]).
+    /// [`gather_portable`](Self::gather_portable) for a flat geometry's triangle `lines`,
+    /// eight lanes at a time: each hit's line is two aligned 32-byte loads (a miss, and each
+    /// lane beyond the rays, loads triangle 0's and is zeroed after), and the eight lanes'
+    /// lines are turned into rows by two 8×8 transpositions. The same values (moved, not
+    /// computed). Where the arrays would take three dependent reads per hit (the triangle,
+    /// its corners' indices, their positions), or sixteen gathers per eight, a line is one.
     ///
     /// # Safety
-    /// The CPU must support AVX2, and `gathers_reach(&arrays)` must hold.
+    /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn gather_avx2<A: Accelerator + ?Sized>(
         &mut self,
         gathered: &mut Gathered,
         lab: &Lab<'_, A>,
-        arrays: FlatArrays<'_>,
+        lines: &[TriangleLine],
         rays: &[Ray],
         hits: &[Option<Hit>],
     ) {
+        use crate::bvh::simd::transpose8;
         use std::arch::x86_64::*;
         assert!(rays.len() <= TILE && hits.len() == rays.len(), "a tile of rays and hits");
         let n = rays.len();
         let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
-        // The hits' triangles (0 for a miss and past the rays), in range of every per-triangle
-        // array: checked here, since the gathers below read unchecked.
-        let triangles = arrays.triangles.len();
-        assert!(
-            arrays.normals.len() == triangles && arrays.material_ids.len() == triangles,
-            "one normal and material per triangle"
-        );
-        let mut index = [0u32; TILE];
+        // The hits' triangles (0 for a miss and past the rays), each a line: checked here,
+        // since the loads below read unchecked.
+        let mut index = [0usize; TILE];
         for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
             let (t, u, v, hit) = match hit {
-                Some(h) => (h.triangle, h.b1, h.b2, true),
+                Some(h) => (h.triangle as usize, h.b1, h.b2, true),
                 None => (0, 0.0, 0.0, false),
             };
-            assert!(!hit || (t as usize) < triangles, "the hit's triangle {t} is in the geometry");
+            assert!(!hit || t < lines.len(), "the hit's triangle {t} is in the geometry");
             index[i] = t;
             (b1[i], b2[i], hit_mask[i]) = (u, v, hit);
             let d = if hit { ray.direction } else { Vec3::ZERO };
@@ -248,31 +243,21 @@ impl TileShading {
                 direction[axis][i] = d[axis];
             }
         }
-        if triangles == 0 {
-            // Every lane missed (the checks above passed): nothing to gather from.
+        if lines.is_empty() {
+            // Every lane missed (the checks above passed): nothing to read.
             self.albedo = [[0.0; TILE]; 3];
             *corner = [[[0.0; TILE]; 3]; 3];
             *normal = [[0.0; TILE]; 3];
             return;
         }
-        let vertices = arrays.positions.len();
-        let corners = arrays.triangles.as_ptr().cast::<i32>();
-        let positions = arrays.positions.as_ptr().cast::<f32>();
-        let normals = arrays.normals.as_ptr().cast::<f32>();
-        let ids = arrays.material_ids.as_ptr().cast::<i32>();
         let mut material = [0u32; TILE];
         for base in (0..TILE).step_by(8) {
-            // Every gather reads inside its array:
-            // `index` holds triangle indices below `triangles` (asserted above), so
-            // `3·t + c < 3·triangles` words of `triangles`, `normals` (`Vec3` is three `f32`)
-            // and `t < triangles` of the material ids; the corners' indices are below
-            // `vertices` (asserted below before use), so `3·v + axis < 3·vertices` floats of
-            // `positions`; and both bounds are at most `i32::MAX` (`gathers_reach`, the
-            // caller's guarantee), so no lane's index overflows or turns negative. Loads and
-            // stores of rows are 8 lanes from `base ≤ TILE − 8`.
+            // Every load reads inside `lines`: `index` holds triangles below `lines.len()`
+            // (asserted above, and 0 elsewhere, with `lines` not empty), and each line is 64
+            // bytes aligned to 64 (`TriangleLine`), so its two halves are aligned 32-byte
+            // loads. Loads and stores of rows are 8 lanes from `base ≤ TILE − 8`.
             // SAFETY: AVX2 is the caller's guarantee; every read and write is in bounds (above).
             unsafe {
-                let t = _mm256_loadu_si256(index.as_ptr().add(base).cast());
                 let hit = _mm256_castsi256_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
                     hit_mask.as_ptr().add(base).cast(),
                 )));
@@ -281,31 +266,42 @@ impl TileShading {
                     _mm256_castps_si256(hit),
                     _mm256_set1_epi32(1),
                 ));
-                let t3 = _mm256_add_epi32(_mm256_add_epi32(t, t), t);
-                let id = _mm256_i32gather_epi32::<4>(ids, t);
-                _mm256_storeu_si256(material.as_mut_ptr().add(base).cast(), id);
-                for (axis, row) in normal.iter_mut().enumerate() {
-                    let k = _mm256_add_epi32(t3, _mm256_set1_epi32(axis as i32));
-                    let g = _mm256_i32gather_ps::<4>(normals, k);
-                    _mm256_storeu_ps(row.as_mut_ptr().add(base), _mm256_and_ps(g, hit));
-                }
+                let line = |i: usize| lines.as_ptr().add(index[base + i]).cast::<f32>();
+                let (l0, l1, l2, l3) = (line(0), line(1), line(2), line(3));
+                let (l4, l5, l6, l7) = (line(4), line(5), line(6), line(7));
+                let low = transpose8([
+                    _mm256_load_ps(l0),
+                    _mm256_load_ps(l1),
+                    _mm256_load_ps(l2),
+                    _mm256_load_ps(l3),
+                    _mm256_load_ps(l4),
+                    _mm256_load_ps(l5),
+                    _mm256_load_ps(l6),
+                    _mm256_load_ps(l7),
+                ]);
+                let high = transpose8([
+                    _mm256_load_ps(l0.add(8)),
+                    _mm256_load_ps(l1.add(8)),
+                    _mm256_load_ps(l2.add(8)),
+                    _mm256_load_ps(l3.add(8)),
+                    _mm256_load_ps(l4.add(8)),
+                    _mm256_load_ps(l5.add(8)),
+                    _mm256_load_ps(l6.add(8)),
+                    _mm256_load_ps(l7.add(8)),
+                ]);
+                // Words 0–8 are the corners, 9–11 the normal, 12 the material.
                 for (c, corner) in corner.iter_mut().enumerate() {
-                    let k = _mm256_add_epi32(t3, _mm256_set1_epi32(c as i32));
-                    let v = _mm256_i32gather_epi32::<4>(corners, k);
-                    // In range of the positions (unsigned: the indices are `u32`).
-                    let limit = _mm256_set1_epi32(vertices as i32);
-                    let beyond = _mm256_cmpeq_epi32(_mm256_max_epu32(v, limit), v);
-                    assert!(
-                        _mm256_movemask_epi8(beyond) == 0,
-                        "a triangle's corner is in the positions"
-                    );
-                    let v3 = _mm256_add_epi32(_mm256_add_epi32(v, v), v);
                     for (axis, row) in corner.iter_mut().enumerate() {
-                        let k = _mm256_add_epi32(v3, _mm256_set1_epi32(axis as i32));
-                        let g = _mm256_i32gather_ps::<4>(positions, k);
-                        _mm256_storeu_ps(row.as_mut_ptr().add(base), _mm256_and_ps(g, hit));
+                        let k = 3 * c + axis;
+                        let word = if k < 8 { low[k] } else { high[k - 8] };
+                        _mm256_storeu_ps(row.as_mut_ptr().add(base), _mm256_and_ps(word, hit));
                     }
                 }
+                for axis in 0..3 {
+                    let row = _mm256_and_ps(high[1 + axis], hit);
+                    _mm256_storeu_ps(normal[axis].as_mut_ptr().add(base), row);
+                }
+                _mm256_storeu_ps(material.as_mut_ptr().add(base).cast(), high[4]);
             }
         }
         // The albedo, by material, one lane at a time (a texture's is looked up per hit).
@@ -464,14 +460,6 @@ impl Albedos {
     }
 }
 
-/// Whether AVX2's gathers, whose indices are signed 32-bit lanes, reach every word of a flat
-/// geometry's arrays: `3·triangles` and `3·positions` at most `i32::MAX` (715 million
-/// triangles and as many vertices). Larger geometry is gathered one lane at a time.
-fn gathers_reach(arrays: &FlatArrays<'_>) -> bool {
-    let most = i32::MAX as usize / 3;
-    arrays.triangles.len() <= most && arrays.positions.len() <= most
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -484,7 +472,7 @@ mod tests {
     fn tile_shading_is_shade_lane_by_lane() {
         use crate::bvh::Bvh;
         let scene = Scene::built_in("cornell").expect("the lab scene");
-        assert!(scene.geometry.flat_arrays().is_some(), "the lab's box takes the gathers");
+        assert!(scene.geometry.triangle_lines().is_some(), "the lab's box has lines");
         let bvh = Bvh::new(&scene.vertices());
         let mut seed = 5u64;
         let mut next = || {
@@ -510,7 +498,7 @@ mod tests {
 
     /// The same on textured glTF boxes, kept instanced (one box drawn 18 times: the tiles take
     /// the other copy of the light loop, the instance's own surface point) and flattened (a
-    /// flat geometry with textures: the AVX2 gathers, and the albedo looked up per hit).
+    /// flat geometry with textures: the triangles' lines, and the albedo looked up per hit).
     #[test]
     fn tile_shading_is_shade_lane_by_lane_on_textured_instances() {
         use crate::bvh::SceneBvh;
@@ -520,7 +508,10 @@ mod tests {
             let options = LoadOptions { instancing };
             let scene = Scene::open(file, &options).expect("the glTF boxes").scene;
             assert_eq!(scene.geometry.is_instanced(), instancing == Instancing::Keep);
-            assert_eq!(scene.geometry.flat_arrays().is_some(), instancing == Instancing::Flatten);
+            assert_eq!(
+                scene.geometry.triangle_lines().is_some(),
+                instancing == Instancing::Flatten
+            );
             assert!(scene.materials.iter().any(|m| !m.textures.is_empty()), "a texture");
             let accel = SceneBvh::build(&scene.geometry).expect("a tree");
             let bounds = (0..scene.geometry.len())
@@ -552,13 +543,13 @@ mod tests {
         }
     }
 
-    /// A scene without triangles: every lane misses, and the gathers have nothing to read.
+    /// A scene without triangles: every lane misses, and there are no lines to read.
     #[test]
     fn tile_shading_of_an_empty_scene_is_black() {
         use crate::geometry::Geometry;
         let mut scene = Scene::built_in("cornell").expect("the lab scene");
         scene.geometry = Geometry::new();
-        assert!(scene.geometry.flat_arrays().is_some(), "an empty geometry takes the gathers");
+        assert!(scene.geometry.triangle_lines().is_some(), "an empty geometry has (no) lines");
         let accel = crate::BruteForce::new(&[]);
         let rays: Vec<Ray> =
             (0..TILE).map(|i| Ray::new(Vec3::ZERO, Vec3::new(1.0, i as f32, 0.5))).collect();
