@@ -21,6 +21,7 @@ use crate::integrator::Integrator;
 use crate::sampling::SamplerKind;
 
 mod accumulator;
+mod band;
 mod passes;
 mod sums;
 mod window;

@@ -9,20 +9,18 @@
 //! pixel's samples are added to its sum in their order: a group gives the pixels of its passes
 //! one by one, to the bit. The pixels go into an [`Accumulator`](super::Accumulator)'s sums.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use super::SampleSettings;
-use super::sums::add_finite;
-use crate::camera::{Camera, RayGenerator};
+use super::band::Band;
+use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::Integrator;
-use crate::ray::Ray;
 use crate::region::Region;
-use crate::sampling::{Grid, Sampler, SamplerKind, sample_offset};
 
 /// The most pixels in a tile: what the tile's arrays on the stack hold.
-const MAX_TILE_PIXELS: usize = 1024;
+pub(super) const MAX_TILE_PIXELS: usize = 1024;
 
 /// Which passes: samples `sample` to `sample + count − 1` of the pixels of `region` (of the
 /// camera's image), drawn as `settings` say.
@@ -134,202 +132,6 @@ fn add_group(
     discarded.into_inner()
 }
 
-/// A band of whole rows of a group of passes ([`add_group`]).
-struct Band<'a> {
-    camera: &'a RayGenerator,
-    has_lens: bool,
-    kind: SamplerKind,
-    settings: &'a SampleSettings,
-    /// The first sample, and how many of each pixel (side by side in a tile).
-    sample: u32,
-    count: usize,
-    /// Pixels per row.
-    width: usize,
-    /// The band's first row and column in the camera's image.
-    first_row: usize,
-    first_column: usize,
-}
-
-impl Band<'_> {
-    /// [`add`](Self::add) compiled with AVX2 (camera rays, shading and accumulation in wider
-    /// registers; the same operations, so the same bits: Rust never fuses a multiply and an
-    /// add).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn add_avx2(
-        &self,
-        integrator: &(impl Integrator + ?Sized),
-        pixels: &mut [Vec3],
-        layers: &mut [&mut [Vec3]],
-    ) -> u64 {
-        self.add(integrator, pixels, layers)
-    }
-
-    /// Adds the group's samples of every pixel of the band (`pixels`, its rows) tile by tile,
-    /// and of each of the integrator's layers (`layers[k]`, the same rows of layer `k`): a
-    /// tile's rays are its pixels' in row order, each pixel's samples side by side, and each
-    /// pixel's are added in the order of their indices. Returns how many samples were not
-    /// finite (NaN or infinite in a channel): they count as black, so that one bad sample cannot
-    /// spoil its pixel for good.
-    #[inline(always)]
-    fn add(
-        &self,
-        integrator: &(impl Integrator + ?Sized),
-        pixels: &mut [Vec3],
-        layers: &mut [&mut [Vec3]],
-    ) -> u64 {
-        let mut discarded = 0;
-        let (rays, kind, settings, sample) = (self.camera, self.kind, self.settings, self.sample);
-        let (width, first_row, has_lens) = (self.width, self.first_row, self.has_lens);
-        let first_column = self.first_column;
-        let rows = pixels.len() / width;
-        let count = self.count;
-        // The lab's pixel positions need no sampler: where the integrator draws no numbers,
-        // none is made (it gets the placeholders made below).
-        let skip_samplers = kind == SamplerKind::Lab && !has_lens && !integrator.draws_numbers();
-        // The tile's columns shrink so that its pixels' samples fit the arrays.
-        let (tile_width, _) = tile_shape(tile_or_default(settings.tile, integrator));
-        let tile_width = (tile_width / count).max(1);
-        // A tile's rays, samplers and colours, on the stack (some 130 KiB in all: rayon's
-        // threads have 2 MiB).
-        let mut tile_rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_TILE_PIXELS];
-        let mut samplers: [Sampler; MAX_TILE_PIXELS] =
-            std::array::from_fn(|_| Sampler::new(kind, 0, (0, 0), 0));
-        // The pattern `multijitter` lays the render's samples out in.
-        let grid = Grid::new(settings.count);
-        let mut colours = [Vec3::ZERO; MAX_TILE_PIXELS];
-        // A tile's film positions, its numbers drawn in lanes (the pixel positions', then the
-        // lens's), and its lanes' indices for those draws.
-        let mut film = [Vec2::ZERO; MAX_TILE_PIXELS];
-        let mut drawn = [Vec2::ZERO; MAX_TILE_PIXELS];
-        let all_lanes: [usize; MAX_TILE_PIXELS] = std::array::from_fn(|k| k);
-        // The layers' values of a tile's rays, ray by ray (empty without layers).
-        let layer_count = layers.len();
-        let mut layer_values = vec![Vec3::ZERO; MAX_TILE_PIXELS * layer_count];
-        for tile_x in (0..width).step_by(tile_width) {
-            let columns = tile_x..(tile_x + tile_width).min(width);
-            let n = columns.len() * rows * count;
-            if skip_samplers {
-                // The lab's film positions, from the pixel positions its samplers' `pixel_2d`
-                // gives; a pass of the first sample alone puts every pixel's at its centre,
-                // found once.
-                let centre = (sample == 0 && count == 1)
-                    .then(|| settings.filter.offset(sample_offset(0, 0, 0)));
-                let mut slot = film.iter_mut();
-                for y in first_row..first_row + rows {
-                    for x in columns.clone() {
-                        let x = first_column + x;
-                        for index in sample..sample + count as u32 {
-                            let offset = centre.unwrap_or_else(|| {
-                                settings.filter.offset(sample_offset(x as u32, y as u32, index))
-                            });
-                            let film = slot.next().expect("a tile's rays fit");
-                            *film = Vec2::new(x as f32, y as f32) + offset;
-                        }
-                    }
-                }
-            } else {
-                let mut slot = samplers.iter_mut().zip(&mut film);
-                for y in first_row..first_row + rows {
-                    for x in columns.clone() {
-                        let x = first_column + x;
-                        let pixel = (x as u32, y as u32);
-                        let indices = sample..sample + count as u32;
-                        for made in
-                            Sampler::counted_range(kind, settings.seed, pixel, indices, grid)
-                        {
-                            let (sampler, film) = slot.next().expect("a tile's rays fit");
-                            *sampler = made;
-                            *film = Vec2::new(x as f32, y as f32);
-                        }
-                    }
-                }
-            }
-            // The pixel positions (and lens numbers): in lanes for the stratified kinds, the
-            // same numbers as one by one (`pixel_2d` is their first `next_2d`; the lab's is not).
-            let (samplers, lanes) = (&mut samplers[..n], &all_lanes[..n]);
-            if !skip_samplers {
-                if matches!(kind, SamplerKind::Sobol | SamplerKind::MultiJitter) {
-                    Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
-                } else {
-                    for (sampler, u) in samplers.iter_mut().zip(&mut drawn) {
-                        *u = sampler.pixel_2d();
-                    }
-                }
-                for (film, &u) in film[..n].iter_mut().zip(&drawn) {
-                    *film += settings.filter.offset(u);
-                }
-            }
-            if has_lens {
-                Sampler::next_2d_each(samplers, lanes, &mut drawn[..n]);
-                for ((ray, film), &u) in tile_rays.iter_mut().zip(&film[..n]).zip(&drawn) {
-                    *ray = rays.lens_ray(*film, u);
-                }
-            } else {
-                rays.rays_through(&film[..n], &mut tile_rays[..n]);
-            }
-            if layer_count == 0 {
-                integrator.radiance_each(&tile_rays[..n], &mut samplers[..n], &mut colours[..n]);
-            } else {
-                integrator.radiance_and_layers_each(
-                    &tile_rays[..n],
-                    &mut samplers[..n],
-                    &mut colours[..n],
-                    &mut layer_values[..n * layer_count],
-                );
-                let mut values = layer_values.chunks_exact(layer_count);
-                for y in 0..rows {
-                    for x in columns.clone() {
-                        for _ in 0..count {
-                            let values = values.next().expect("the layers of each ray");
-                            for (layer, &value) in layers.iter_mut().zip(values) {
-                                if value.is_finite() {
-                                    layer[y * width + x] += value;
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            if count == 1 {
-                // One sample per pixel: each row of the tile is a run of pixels and a run of
-                // colours, added as runs of floats.
-                let colours = colours[..n].chunks_exact(columns.len());
-                for (y, colours) in colours.enumerate() {
-                    let row = &mut pixels[y * width..][columns.clone()];
-                    discarded += add_finite(row, colours);
-                }
-                continue;
-            }
-            let mut colour = colours.iter();
-            for y in 0..rows {
-                for x in columns.clone() {
-                    for _ in 0..count {
-                        let colour = *colour.next().expect("one colour per ray");
-                        if colour.is_finite() {
-                            pixels[y * width + x] += colour;
-                        } else {
-                            discarded += 1;
-                        }
-                    }
-                }
-            }
-        }
-        discarded
-    }
-}
-
-/// `tile`, its width 0 replaced by the integrator's ([`Integrator::tile_width`]).
-fn tile_or_default(
-    (width, height): (u32, u32),
-    integrator: &(impl Integrator + ?Sized),
-) -> (u32, u32) {
-    (if width == 0 { integrator.tile_width() } else { width }, height)
-}
-
 /// A tile shape that fits the tile arrays: both sides at least 1, at most 1,024 pixels.
 pub(super) fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
     let height = (height as usize).clamp(1, MAX_TILE_PIXELS);
@@ -340,6 +142,10 @@ pub(super) fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::RayGenerator;
+    use crate::ray::Ray;
+    use crate::sampling::{Grid, Sampler, SamplerKind};
+    use glam::Vec2;
 
     /// Band `b` of pass `sample` (whole rows of an image `width` wide, from its left edge).
     fn band<'a>(
