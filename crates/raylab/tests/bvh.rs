@@ -4,8 +4,9 @@
 
 use glam::Vec3;
 use proptest::prelude::*;
+use raylab::accel::{HitRows, ROWS, RayRows};
 use raylab::bvh::{BuildSettings, Bvh, Collapse, Isa};
-use raylab::{Accelerator, BruteForce, Ray};
+use raylab::{Accelerator, BruteForce, Hit, Ray};
 
 /// Every BVH variant over `triangles`: each preset's tree, small-scene leaves (one block), the
 /// collapse of least cost over the finest binary trees, and
@@ -74,6 +75,22 @@ fn assert_agreement(triangles: &[[Vec3; 3]], rays: &[Ray]) -> Result<usize, Test
         for (i, (c, o)) in expected.iter().enumerate() {
             prop_assert_eq!(closest[i], *c, "{} packet: {:?}", name, rays[i]);
             prop_assert_eq!(occluded[i], *o, "{} packet: {:?}", name, rays[i]);
+        }
+        // In rows, a tile at a time: hits into rows that hold wrong answers first (those past
+        // the tile must stay), occlusion from rays in rows.
+        for (k, (tile, expected)) in rays.chunks(ROWS).zip(expected.chunks(ROWS)).enumerate() {
+            let wrong = Some(Hit { t: -1.0, triangle: 7, b1: 0.5, b2: 0.5 });
+            let mut hits = HitRows::default();
+            (0..ROWS).for_each(|i| hits.set(i, wrong));
+            bvh.closest_hits_rows(tile, &mut hits);
+            let blocked = bvh.occluded_rows(&RayRows::from_rays(tile));
+            for (i, (c, o)) in expected.iter().enumerate() {
+                prop_assert_eq!(hits.hit(i), *c, "{} rows: {:?}", name, tile[i]);
+                prop_assert_eq!(blocked >> i & 1 != 0, *o, "{} rows: {:?}", name, tile[i]);
+            }
+            prop_assert!((tile.len()..ROWS).all(|i| hits.hit(i) == wrong), "{} tile {}", name, k);
+            let past = blocked.checked_shr(tile.len() as u32).unwrap_or(0);
+            prop_assert_eq!(past, 0, "{}: no bit past the rays", name);
         }
     }
     Ok(expected.iter().filter(|(c, _)| c.is_some()).count())

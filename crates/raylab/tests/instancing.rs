@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Quat, Vec3};
+use raylab::accel::{HitRows, ROWS, RayRows};
 use raylab::bvh::TwoLevel;
 use raylab::scene::load_mesh;
 use raylab::{Accelerator, BruteForce, Geometry, Hit, Mesh, Ray, Scene, SceneBvh};
@@ -208,6 +209,16 @@ fn hits_through_instances_are_the_brute_force_answers() {
         accel.occluded_each(&rays, &mut batch);
         let single: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
         assert_eq!(batch, single);
+        // In rows, a tile at a time.
+        for (tile, single) in rays.chunks(ROWS).zip(single.chunks(ROWS)) {
+            let mut hits = HitRows::default();
+            accel.closest_hits_rows(tile, &mut hits);
+            let blocked = accel.occluded_rows(&RayRows::from_rays(tile));
+            for (i, (ray, &occluded)) in tile.iter().zip(single).enumerate() {
+                assert_eq!(hits.hit(i), accel.closest_hit(ray), "{ray:?}");
+                assert_eq!(blocked >> i & 1 != 0, occluded, "{ray:?}");
+            }
+        }
     }
 }
 

@@ -7,8 +7,10 @@
 //! answers them the same way, only faster.
 
 mod brute_force;
+mod rows;
 
 pub use brute_force::BruteForce;
+pub use rows::{HitRows, ROWS, RayRows};
 
 /// The closest intersection of a ray with a scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,6 +81,28 @@ pub trait Accelerator: Sync {
         for (ray, o) in rays.iter().zip(occluded) {
             *o = self.occluded(ray);
         }
+    }
+
+    /// The closest hit of each of up to [`ROWS`] rays (a tile of camera rays), in rows:
+    /// `hits.hit(i)` for `rays[i]` is exactly what [`closest_hit`](Self::closest_hit) answers;
+    /// lanes from `rays.len()` on are left as they were. The form for integrators that shade
+    /// a tile in lanes; accelerators that trace packets write their rows directly.
+    ///
+    /// # Panics
+    /// If there are more than [`ROWS`] rays.
+    fn closest_hits_rows(&self, rays: &[crate::Ray], hits: &mut HitRows) {
+        assert!(rays.len() <= ROWS, "at most {ROWS} rays in rows");
+        for (i, ray) in rays.iter().enumerate() {
+            hits.set(i, self.closest_hit(ray));
+        }
+    }
+
+    /// Which of the rays in `rays` (coherent ones: shadow rays toward one light) are occluded,
+    /// as a mask: bit `i` for ray `i`, exactly what [`occluded`](Self::occluded) answers (no bit
+    /// at or above `rays.len`).
+    fn occluded_rows(&self, rays: &RayRows) -> u64 {
+        assert!(rays.len <= ROWS, "at most {ROWS} rays in rows");
+        (0..rays.len).filter(|&i| self.occluded(&rays.ray(i))).fold(0, |m, i| m | 1 << i)
     }
 
     /// Whether each of many incoherent rays (a path tracer's shadow rays) is occluded,

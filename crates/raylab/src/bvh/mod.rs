@@ -69,7 +69,7 @@ pub use scene::SceneBvh;
 pub use traverse::TraversalStats;
 pub use two_level::TwoLevel;
 
-use crate::accel::{Accelerator, Hit};
+use crate::accel::{Accelerator, Hit, HitRows, RayRows};
 use crate::ray::Ray;
 use node::WideBvh;
 use queries::Queries;
@@ -305,6 +305,20 @@ impl Accelerator for Bvh {
     fn occluded_each(&self, rays: &[Ray], occluded: &mut [bool]) {
         // SAFETY: as above.
         unsafe { (self.queries.occluded_each)(&self.wide, rays, occluded) }
+    }
+
+    /// In packets, as [`closest_hits`](Self::closest_hits), the packet's hits copied out as
+    /// the rows they are.
+    fn closest_hits_rows(&self, rays: &[Ray], hits: &mut HitRows) {
+        // SAFETY: as above.
+        unsafe { (self.queries.closest_hits_rows)(&self.wide, rays, hits) }
+    }
+
+    /// In packets, as [`occluded_each`](Self::occluded_each), the packet's lanes filled from
+    /// the rows as they are.
+    fn occluded_rows(&self, rays: &RayRows) -> u64 {
+        // SAFETY: as above.
+        unsafe { (self.queries.occluded_rows)(&self.wide, rays) }
     }
 
     /// A small scene's flat list traces the rays in lanes, one triangle per step

@@ -11,7 +11,7 @@ use super::isa::{Isa, Scalar};
 use super::node::WideBvh;
 use super::packet;
 use super::traverse::{self, TreeRaysKernel, flat::Flat, flat::FlatKernel};
-use crate::accel::Hit;
+use crate::accel::{Hit, HitRows, RayRows};
 use crate::ray::Ray;
 
 /// A BVH's queries, compiled for one instruction set.
@@ -30,6 +30,10 @@ pub(crate) struct Queries {
     pub closest_hits: unsafe fn(&WideBvh, &[Ray], &mut [Option<Hit>]),
     /// Occlusion of rays in packets.
     pub occluded_each: unsafe fn(&WideBvh, &[Ray], &mut [bool]),
+    /// Closest hits of a tile of rays in packets, answered in rows.
+    pub closest_hits_rows: unsafe fn(&WideBvh, &[Ray], &mut HitRows),
+    /// Occlusion of a tile of rays in rows, in packets, as a mask.
+    pub occluded_rows: unsafe fn(&WideBvh, &RayRows) -> u64,
     /// Closest hits of incoherent rays, through the tree in lanes where the set has them.
     pub closest_hits_incoherent: unsafe fn(&WideBvh, &[Ray], &mut [Option<Hit>]),
     /// Occlusion of incoherent rays, through the tree in lanes where the set has them.
@@ -74,6 +78,16 @@ macro_rules! queries {
             unsafe { packet::occluded_each::<$kernel>(bvh, rays, out) }
         }
         $(#[target_feature(enable = $features)])?
+        unsafe fn closest_hits_rows(bvh: &WideBvh, rays: &[Ray], out: &mut HitRows) {
+            // SAFETY: as above.
+            unsafe { packet::closest_hits_rows::<$kernel>(bvh, rays, out) }
+        }
+        $(#[target_feature(enable = $features)])?
+        unsafe fn occluded_rows(bvh: &WideBvh, rays: &RayRows) -> u64 {
+            // SAFETY: as above.
+            unsafe { packet::occluded_rows::<$kernel>(bvh, rays) }
+        }
+        $(#[target_feature(enable = $features)])?
         unsafe fn closest_hits_incoherent(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
             // SAFETY: as above.
             unsafe { <$kernel as TreeRaysKernel>::closest_hits(bvh, rays, out) }
@@ -109,6 +123,8 @@ macro_rules! queries {
             occluded,
             closest_hits,
             occluded_each,
+            closest_hits_rows,
+            occluded_rows,
             closest_hits_incoherent,
             occluded_incoherent,
             flat_closest_hit,

@@ -3,7 +3,7 @@
 
 use super::TwoLevel;
 use super::{BuildError, Bvh};
-use crate::accel::{Accelerator, Hit};
+use crate::accel::{Accelerator, Hit, HitRows, RayRows};
 use crate::geometry::Geometry;
 use crate::ray::Ray;
 
@@ -86,6 +86,20 @@ impl Accelerator for SceneBvh {
         match self {
             SceneBvh::Flat(bvh) => bvh.occluded_each(rays, occluded),
             SceneBvh::Instanced(two) => two.occluded_each(rays, occluded),
+        }
+    }
+
+    fn closest_hits_rows(&self, rays: &[Ray], hits: &mut HitRows) {
+        match self {
+            SceneBvh::Flat(bvh) => bvh.closest_hits_rows(rays, hits),
+            SceneBvh::Instanced(two) => two.closest_hits_rows(rays, hits),
+        }
+    }
+
+    fn occluded_rows(&self, rays: &RayRows) -> u64 {
+        match self {
+            SceneBvh::Flat(bvh) => bvh.occluded_rows(rays),
+            SceneBvh::Instanced(two) => two.occluded_rows(rays),
         }
     }
 

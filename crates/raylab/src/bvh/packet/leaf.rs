@@ -3,7 +3,7 @@
 //! twin, [`packet_leaf_scalar`], runs them ray by ray.
 
 use super::rays::PacketRays;
-use super::setup::RayRows;
+use super::setup::RestRows;
 use crate::bvh::bounds::Bounds;
 use crate::bvh::isa::Scalar;
 use crate::bvh::leaf::kernel::prepare_triangle_ray;
@@ -45,7 +45,7 @@ pub(crate) trait PacketKernel: Kernel {
     unsafe fn rows_of_rays(
         rays: &[Ray],
         origin: &mut [[f32; super::rays::PACKET]; 3],
-        rest: &mut RayRows,
+        rest: &mut RestRows,
     ) {
         super::setup::rows_portable(rays, origin, rest)
     }
@@ -132,7 +132,7 @@ mod x86 {
                 unsafe fn rows_of_rays(
                     rays: &[Ray],
                     origin: &mut [[f32; crate::bvh::packet::rays::PACKET]; 3],
-                    rest: &mut RayRows,
+                    rest: &mut RestRows,
                 ) {
                     if $transpose {
                         // SAFETY: the caller's guarantee of the instruction set, which has AVX.

@@ -24,7 +24,7 @@ pub(crate) mod leaf;
 pub(crate) mod rays;
 mod setup;
 
-use crate::accel::Hit;
+use crate::accel::{Hit, HitRows, RayRows};
 use crate::bvh::bounds::Frustum;
 use crate::bvh::node::{Child, WideBvh, decode};
 use crate::bvh::traverse::{Stack, closest_hit, occluded};
@@ -47,7 +47,7 @@ struct Chunk {
     /// A second packet for a group that is not the whole chunk, made when first needed.
     gathered: Option<PacketRays>,
     /// The rays' directions and ranges in rows, on their way into `lanes` ([`setup::fill`]).
-    rows: setup::RayRows,
+    rows: setup::RestRows,
 }
 
 thread_local! {
@@ -101,12 +101,24 @@ impl Chunk {
     /// The CPU must support `K`'s instruction set.
     #[inline(always)]
     unsafe fn prepare<K: PacketKernel>(&mut self, rays: &[Ray]) {
+        // SAFETY: the caller's guarantee.
+        let groups = unsafe { setup::fill::<K>(&mut self.lanes, &mut self.rows, rays) };
+        self.group(&groups[..rays.len()]);
+    }
+
+    /// Prepares rays given in rows (at most [`PACKET`]).
+    #[inline(always)]
+    fn prepare_rows(&mut self, rays: &RayRows) {
+        let groups = setup::fill_rows(&mut self.lanes, rays);
+        self.group(&groups[..rays.len]);
+    }
+
+    /// Sorts the prepared lanes into their `groups`.
+    #[inline(always)]
+    fn group(&mut self, groups: &[u8]) {
         self.groups = [0; 24];
         self.present = 0;
         self.alone = 0;
-        // SAFETY: the caller's guarantee.
-        let groups = unsafe { setup::fill::<K>(&mut self.lanes, &mut self.rows, rays) };
-        let groups = &groups[..rays.len()];
         // Camera and shadow rays are nearly always one group: found without a loop through
         // memory (each `|=` below waits on the one before it).
         let first = groups.first().copied().unwrap_or(setup::ALONE);
@@ -139,12 +151,12 @@ impl Chunk {
     unsafe fn trace<K: PacketKernel, Q: Query>(
         &mut self,
         bvh: &WideBvh,
-        rays: &[Ray],
-        out: &mut [Q::Answer],
+        rays: &(impl Rays + ?Sized),
+        out: &mut (impl Answers<Q> + ?Sized),
     ) {
         for i in bits(self.alone) {
             // SAFETY: the caller guarantees `K`'s instruction set.
-            out[i] = unsafe { Q::alone::<K>(bvh, &rays[i]) };
+            out.put(i, unsafe { Q::alone::<K>(bvh, &rays.ray(i)) });
         }
         let all = self.lanes.all();
         for group in bits(self.present as u64) {
@@ -152,7 +164,7 @@ impl Chunk {
             if members.count_ones() == 1 {
                 let i = members.trailing_zeros() as usize;
                 // SAFETY: the caller guarantees `K`'s instruction set.
-                out[i] = unsafe { Q::alone::<K>(bvh, &rays[i]) };
+                out.put(i, unsafe { Q::alone::<K>(bvh, &rays.ray(i)) });
                 continue;
             }
             let (negative, k) = self.shared[group];
@@ -162,9 +174,7 @@ impl Chunk {
                 self.lanes.k = k;
                 // SAFETY: the caller guarantees `K`'s instruction set.
                 let traced = unsafe { Q::packet::<K>(bvh, &mut self.lanes) };
-                for (i, out) in out.iter_mut().enumerate() {
-                    *out = Q::answer(&self.lanes, traced, i);
-                }
+                out.put_packet(&self.lanes, traced);
                 continue;
             }
             let gathered = self.gathered.get_or_insert_with(PacketRays::new);
@@ -177,7 +187,7 @@ impl Chunk {
             // SAFETY: the caller guarantees `K`'s instruction set.
             let traced = unsafe { Q::packet::<K>(bvh, gathered) };
             for (j, i) in bits(members).enumerate() {
-                out[i] = Q::answer(gathered, traced, j);
+                out.put(i, Q::answer(gathered, traced, j));
             }
         }
     }
@@ -194,6 +204,81 @@ trait Query {
     unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64;
     /// The answer of lane `j` of a traced packet.
     fn answer(rays: &PacketRays, traced: u64, j: usize) -> Self::Answer;
+}
+
+/// Where a chunk's rays are read one at a time (those traced alone): records or rows.
+trait Rays {
+    fn ray(&self, i: usize) -> Ray;
+}
+
+impl Rays for [Ray] {
+    #[inline(always)]
+    fn ray(&self, i: usize) -> Ray {
+        self[i]
+    }
+}
+
+impl Rays for RayRows {
+    #[inline(always)]
+    fn ray(&self, i: usize) -> Ray {
+        RayRows::ray(self, i)
+    }
+}
+
+/// Where a chunk's answers by `Q` go: answer `i` for ray `i`.
+trait Answers<Q: Query> {
+    fn put(&mut self, i: usize, answer: Q::Answer);
+
+    /// The answers of a packet of the whole chunk (lane `i` for ray `i`).
+    #[inline(always)]
+    fn put_packet(&mut self, rays: &PacketRays, traced: u64) {
+        for i in 0..rays.len {
+            self.put(i, Q::answer(rays, traced, i));
+        }
+    }
+}
+
+impl<Q: Query> Answers<Q> for [Q::Answer] {
+    #[inline(always)]
+    fn put(&mut self, i: usize, answer: Q::Answer) {
+        self[i] = answer;
+    }
+}
+
+/// Closest hits in rows: a packet's best hits are rows already, copied as they are (misses
+/// given `HitRows`' values).
+impl Answers<ClosestHits> for HitRows {
+    #[inline(always)]
+    fn put(&mut self, i: usize, answer: Option<Hit>) {
+        self.set(i, answer);
+    }
+
+    #[inline(always)]
+    fn put_packet(&mut self, rays: &PacketRays, _: u64) {
+        let n = rays.len;
+        for i in 0..n {
+            let miss = rays.best_triangle[i] == HitRows::MISS;
+            self.t[i] = if miss { f32::INFINITY } else { rays.best_t[i] };
+            self.triangle[i] = rays.best_triangle[i];
+            self.b1[i] = if miss { 0.0 } else { rays.best_b1[i] };
+            self.b2[i] = if miss { 0.0 } else { rays.best_b2[i] };
+        }
+    }
+}
+
+/// Occlusion as a mask: bit `i` set where ray `i` is occluded.
+struct OccludedMask(u64);
+
+impl Answers<OccludedEach> for OccludedMask {
+    #[inline(always)]
+    fn put(&mut self, i: usize, occluded: bool) {
+        self.0 |= (occluded as u64) << i;
+    }
+
+    #[inline(always)]
+    fn put_packet(&mut self, rays: &PacketRays, open: u64) {
+        self.0 |= rays.all() & !open;
+    }
 }
 
 /// [`closest_hits`].
@@ -271,6 +356,25 @@ pub(crate) unsafe fn closest_hits<K: PacketKernel>(
     Chunk::give_back(chunk);
 }
 
+/// [`closest_hits`] of at most [`PACKET`] rays, answered in rows.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn closest_hits_rows<K: PacketKernel>(
+    bvh: &WideBvh,
+    rays: &[Ray],
+    out: &mut HitRows,
+) {
+    assert!(rays.len() <= PACKET, "at most {PACKET} rays in rows");
+    let mut chunk = Chunk::take();
+    // SAFETY: the caller guarantees `K`'s instruction set.
+    unsafe { chunk.prepare::<K>(rays) };
+    // SAFETY: the caller guarantees `K`'s instruction set.
+    unsafe { chunk.trace::<K, ClosestHits>(bvh, rays, out) };
+    Chunk::give_back(chunk);
+}
+
 /// Traces a packet of at least two rays to their closest hits.
 ///
 /// # Safety
@@ -345,6 +449,22 @@ pub(crate) unsafe fn occluded_each<K: PacketKernel>(bvh: &WideBvh, rays: &[Ray],
         unsafe { chunk.trace::<K, OccludedEach>(bvh, rays, out) };
     }
     Chunk::give_back(chunk);
+}
+
+/// Which of the rays in rows are occluded, as a mask (bit `i` for ray `i`), exactly as
+/// [`occluded`] decides each.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn occluded_rows<K: PacketKernel>(bvh: &WideBvh, rays: &RayRows) -> u64 {
+    let mut chunk = Chunk::take();
+    chunk.prepare_rows(rays);
+    let mut out = OccludedMask(0);
+    // SAFETY: the caller guarantees `K`'s instruction set.
+    unsafe { chunk.trace::<K, OccludedEach>(bvh, rays, &mut out) };
+    Chunk::give_back(chunk);
+    out.0
 }
 
 /// Traces a packet of at least two rays for occlusion; returns the mask of rays not occluded.

@@ -19,18 +19,18 @@ pub(super) const ALONE: u8 = u8::MAX;
 
 /// A packet's rays' directions (three rows), `t_min` and `t_max`, lane `i` for ray `i`: what
 /// [`fill`] reads besides the origins, which it copies straight into the packet's lanes.
-pub(super) type RayRows = [[f32; PACKET]; 5];
+pub(super) type RestRows = [[f32; PACKET]; 5];
 
 /// Copies `rays` (at most [`PACKET`]) into rows: their origins into `origin`, their directions,
 /// `t_min` and `t_max` into `rest` (the scalar twin of [`rows_avx`]).
 #[inline(always)]
-pub(super) fn rows_portable(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RayRows) {
+pub(super) fn rows_portable(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RestRows) {
     rows_from(0, rays, origin, rest);
 }
 
 /// [`rows_portable`] into lanes `first..`: ray `i` into lane `first + i`.
 #[inline(always)]
-fn rows_from(first: usize, rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RayRows) {
+fn rows_from(first: usize, rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RestRows) {
     for (i, ray) in rays.iter().enumerate() {
         let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
         for axis in 0..3 {
@@ -51,7 +51,7 @@ fn rows_from(first: usize, rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: 
 /// The CPU must support AVX.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RayRows) {
+pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], rest: &mut RestRows) {
     use std::arch::x86_64::*;
     const _: () = assert!(std::mem::size_of::<Ray>() == 32);
     assert!(rays.len() <= PACKET, "a packet holds at most {PACKET} rays");
@@ -99,7 +99,7 @@ pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], res
 #[inline(always)]
 pub(super) unsafe fn fill<K: PacketKernel>(
     lanes: &mut PacketRays,
-    rows: &mut RayRows,
+    rows: &mut RestRows,
     rays: &[Ray],
 ) -> [u8; PACKET] {
     assert!(rays.len() <= PACKET, "a packet holds at most {PACKET} rays");
@@ -107,6 +107,29 @@ pub(super) unsafe fn fill<K: PacketKernel>(
     // SAFETY: the caller's guarantee.
     unsafe { K::rows_of_rays(rays, &mut lanes.origin, rows) };
     let [direction @ .., t_min, t_max] = &*rows;
+    fill_lanes(lanes, direction, t_min, t_max)
+}
+
+/// [`fill`] from rays already in rows: the origins copied into the lanes, the rest read where
+/// they are. Lane `i` is filled as `fill` fills it from `rays.ray(i)`.
+#[inline(always)]
+pub(super) fn fill_rows(lanes: &mut PacketRays, rays: &crate::accel::RayRows) -> [u8; PACKET] {
+    const _: () = assert!(crate::accel::ROWS == PACKET);
+    assert!(rays.len <= PACKET, "a packet holds at most {PACKET} rays");
+    lanes.len = rays.len;
+    lanes.origin = rays.origin;
+    fill_lanes(lanes, &rays.direction, &rays.t_min, &rays.t_max)
+}
+
+/// The lanes of [`fill`], the origins already in `lanes`: every lane computed by the same
+/// operations, without branches.
+#[inline(always)]
+fn fill_lanes(
+    lanes: &mut PacketRays,
+    direction: &[[f32; PACKET]; 3],
+    t_min: &[f32; PACKET],
+    t_max: &[f32; PACKET],
+) -> [u8; PACKET] {
     let mut groups = [ALONE; PACKET];
     for i in 0..PACKET {
         let (ox, oy, oz) = (lanes.origin[0][i], lanes.origin[1][i], lanes.origin[2][i]);
@@ -186,7 +209,7 @@ mod tests {
     /// `rays.len()` alike; returns the first set's lanes in `lanes` and its groups.
     fn fill_each_isa(
         lanes: &mut PacketRays,
-        other_rows: &mut RayRows,
+        other_rows: &mut RestRows,
         rays: &[Ray],
     ) -> [u8; PACKET] {
         use crate::bvh::isa::Scalar;

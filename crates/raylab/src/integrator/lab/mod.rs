@@ -239,25 +239,51 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
             }
             return;
         }
-        // A tile at a time, in this thread's arrays: no allocation or clearing per tile.
+        // A tile at a time, in this thread's arrays: no allocation or clearing per tile. The
+        // hits come back in rows, and the shadow rays go in rows, side by side (the lanes
+        // with one): the packets read and write rows, so nothing is turned into records.
         let mut arrays = TileArrays::take();
-        let TileArrays { hits, shading, gathered, shadow_rays, occluded } = &mut *arrays;
+        let TileArrays { hits, shading, gathered, shadow_rays } = &mut *arrays;
+        let light = self.light.position.to_array();
         for (rays, out) in rays.chunks(TILE).zip(out.chunks_mut(TILE)) {
             let n = rays.len();
-            let hits = &mut hits[..n];
-            self.accel.closest_hits(rays, hits);
+            self.accel.closest_hits_rows(rays, hits);
             shading.shade(gathered, self, rays, hits);
-            let mut shadows = 0;
+            let (mut shadows, mut unusual) = (0, false);
             for i in (0..n).filter(|&i| shading.shadow[i]) {
-                shadow_rays[shadows] = shading.shadow_ray(i, self, &rays[i], hits[i]);
+                for axis in 0..3 {
+                    shadow_rays.origin[axis][shadows] = shading.shadow_origin[axis][i];
+                }
+                unusual |= shading.unusual[i];
                 shadows += 1;
             }
-            self.accel.occluded_each(&shadow_rays[..shadows], &mut occluded[..shadows]);
-            let mut blocked = occluded[..shadows].iter();
-            for (i, (colour, hit)) in out.iter_mut().zip(hits.iter()).enumerate() {
-                let occluded =
-                    shading.shadow[i] && *blocked.next().expect("one answer per shadow ray");
-                *colour = self.finish(hit.is_some(), &shading.lane(i), occluded);
+            // `Ray::segment(origin, light − origin, 1)`, every lane at once.
+            let rows = shadow_rays.direction.iter_mut().zip(&shadow_rays.origin).zip(light);
+            for ((direction, origin), light) in rows {
+                for (d, o) in direction.iter_mut().zip(origin) {
+                    *d = light - o;
+                }
+            }
+            (shadow_rays.t_min, shadow_rays.t_max) = ([0.0; TILE], [1.0; TILE]);
+            if unusual {
+                // A moved origin that is not finite: the lane's ray is `shade`'s own.
+                for (j, i) in (0..n).filter(|&i| shading.shadow[i]).enumerate() {
+                    if shading.unusual[i] {
+                        let ray = shading.shadow_ray(i, self, &rays[i], hits.hit(i));
+                        shadow_rays.set(j, &ray);
+                    }
+                }
+            }
+            shadow_rays.len = shadows;
+            let blocked = if shadows > 0 { self.accel.occluded_rows(shadow_rays) } else { 0 };
+            let mut j = 0;
+            for (i, colour) in out.iter_mut().enumerate() {
+                let mut occluded = false;
+                if shading.shadow[i] {
+                    occluded = blocked >> j & 1 != 0;
+                    j += 1;
+                }
+                *colour = self.finish(hits.is_hit(i), &shading.lane(i), occluded);
             }
         }
         TileArrays::give_back(arrays);

@@ -6,7 +6,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::{Lab, Shading, Stage};
-use crate::accel::{Accelerator, Hit};
+use crate::accel::{Accelerator, Hit, HitRows, RayRows};
 use crate::float::gamma;
 use crate::geometry::TriangleLine;
 use crate::ray::{Ray, step_away};
@@ -46,11 +46,10 @@ pub(super) struct Gathered {
 /// A thread's arrays for the lab's tiles (10 KB), kept from tile to tile and call to call, as
 /// the packets keep theirs: nothing is allocated, cleared or moved per tile.
 pub(super) struct TileArrays {
-    pub(super) hits: [Option<Hit>; TILE],
+    pub(super) hits: HitRows,
     pub(super) shading: TileShading,
     pub(super) gathered: Gathered,
-    pub(super) shadow_rays: [Ray; TILE],
-    pub(super) occluded: [bool; TILE],
+    pub(super) shadow_rays: RayRows,
 }
 
 thread_local! {
@@ -64,7 +63,7 @@ impl TileArrays {
     pub(super) fn take() -> Box<TileArrays> {
         SPARE_TILE.take().unwrap_or_else(|| {
             Box::new(TileArrays {
-                hits: [None; TILE],
+                hits: HitRows::default(),
                 shading: TileShading {
                     albedo: [[0.0; TILE]; 3],
                     direct: [[0.0; TILE]; 3],
@@ -80,8 +79,7 @@ impl TileArrays {
                     b2: [0.0; TILE],
                     hit_mask: [false; TILE],
                 },
-                shadow_rays: [Ray::new(Vec3::ZERO, Vec3::Z); TILE],
-                occluded: [false; TILE],
+                shadow_rays: RayRows::default(),
             })
         })
     }
@@ -93,7 +91,8 @@ impl TileArrays {
 }
 
 impl TileShading {
-    /// Shades the tile of `rays` and their `hits` (at most [`TILE`]) into `self`, through
+    /// Shades the tile of `rays` and their `hits` (lane `i` for `rays[i]`, at most [`TILE`])
+    /// into `self`, through
     /// `gathered`, compiled for AVX2 where the CPU has it (the arithmetic is the same
     /// operations either way: Rust never fuses a multiply and an add, so the lanes are the
     /// same bits; the test below checks both forms). Lanes from `rays.len()` on hold values of
@@ -103,7 +102,7 @@ impl TileShading {
         gathered: &mut Gathered,
         lab: &Lab<'_, A>,
         rays: &[Ray],
-        hits: &[Option<Hit>],
+        hits: &HitRows,
     ) {
         #[cfg(target_arch = "x86_64")]
         if crate::cpu::Isa::detect().at_least(crate::cpu::Isa::Avx2) {
@@ -125,14 +124,14 @@ impl TileShading {
         gathered: &mut Gathered,
         lab: &Lab<'_, A>,
         rays: &[Ray],
-        hits: &[Option<Hit>],
+        hits: &HitRows,
     ) {
         match lab.scene.geometry.triangle_lines() {
             // SAFETY: the caller guarantees AVX2.
             Some(lines) => unsafe { self.gather_avx2(gathered, lab, lines, rays, hits) },
             None => self.gather_portable(gathered, lab, rays, hits),
         }
-        self.light(gathered, lab, hits);
+        self.light(gathered, lab, rays.len(), hits);
     }
 
     /// [`shade`](Self::shade) for any instruction set.
@@ -142,10 +141,10 @@ impl TileShading {
         gathered: &mut Gathered,
         lab: &Lab<'_, A>,
         rays: &[Ray],
-        hits: &[Option<Hit>],
+        hits: &HitRows,
     ) {
         self.gather_portable(gathered, lab, rays, hits);
-        self.light(gathered, lab, hits);
+        self.light(gathered, lab, rays.len(), hits);
     }
 
     /// Gathers the tile's hits into `gathered` (and their albedo into `self`) one lane at a
@@ -157,17 +156,17 @@ impl TileShading {
         gathered: &mut Gathered,
         lab: &Lab<'_, A>,
         rays: &[Ray],
-        hits: &[Option<Hit>],
+        hits: &HitRows,
     ) {
-        assert!(rays.len() <= TILE && hits.len() == rays.len(), "a tile of rays and hits");
+        assert!(rays.len() <= TILE, "a tile of rays");
         let geometry = &lab.scene.geometry;
         let tile = self;
         // Gathered: the corners, normal and barycentrics of each hit, zeros for misses (every
         // lane of the tile written, so nothing needs clearing first).
         let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
         let mut materials = Albedos::new();
-        for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
-            let Some(hit) = hit else {
+        for (i, ray) in rays.iter().enumerate() {
+            let Some(hit) = &hits.hit(i) else {
                 for axis in 0..3 {
                     tile.albedo[axis][i] = 0.0;
                     for corner in corner.iter_mut() {
@@ -220,23 +219,23 @@ impl TileShading {
         lab: &Lab<'_, A>,
         lines: &[TriangleLine],
         rays: &[Ray],
-        hits: &[Option<Hit>],
+        hits: &HitRows,
     ) {
         use crate::bvh::simd::transpose8;
         use std::arch::x86_64::*;
-        assert!(rays.len() <= TILE && hits.len() == rays.len(), "a tile of rays and hits");
+        assert!(rays.len() <= TILE, "a tile of rays");
         let n = rays.len();
         let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
         // The hits' triangles (0 for a miss and past the rays), each a line: checked here,
         // since the loads below read unchecked.
         let mut index = [0usize; TILE];
-        for (i, (hit, ray)) in hits.iter().zip(rays).enumerate() {
-            let (t, u, v, hit) = match hit {
-                Some(h) => (h.triangle as usize, h.b1, h.b2, true),
-                None => (0, 0.0, 0.0, false),
-            };
+        for (i, ray) in rays.iter().enumerate() {
+            let t = hits.triangle[i];
+            let hit = t != HitRows::MISS;
+            let t = if hit { t as usize } else { 0 };
             assert!(!hit || t < lines.len(), "the hit's triangle {t} is in the geometry");
             index[i] = t;
+            let (u, v) = if hit { (hits.b1[i], hits.b2[i]) } else { (0.0, 0.0) };
             (b1[i], b2[i], hit_mask[i]) = (u, v, hit);
             let d = if hit { ray.direction } else { Vec3::ZERO };
             for axis in 0..3 {
@@ -307,7 +306,7 @@ impl TileShading {
         // The albedo, by material, one lane at a time (a texture's is looked up per hit).
         let mut materials = Albedos::new();
         for i in 0..n {
-            let albedo = match &hits[i] {
+            let albedo = match &hits.hit(i) {
                 None => Vec3::ZERO,
                 Some(hit) => materials.albedo(lab, &rays[i], hit, material[i]),
             };
@@ -323,7 +322,8 @@ impl TileShading {
         &mut self,
         gathered: &Gathered,
         lab: &Lab<'_, A>,
-        hits: &[Option<Hit>],
+        n: usize,
+        hits: &HitRows,
     ) {
         let tile = self;
         if lab.stage == Stage::Flat {
@@ -333,9 +333,9 @@ impl TileShading {
             return;
         }
         if lab.scene.geometry.is_instanced() {
-            tile.light_lanes::<true, A>(lab, hits, gathered);
+            tile.light_lanes::<true, A>(lab, n, hits, gathered);
         } else {
-            tile.light_lanes::<false, A>(lab, hits, gathered);
+            tile.light_lanes::<false, A>(lab, n, hits, gathered);
         }
     }
 
@@ -345,7 +345,8 @@ impl TileShading {
     fn light_lanes<const INSTANCED: bool, A: Accelerator + ?Sized>(
         &mut self,
         lab: &Lab<'_, A>,
-        hits: &[Option<Hit>],
+        n: usize,
+        hits: &HitRows,
         g: &Gathered,
     ) {
         let Gathered { corner, normal, direction, b1, b2, hit_mask } = g;
@@ -356,10 +357,13 @@ impl TileShading {
         for i in 0..TILE {
             let mut p = [0.0f32; 3];
             let mut error = [0.0f32; 3];
-            if INSTANCED && let Some(Some(hit)) = hits.get(i) {
+            if INSTANCED
+                && i < n
+                && let Some(hit) = hits.hit(i)
+            {
                 // An instance's point is found in its own space, with the bound of the way
                 // there and back.
-                let point = lab.scene.geometry.surface_point(hit);
+                let point = lab.scene.geometry.surface_point(&hit);
                 (p, error) = (point.p.to_array(), point.error.to_array());
             } else {
                 // `Geometry::surface_point`, on the gathered corners.
@@ -563,7 +567,18 @@ mod tests {
     fn tile_matches_shade<A: Accelerator + ?Sized>(lab: &Lab<'_, A>, rays: &[Ray]) -> usize {
         let mut shadows = 0;
         let stage = lab.stage;
-        let hits: Vec<Option<Hit>> = rays.iter().map(|r| lab.accel.closest_hit(r)).collect();
+        let hit_list: Vec<Option<Hit>> = rays.iter().map(|r| lab.accel.closest_hit(r)).collect();
+        // In rows, as the accelerator answers them; lanes past the rays hold another tile's
+        // hits, which must not leak into this one.
+        let mut hits = HitRows::default();
+        for i in 0..TILE {
+            hits.set(i, Some(Hit { t: 1.0, triangle: 0, b1: f32::NAN, b2: 0.5 }));
+        }
+        lab.accel.closest_hits_rows(rays, &mut hits);
+        for (i, hit) in hit_list.iter().enumerate() {
+            let bits = |h: Option<Hit>| h.map(|h| [h.t, h.b1, h.b2].map(f32::to_bits));
+            assert_eq!(bits(hits.hit(i)), bits(*hit), "the rows hold the one-ray answers");
+        }
         // Arrays left from another tile (lanes of other values) must not leak into this one.
         let mut arrays = TileArrays::take();
         let TileArrays { shading: tile, gathered, .. } = &mut *arrays;
@@ -586,7 +601,7 @@ mod tests {
         fresh.gathered.hit_mask = [true; TILE];
         let TileArrays { shading: portable, gathered, .. } = &mut *fresh;
         portable.shade_portable(gathered, lab, rays, &hits);
-        for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
+        for (i, (ray, hit)) in rays.iter().zip(&hit_list).enumerate() {
             let bits = |v: Vec3| v.to_array().map(f32::to_bits);
             let (lane, other) = (tile.lane(i), portable.lane(i));
             assert_eq!(bits(lane.albedo), bits(other.albedo));
