@@ -21,15 +21,19 @@ mod bundle;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 pub(crate) mod leaf;
+mod query;
 pub(crate) mod rays;
 mod setup;
 
 use crate::accel::{Hit, HitRows, RayRows};
 use crate::bvh::bounds::Frustum;
 use crate::bvh::node::{Child, WideBvh, decode};
-use crate::bvh::traverse::{Stack, closest_hit, occluded};
+use crate::bvh::traverse::Stack;
+#[cfg(doc)]
+use crate::bvh::traverse::{closest_hit, occluded};
 use crate::ray::Ray;
 use leaf::PacketKernel;
+use query::{Answers, ClosestHits, OccludedEach, OccludedMask, Query, Rays};
 use rays::{PACKET, PacketRays, Shared};
 
 /// A chunk of up to [`PACKET`] rays, prepared once (lane `i` for ray `i`) and sorted into
@@ -193,144 +197,6 @@ impl Chunk {
     }
 }
 
-/// A query traced in packets: closest hit or occlusion. (A trait rather than closures, so that
-/// everything inlines into the instruction set's entry point.)
-trait Query {
-    type Answer;
-    /// # Safety
-    /// The CPU must support `K`'s instruction set (for this whole trait).
-    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> Self::Answer;
-    /// Traces a packet of at least two rays; returns what [`answer`](Self::answer) needs.
-    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64;
-    /// The answer of lane `j` of a traced packet.
-    fn answer(rays: &PacketRays, traced: u64, j: usize) -> Self::Answer;
-}
-
-/// Where a chunk's rays are read one at a time (those traced alone): records or rows.
-trait Rays {
-    fn ray(&self, i: usize) -> Ray;
-}
-
-impl Rays for [Ray] {
-    #[inline(always)]
-    fn ray(&self, i: usize) -> Ray {
-        self[i]
-    }
-}
-
-impl Rays for RayRows {
-    #[inline(always)]
-    fn ray(&self, i: usize) -> Ray {
-        RayRows::ray(self, i)
-    }
-}
-
-/// Where a chunk's answers by `Q` go: answer `i` for ray `i`.
-trait Answers<Q: Query> {
-    fn put(&mut self, i: usize, answer: Q::Answer);
-
-    /// The answers of a packet of the whole chunk (lane `i` for ray `i`).
-    #[inline(always)]
-    fn put_packet(&mut self, rays: &PacketRays, traced: u64) {
-        for i in 0..rays.len {
-            self.put(i, Q::answer(rays, traced, i));
-        }
-    }
-}
-
-impl<Q: Query> Answers<Q> for [Q::Answer] {
-    #[inline(always)]
-    fn put(&mut self, i: usize, answer: Q::Answer) {
-        self[i] = answer;
-    }
-}
-
-/// Closest hits in rows: a packet's best hits are rows already, copied as they are (misses
-/// given `HitRows`' values).
-impl Answers<ClosestHits> for HitRows {
-    #[inline(always)]
-    fn put(&mut self, i: usize, answer: Option<Hit>) {
-        self.set(i, answer);
-    }
-
-    #[inline(always)]
-    fn put_packet(&mut self, rays: &PacketRays, _: u64) {
-        let n = rays.len;
-        for i in 0..n {
-            let miss = rays.best_triangle[i] == HitRows::MISS;
-            self.t[i] = if miss { f32::INFINITY } else { rays.best_t[i] };
-            self.triangle[i] = rays.best_triangle[i];
-            self.b1[i] = if miss { 0.0 } else { rays.best_b1[i] };
-            self.b2[i] = if miss { 0.0 } else { rays.best_b2[i] };
-        }
-    }
-}
-
-/// Occlusion as a mask: bit `i` set where ray `i` is occluded.
-struct OccludedMask(u64);
-
-impl Answers<OccludedEach> for OccludedMask {
-    #[inline(always)]
-    fn put(&mut self, i: usize, occluded: bool) {
-        self.0 |= (occluded as u64) << i;
-    }
-
-    #[inline(always)]
-    fn put_packet(&mut self, rays: &PacketRays, open: u64) {
-        self.0 |= rays.all() & !open;
-    }
-}
-
-/// [`closest_hits`].
-struct ClosestHits;
-
-impl Query for ClosestHits {
-    type Answer = Option<Hit>;
-
-    #[inline(always)]
-    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-        // SAFETY: the caller's guarantee.
-        unsafe { closest_hit::<K>(bvh, ray) }
-    }
-
-    #[inline(always)]
-    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
-        // SAFETY: the caller's guarantee.
-        unsafe { closest_packet::<K>(bvh, rays) };
-        0
-    }
-
-    #[inline(always)]
-    fn answer(rays: &PacketRays, _: u64, j: usize) -> Option<Hit> {
-        rays.best(j)
-    }
-}
-
-/// [`occluded_each`].
-struct OccludedEach;
-
-impl Query for OccludedEach {
-    type Answer = bool;
-
-    #[inline(always)]
-    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
-        // SAFETY: the caller's guarantee.
-        unsafe { occluded::<K>(bvh, ray) }
-    }
-
-    /// The rays still open: not occluded.
-    #[inline(always)]
-    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
-        // SAFETY: the caller's guarantee.
-        unsafe { occluded_packet::<K>(bvh, rays) }
-    }
-
-    #[inline(always)]
-    fn answer(_: &PacketRays, open: u64, j: usize) -> bool {
-        open & (1 << j) == 0
-    }
-}
-
 /// A stack entry: a child reference, the packet's entry distance, and where its box is
 /// (`8·node + slot`).
 type Entry = (u32, f32, u32);
@@ -380,7 +246,7 @@ pub(crate) unsafe fn closest_hits_rows<K: PacketKernel>(
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-unsafe fn closest_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
+pub(super) unsafe fn closest_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let all = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
@@ -472,7 +338,7 @@ pub(crate) unsafe fn occluded_rows<K: PacketKernel>(bvh: &WideBvh, rays: &RayRow
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-unsafe fn occluded_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+pub(super) unsafe fn occluded_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
     let mut open = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));

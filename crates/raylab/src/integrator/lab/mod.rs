@@ -165,6 +165,7 @@ impl Shading {
     const NONE: Shading = Shading { albedo: Vec3::ZERO, direct: Vec3::ZERO, shadow_ray: None };
 }
 
+mod gather;
 mod tile;
 
 use tile::{TILE, TileArrays};

@@ -5,10 +5,10 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
+use super::gather::Gathered;
 use super::{Lab, Shading, Stage};
 use crate::accel::{Accelerator, Hit, HitRows, RayRows};
 use crate::float::gamma;
-use crate::geometry::TriangleLine;
 use crate::ray::{Ray, step_away};
 
 /// Rays shaded together: one tile of
@@ -30,17 +30,6 @@ pub(super) struct TileShading {
     pub(super) shadow_origin: [[f32; TILE]; 3],
     /// Lanes whose moved origin is not finite: their shadow ray is `shade`'s own.
     pub(super) unusual: [bool; TILE],
-}
-
-/// The hits of a tile gathered for [`TileShading`]: corners, normals, ray directions and
-/// barycentrics, row by row (zeros where a lane misses).
-pub(super) struct Gathered {
-    corner: [[[f32; TILE]; 3]; 3],
-    normal: [[f32; TILE]; 3],
-    direction: [[f32; TILE]; 3],
-    b1: [f32; TILE],
-    b2: [f32; TILE],
-    hit_mask: [bool; TILE],
 }
 
 /// A thread's arrays for the lab's tiles (10 KB), kept from tile to tile and call to call, as
@@ -145,175 +134,6 @@ impl TileShading {
     ) {
         self.gather_portable(gathered, lab, rays, hits);
         self.light(gathered, lab, rays.len(), hits);
-    }
-
-    /// Gathers the tile's hits into `gathered` (and their albedo into `self`) one lane at a
-    /// time: the twin of [`gather_avx2`](Self::gather_avx2), and the form for instanced
-    /// geometry.
-    #[inline(always)]
-    fn gather_portable<A: Accelerator + ?Sized>(
-        &mut self,
-        gathered: &mut Gathered,
-        lab: &Lab<'_, A>,
-        rays: &[Ray],
-        hits: &HitRows,
-    ) {
-        assert!(rays.len() <= TILE, "a tile of rays");
-        let geometry = &lab.scene.geometry;
-        let tile = self;
-        // Gathered: the corners, normal and barycentrics of each hit, zeros for misses (every
-        // lane of the tile written, so nothing needs clearing first).
-        let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
-        let mut materials = Albedos::new();
-        for (i, ray) in rays.iter().enumerate() {
-            let Some(hit) = &hits.hit(i) else {
-                for axis in 0..3 {
-                    tile.albedo[axis][i] = 0.0;
-                    for corner in corner.iter_mut() {
-                        corner[axis][i] = 0.0;
-                    }
-                    normal[axis][i] = 0.0;
-                    direction[axis][i] = 0.0;
-                }
-                (b1[i], b2[i]) = (0.0, 0.0);
-                hit_mask[i] = false;
-                continue;
-            };
-            let triangle = hit.triangle as usize;
-            // (A `match`, not `unwrap_or_else`: a closure is not inlined into the AVX2 copy.)
-            let (vertices, n, id) = match geometry.flat_triangle(triangle) {
-                Some(flat) => flat,
-                None => {
-                    let id = geometry.material_id(triangle);
-                    (geometry.triangle(triangle), geometry.normal(triangle), id)
-                }
-            };
-            let albedo = materials.albedo(lab, ray, hit, id);
-            for axis in 0..3 {
-                tile.albedo[axis][i] = albedo[axis];
-                for (j, v) in vertices.iter().enumerate() {
-                    corner[j][axis][i] = v[axis];
-                }
-                normal[axis][i] = n[axis];
-                direction[axis][i] = ray.direction[axis];
-            }
-            (b1[i], b2[i]) = (hit.b1, hit.b2);
-            hit_mask[i] = true;
-        }
-    }
-
-    /// [`gather_portable`](Self::gather_portable) for a flat geometry's triangle `lines`,
-    /// eight lanes at a time: each hit's line is two aligned 32-byte loads (a miss, and each
-    /// lane beyond the rays, loads triangle 0's and is zeroed after), and the eight lanes'
-    /// lines are turned into rows by two 8×8 transpositions. The same values (moved, not
-    /// computed). Where the arrays would take three dependent reads per hit (the triangle,
-    /// its corners' indices, their positions), or sixteen gathers per eight, a line is one.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn gather_avx2<A: Accelerator + ?Sized>(
-        &mut self,
-        gathered: &mut Gathered,
-        lab: &Lab<'_, A>,
-        lines: &[TriangleLine],
-        rays: &[Ray],
-        hits: &HitRows,
-    ) {
-        use crate::bvh::simd::transpose8;
-        use std::arch::x86_64::*;
-        assert!(rays.len() <= TILE, "a tile of rays");
-        let n = rays.len();
-        let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
-        // The hits' triangles (0 for a miss and past the rays), each a line: checked here,
-        // since the loads below read unchecked.
-        let mut index = [0usize; TILE];
-        for (i, ray) in rays.iter().enumerate() {
-            let t = hits.triangle[i];
-            let hit = t != HitRows::MISS;
-            let t = if hit { t as usize } else { 0 };
-            assert!(!hit || t < lines.len(), "the hit's triangle {t} is in the geometry");
-            index[i] = t;
-            let (u, v) = if hit { (hits.b1[i], hits.b2[i]) } else { (0.0, 0.0) };
-            (b1[i], b2[i], hit_mask[i]) = (u, v, hit);
-            let d = if hit { ray.direction } else { Vec3::ZERO };
-            for axis in 0..3 {
-                direction[axis][i] = d[axis];
-            }
-        }
-        if lines.is_empty() {
-            // Every lane missed (the checks above passed): nothing to read.
-            self.albedo = [[0.0; TILE]; 3];
-            *corner = [[[0.0; TILE]; 3]; 3];
-            *normal = [[0.0; TILE]; 3];
-            return;
-        }
-        let mut material = [0u32; TILE];
-        for base in (0..TILE).step_by(8) {
-            // Every load reads inside `lines`: `index` holds triangles below `lines.len()`
-            // (asserted above, and 0 elsewhere, with `lines` not empty), and each line is 64
-            // bytes aligned to 64 (`TriangleLine`), so its two halves are aligned 32-byte
-            // loads. Loads and stores of rows are 8 lanes from `base ≤ TILE − 8`.
-            // SAFETY: AVX2 is the caller's guarantee; every read and write is in bounds (above).
-            unsafe {
-                let hit = _mm256_castsi256_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
-                    hit_mask.as_ptr().add(base).cast(),
-                )));
-                // A hit's lane is all ones: `bool` is the byte 1, so compare, not shift.
-                let hit = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                    _mm256_castps_si256(hit),
-                    _mm256_set1_epi32(1),
-                ));
-                let line = |i: usize| lines.as_ptr().add(index[base + i]).cast::<f32>();
-                let (l0, l1, l2, l3) = (line(0), line(1), line(2), line(3));
-                let (l4, l5, l6, l7) = (line(4), line(5), line(6), line(7));
-                let low = transpose8([
-                    _mm256_load_ps(l0),
-                    _mm256_load_ps(l1),
-                    _mm256_load_ps(l2),
-                    _mm256_load_ps(l3),
-                    _mm256_load_ps(l4),
-                    _mm256_load_ps(l5),
-                    _mm256_load_ps(l6),
-                    _mm256_load_ps(l7),
-                ]);
-                let high = transpose8([
-                    _mm256_load_ps(l0.add(8)),
-                    _mm256_load_ps(l1.add(8)),
-                    _mm256_load_ps(l2.add(8)),
-                    _mm256_load_ps(l3.add(8)),
-                    _mm256_load_ps(l4.add(8)),
-                    _mm256_load_ps(l5.add(8)),
-                    _mm256_load_ps(l6.add(8)),
-                    _mm256_load_ps(l7.add(8)),
-                ]);
-                // Words 0–8 are the corners, 9–11 the normal, 12 the material.
-                for (c, corner) in corner.iter_mut().enumerate() {
-                    for (axis, row) in corner.iter_mut().enumerate() {
-                        let k = 3 * c + axis;
-                        let word = if k < 8 { low[k] } else { high[k - 8] };
-                        _mm256_storeu_ps(row.as_mut_ptr().add(base), _mm256_and_ps(word, hit));
-                    }
-                }
-                for axis in 0..3 {
-                    let row = _mm256_and_ps(high[1 + axis], hit);
-                    _mm256_storeu_ps(normal[axis].as_mut_ptr().add(base), row);
-                }
-                _mm256_storeu_ps(material.as_mut_ptr().add(base).cast(), high[4]);
-            }
-        }
-        // The albedo, by material, one lane at a time (a texture's is looked up per hit).
-        let mut materials = Albedos::new();
-        for i in 0..n {
-            let albedo = match &hits.hit(i) {
-                None => Vec3::ZERO,
-                Some(hit) => materials.albedo(lab, &rays[i], hit, material[i]),
-            };
-            for axis in 0..3 {
-                self.albedo[axis][i] = albedo[axis];
-            }
-        }
     }
 
     /// The light's part of [`shade`](Self::shade), on the gathered hits.
@@ -432,35 +252,6 @@ impl TileShading {
         let get = |axis: usize| self.shadow_origin[axis][i];
         let origin = Vec3::new(get(0), get(1), get(2));
         Ray::segment(origin, lab.light.position - origin, 1.0)
-    }
-}
-
-/// The albedo of hits one after another: neighbouring hits mostly share a material, whose
-/// albedo is looked up once for them (unless it has a texture, which is read per hit).
-struct Albedos {
-    /// The last material's id, albedo and whether it has textures.
-    last: (u32, Vec3, bool),
-}
-
-impl Albedos {
-    fn new() -> Self {
-        Albedos { last: (u32::MAX, Vec3::ZERO, false) }
-    }
-
-    /// The albedo of material `id` where `ray` meets `hit` ([`Lab::albedo`]).
-    #[inline(always)]
-    fn albedo<A: Accelerator + ?Sized>(
-        &mut self,
-        lab: &Lab<'_, A>,
-        ray: &Ray,
-        hit: &Hit,
-        id: u32,
-    ) -> Vec3 {
-        if id != self.last.0 {
-            let m = &lab.scene.materials[id as usize];
-            self.last = (id, m.bsdf.albedo(), !m.textures.is_empty());
-        }
-        if self.last.2 { lab.albedo(ray, hit, id) } else { self.last.1 }
     }
 }
 
