@@ -60,6 +60,14 @@ impl<Q: Query> Answers<Q> for [Q::Answer] {
     fn put(&mut self, i: usize, answer: Q::Answer) {
         self[i] = answer;
     }
+
+    /// Lane by lane (the slice is the chunk's: one answer per lane).
+    #[inline(always)]
+    fn put_packet(&mut self, rays: &PacketRays, traced: u64) {
+        for (i, out) in self.iter_mut().enumerate() {
+            *out = Q::answer(rays, traced, i);
+        }
+    }
 }
 
 /// Closest hits in rows: a packet's best hits are rows already, copied as they are (misses
@@ -72,7 +80,7 @@ impl Answers<ClosestHits> for HitRows {
 
     #[inline(always)]
     fn put_packet(&mut self, rays: &PacketRays, _: u64) {
-        let n = rays.len;
+        let n = rays.len.min(crate::accel::ROWS);
         for i in 0..n {
             let miss = rays.best_triangle[i] == HitRows::MISS;
             self.t[i] = if miss { f32::INFINITY } else { rays.best_t[i] };
