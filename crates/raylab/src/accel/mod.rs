@@ -100,6 +100,9 @@ pub trait Accelerator: Sync {
     /// Which of the rays in `rays` (coherent ones: shadow rays toward one light) are occluded,
     /// as a mask: bit `i` for ray `i`, exactly what [`occluded`](Self::occluded) answers (no bit
     /// at or above `rays.len`).
+    ///
+    /// # Panics
+    /// If `rays.len` is above [`ROWS`].
     fn occluded_rows(&self, rays: &RayRows) -> u64 {
         assert!(rays.len <= ROWS, "at most {ROWS} rays in rows");
         (0..rays.len).filter(|&i| self.occluded(&rays.ray(i))).fold(0, |m, i| m | 1 << i)

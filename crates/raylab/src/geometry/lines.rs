@@ -16,23 +16,24 @@ use glam::Vec3;
 pub(crate) const MOST_LINES: usize = 1 << 20;
 
 /// One triangle's corners `v0, v1, v2`, geometric normal and material id, as sixteen 32-bit
-/// words: `[v0.x, v0.y, v0.z, v1.x, v1.y, v1.z, v2.x, v2.y | v2.z, n.x, n.y, n.z, material
-/// (bits), 0, 0, 0]`. The values are the stored arrays' own (moved, not computed).
+/// words: `[v0.x, v0.y, v0.z, v1.x, v1.y, v1.z, v2.x, v2.y | v2.z, n.x, n.y, n.z, material,
+/// 0, 0, 0]`, the coordinates as their `f32` bits. The values are the stored arrays' own
+/// (moved, not computed).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 pub(crate) struct TriangleLine {
-    pub words: [f32; 16],
+    pub words: [u32; 16],
 }
 
 impl TriangleLine {
     /// The line of a triangle with `corners`, `normal` and `material`.
     pub fn new(corners: [Vec3; 3], normal: Vec3, material: u32) -> Self {
-        let [a, b, c] = corners;
-        let m = f32::from_bits(material);
+        let [a, b, c] = corners.map(|v| v.to_array().map(f32::to_bits));
+        let n = normal.to_array().map(f32::to_bits);
         TriangleLine {
             words: [
-                a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, normal.x, normal.y, normal.z, m, 0.0,
-                0.0, 0.0,
+                a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], n[0], n[1], n[2], material,
+                0, 0, 0,
             ],
         }
     }
@@ -40,17 +41,33 @@ impl TriangleLine {
     /// The corners, normal and material back.
     #[cfg(test)]
     pub fn triangle(&self) -> ([Vec3; 3], Vec3, u32) {
-        let w = &self.words;
+        let w = self.words.map(f32::from_bits);
         let v = |i: usize| Vec3::new(w[i], w[i + 1], w[i + 2]);
-        ([v(0), v(3), v(6)], v(9), w[12].to_bits())
+        ([v(0), v(3), v(6)], v(9), self.words[12])
     }
 }
 
 /// Lines made on first use ([`get_or_make`](Self::get_or_make)) and forgotten by
 /// [`forget`](Self::forget) whenever what they derive from changes. Derived data: two
-/// geometries compare equal whatever their lines hold.
-#[derive(Clone, Debug, Default)]
+/// geometries compare equal whatever their lines hold, and a copy of a geometry starts
+/// without them (they are made again if asked for).
+#[derive(Default)]
 pub(crate) struct LazyLines(OnceLock<Box<[TriangleLine]>>);
+
+impl Clone for LazyLines {
+    fn clone(&self) -> Self {
+        LazyLines::default()
+    }
+}
+
+impl std::fmt::Debug for LazyLines {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0.get() {
+            Some(lines) => write!(f, "{} lines", lines.len()),
+            None => f.write_str("no lines"),
+        }
+    }
+}
 
 impl LazyLines {
     /// The lines, made by `make` if there are none yet.
@@ -83,14 +100,15 @@ mod tests {
     fn a_line_holds_its_triangle_bit_for_bit() {
         let corners =
             [Vec3::new(-0.0, 1.5, f32::MIN_POSITIVE), Vec3::X, Vec3::new(3.0, -2.0, 1e-30)];
-        let line = TriangleLine::new(corners, Vec3::new(0.0, -1.0, 0.0), 0xFFFF_FFFE);
+        // A material id whose bits are a signalling NaN as a float.
+        let line = TriangleLine::new(corners, Vec3::new(0.0, -1.0, 0.0), 0x7F80_0001);
         let (back, normal, material) = line.triangle();
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         for (a, b) in back.iter().zip(corners) {
             assert_eq!(bits(*a), bits(b));
         }
         assert_eq!(bits(normal), bits(Vec3::new(0.0, -1.0, 0.0)));
-        assert_eq!(material, 0xFFFF_FFFE);
+        assert_eq!(material, 0x7F80_0001);
         assert_eq!(std::mem::size_of::<TriangleLine>(), 64);
         assert_eq!(std::mem::align_of::<TriangleLine>(), 64);
     }
@@ -122,7 +140,11 @@ mod tests {
         assert_eq!(g.triangle_lines().expect("lines")[1].triangle().2, 7);
         let moved = g.map_positions(|p| p * 2.0);
         check(&moved);
-        assert!(g.bytes() >= 3 * 64, "the lines are counted once made");
+        let mut fresh = g.clone();
+        fresh.material_ids_mut()[0] = 1;
+        let before = fresh.bytes();
+        check(&fresh);
+        assert_eq!(fresh.bytes(), before + 64 * fresh.len() as u64, "lines counted once made");
     }
 
     #[test]

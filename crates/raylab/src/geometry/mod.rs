@@ -439,8 +439,8 @@ impl Geometry {
     /// The same geometry with every stored position moved by `f` (normals recomputed); an
     /// instanced mesh's positions are in its own space.
     pub fn map_positions(&self, f: impl Fn(Vec3) -> Vec3) -> Geometry {
+        // (A clone starts without the triangles' lines.)
         let mut geometry = self.clone();
-        geometry.lines.forget();
         for p in &mut geometry.positions {
             *p = f(*p);
         }

@@ -95,7 +95,8 @@ pub trait Integrator: Sync {
     /// Whether [`radiance_each`](Self::radiance_each) and
     /// [`radiance_and_layers_each`](Self::radiance_and_layers_each) draw numbers from their
     /// samplers. An integrator that never does (the lab's) says `false`, and the scheduler may
-    /// then skip making them: it is handed placeholder samplers, not its pixels'. Its pixel
+    /// then skip making them: it is handed samplers of no meaning (another band's, or
+    /// placeholders), not its pixels', so it must not draw from them. Its pixel
     /// positions are still drawn as its samplers would draw them.
     fn draws_numbers(&self) -> bool {
         true

@@ -19,7 +19,7 @@ use crate::film::Film;
 use crate::integrator::Integrator;
 use crate::region::Region;
 
-/// The most pixels in a tile: what the tile's arrays on the stack hold.
+/// The most pixels in a tile: what a band's tile arrays hold (`band.rs`).
 pub(super) const MAX_TILE_PIXELS: usize = 1024;
 
 /// Which passes: samples `sample` to `sample + count − 1` of the pixels of `region` (of the

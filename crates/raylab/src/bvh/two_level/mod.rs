@@ -30,7 +30,7 @@ mod build;
 mod lanes;
 mod rows;
 
-use crate::accel::{Accelerator, Hit};
+use crate::accel::{Accelerator, Hit, HitRows, ROWS, RayRows};
 use crate::bvh::{Bounds, Frustum, RayBoxTest};
 use crate::geometry::instance::max_row_sum;
 use crate::geometry::{Geometry, Placement};
@@ -551,6 +551,26 @@ impl<A: Accelerator> Accelerator for TwoLevel<A> {
                 *o = done.get();
             }
         }
+    }
+
+    /// Through [`closest_hits`](Self::closest_hits)' packets, copied into rows.
+    fn closest_hits_rows(&self, rays: &[Ray], hits: &mut HitRows) {
+        assert!(rays.len() <= ROWS, "at most {ROWS} rays in rows");
+        let mut answers = [None; ROWS];
+        let answers = &mut answers[..rays.len()];
+        self.closest_hits(rays, answers);
+        for (i, &hit) in answers.iter().enumerate() {
+            hits.set(i, hit);
+        }
+    }
+
+    /// Through [`occluded_each`](Self::occluded_each)'s packets, as a mask.
+    fn occluded_rows(&self, rays: &RayRows) -> u64 {
+        assert!(rays.len <= ROWS, "at most {ROWS} rays in rows");
+        let list: [Ray; ROWS] = std::array::from_fn(|i| rays.ray(i));
+        let mut occluded = [false; ROWS];
+        self.occluded_each(&list[..rays.len], &mut occluded[..rays.len]);
+        (0..rays.len).filter(|&i| occluded[i]).fold(0, |mask, i| mask | 1 << i)
     }
 }
 

@@ -245,37 +245,10 @@ impl<A: Accelerator + ?Sized> Integrator for Lab<'_, A> {
         // with one): the packets read and write rows, so nothing is turned into records.
         let mut arrays = TileArrays::take();
         let TileArrays { hits, shading, gathered, shadow_rays } = &mut *arrays;
-        let light = self.light.position.to_array();
         for (rays, out) in rays.chunks(TILE).zip(out.chunks_mut(TILE)) {
-            let n = rays.len();
             self.accel.closest_hits_rows(rays, hits);
             shading.shade(gathered, self, rays, hits);
-            let (mut shadows, mut unusual) = (0, false);
-            for i in (0..n).filter(|&i| shading.shadow[i]) {
-                for axis in 0..3 {
-                    shadow_rays.origin[axis][shadows] = shading.shadow_origin[axis][i];
-                }
-                unusual |= shading.unusual[i];
-                shadows += 1;
-            }
-            // `Ray::segment(origin, light − origin, 1)`, every lane at once.
-            let rows = shadow_rays.direction.iter_mut().zip(&shadow_rays.origin).zip(light);
-            for ((direction, origin), light) in rows {
-                for (d, o) in direction.iter_mut().zip(origin) {
-                    *d = light - o;
-                }
-            }
-            (shadow_rays.t_min, shadow_rays.t_max) = ([0.0; TILE], [1.0; TILE]);
-            if unusual {
-                // A moved origin that is not finite: the lane's ray is `shade`'s own.
-                for (j, i) in (0..n).filter(|&i| shading.shadow[i]).enumerate() {
-                    if shading.unusual[i] {
-                        let ray = shading.shadow_ray(i, self, &rays[i], hits.hit(i));
-                        shadow_rays.set(j, &ray);
-                    }
-                }
-            }
-            shadow_rays.len = shadows;
+            let shadows = shading.shadow_rows(self, rays, hits, shadow_rays);
             let blocked = if shadows > 0 { self.accel.occluded_rows(shadow_rays) } else { 0 };
             let mut j = 0;
             for (i, colour) in out.iter_mut().enumerate() {

@@ -230,6 +230,47 @@ impl TileShading {
         }
     }
 
+    /// The shadow rays of the tile's lanes that have one (`shadow`), side by side in `out` in
+    /// lane order, each as [`shadow_ray`](Self::shadow_ray) makes it: `Ray::segment(origin,
+    /// light − origin, 1)`, in lanes, and `shade`'s own ray where the moved origin is not
+    /// finite (`unusual`). Sets `out.len` to their number and returns it.
+    #[inline(always)]
+    pub(super) fn shadow_rows<A: Accelerator + ?Sized>(
+        &self,
+        lab: &Lab<'_, A>,
+        rays: &[Ray],
+        hits: &HitRows,
+        out: &mut RayRows,
+    ) -> usize {
+        const _: () = assert!(TILE == crate::accel::ROWS);
+        let n = rays.len();
+        let (mut shadows, mut unusual) = (0, false);
+        for i in (0..n).filter(|&i| self.shadow[i]) {
+            for axis in 0..3 {
+                out.origin[axis][shadows] = self.shadow_origin[axis][i];
+            }
+            unusual |= self.unusual[i];
+            shadows += 1;
+        }
+        let light = lab.light.position.to_array();
+        let rows = out.direction.iter_mut().zip(&out.origin).zip(light);
+        for ((direction, origin), light) in rows {
+            for (d, o) in direction.iter_mut().zip(origin) {
+                *d = light - o;
+            }
+        }
+        (out.t_min, out.t_max) = ([0.0; TILE], [1.0; TILE]);
+        if unusual {
+            for (j, i) in (0..n).filter(|&i| self.shadow[i]).enumerate() {
+                if self.unusual[i] {
+                    out.set(j, &self.shadow_ray(i, lab, &rays[i], hits.hit(i)));
+                }
+            }
+        }
+        out.len = shadows;
+        shadows
+    }
+
     /// Lane `i` as `shade` returns it (its shadow ray as a flag).
     #[inline]
     pub(super) fn lane(&self, i: usize) -> Shading {
@@ -338,6 +379,55 @@ mod tests {
         }
     }
 
+    /// The shadow rays side by side in rows are each lane's own, in lane order, also where a
+    /// lane's moved origin is not finite and its ray is `shade`'s (such lanes are marked here:
+    /// the lab's box never makes one).
+    #[test]
+    fn shadow_rows_are_each_lanes_ray_in_order() {
+        use crate::bvh::Bvh;
+        let scene = Scene::built_in("cornell").expect("the lab scene");
+        let bvh = Bvh::new(&scene.vertices());
+        let lab = Lab::new(&scene, &bvh, Stage::Ambient);
+        let mut arrays = TileArrays::take();
+        let TileArrays { hits, shading, gathered, shadow_rays } = &mut *arrays;
+        let mut compared = 0;
+        for tile in 0..4 {
+            let rays: Vec<Ray> = (0..TILE - tile)
+                .map(|i| {
+                    let (x, y) = ((i % 8) as f32 * 0.1 - 0.35, (i / 8) as f32 * 0.1 - 0.35);
+                    Ray::new(Vec3::new(0.0, 0.0, -3.0), Vec3::new(x + tile as f32 * 0.2, y, 1.0))
+                })
+                .collect();
+            lab.accel.closest_hits_rows(&rays, hits);
+            shading.shade(gathered, &lab, &rays, hits);
+            // Every third lane with a shadow ray marked unusual, its origin made nonsense.
+            let mut k = 0;
+            for i in (0..rays.len()).filter(|&i| shading.shadow[i]) {
+                shading.unusual[i] = k % 3 == tile % 3;
+                if shading.unusual[i] {
+                    shading.shadow_origin[0][i] = f32::NAN;
+                }
+                k += 1;
+            }
+            let n = shading.shadow_rows(&lab, &rays, hits, shadow_rays);
+            assert_eq!((n, shadow_rays.len), (k, k));
+            let lanes = (0..rays.len()).filter(|&i| shading.shadow[i]);
+            for (j, i) in lanes.enumerate() {
+                let want = shading.shadow_ray(i, &lab, &rays[i], hits.hit(i));
+                let got = shadow_rays.ray(j);
+                let bits = |r: &Ray| {
+                    let v = |v: Vec3| v.to_array().map(f32::to_bits);
+                    (v(r.origin), v(r.direction), r.t_min.to_bits(), r.t_max.to_bits())
+                };
+                assert_eq!(bits(&got), bits(&want), "lane {i}, row {j}");
+                assert!(got.origin.is_finite(), "lane {i}: shade's own ray");
+                compared += 1;
+            }
+        }
+        TileArrays::give_back(arrays);
+        assert!(compared > 150, "only {compared} shadow rays");
+    }
+
     /// A scene without triangles: every lane misses, and there are no lines to read.
     #[test]
     fn tile_shading_of_an_empty_scene_is_black() {
@@ -367,7 +457,8 @@ mod tests {
         }
         lab.accel.closest_hits_rows(rays, &mut hits);
         for (i, hit) in hit_list.iter().enumerate() {
-            let bits = |h: Option<Hit>| h.map(|h| [h.t, h.b1, h.b2].map(f32::to_bits));
+            let bits =
+                |h: Option<Hit>| h.map(|h| (h.triangle, [h.t, h.b1, h.b2].map(f32::to_bits)));
             assert_eq!(bits(hits.hit(i)), bits(*hit), "the rows hold the one-ray answers");
         }
         // Arrays left from another tile (lanes of other values) must not leak into this one.
