@@ -1,6 +1,6 @@
 //! Rays and hits in rows (structure of arrays), up to a tile of [`ROWS`]: the form in which an
-//! integrator that shades a tile in lanes ([`Lab`](crate::integrator::Lab)) hands rays to an
-//! accelerator and takes its answers back, so that neither side turns rows into records and
+//! integrator that shades a tile in lanes (the lab's) hands rays to an accelerator and takes
+//! its answers back, so that neither side turns rows into records and
 //! back ([`Accelerator::closest_hits_rows`](super::Accelerator::closest_hits_rows),
 //! [`Accelerator::occluded_rows`](super::Accelerator::occluded_rows)). The answers are exactly
 //! the one-ray queries'.

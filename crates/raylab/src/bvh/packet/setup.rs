@@ -329,6 +329,22 @@ mod tests {
                 .collect();
             let mut vector = PacketRays::new();
             let groups = fill_each_isa(&mut vector, &mut kept_rows, &rays);
+            // The same lanes from the rays given in rows (`fill_rows`).
+            let mut from_rows = PacketRays::new();
+            let rows_groups = fill_rows(&mut from_rows, &crate::accel::RayRows::from_rays(&rays));
+            let n = rays.len();
+            assert_eq!((rows_groups[..n].to_vec(), from_rows.len), (groups[..n].to_vec(), n));
+            let lanes = |p: &PacketRays| -> Vec<u32> {
+                let rows = p.origin.iter().chain(&p.inv_direction).chain(&p.shear).chain([
+                    &p.box_t_min,
+                    &p.triangle_t_min,
+                    &p.triangle_limit,
+                    &p.box_limit,
+                    &p.best_t,
+                ]);
+                rows.flat_map(|row| row[..n].iter().map(|v| v.to_bits())).collect()
+            };
+            assert_eq!(lanes(&from_rows), lanes(&vector), "filled from rows");
             let mut scalar = PacketRays::new();
             for (i, ray) in rays.iter().enumerate() {
                 let expected = scalar.set_lane(i, ray);
