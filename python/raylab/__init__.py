@@ -302,7 +302,7 @@ def render(
     size: (width, height) in pixels [the scene file's, else 500×500].
     spp: samples per pixel [the scene file's; 16 for path tracing, 1 for the lab].
     integrator: "path", "path-scalar", "lab", "albedo", "normals" or "depth" [the scene
-        file's; "path" for scenes with area lights, else "lab"].
+        file's; "path" where a surface emits or a light is not a point light, else "lab"].
     seed: the seed of every random number [0]. max_depth: the longest path, as Mitsuba counts
         it [unlimited]. sampler: "sobol", "multijitter", "stratified" or "independent".
     region: (x0, y0, x1, y1), the part of the image to render (x1, y1 excluded).

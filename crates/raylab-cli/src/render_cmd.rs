@@ -34,7 +34,8 @@ pub struct RenderArgs {
 
     /// What to compute: lab (the lab's light model), path (path tracing), path-scalar (the
     /// same pixels, one path at a time), or the first hit's albedo, normals or depth [default:
-    /// the scene file's; path for scenes with area lights, else lab].
+    /// the scene file's; path where a surface emits or a light is not a point light, else
+    /// lab].
     #[arg(long, value_name = "NAME")]
     integrator: Option<IntegratorKind>,
 

@@ -67,8 +67,8 @@ pub struct ViewArgs {
     exit_after_frames: Option<u32>,
 
     /// What to show first: lab (the lab's light model), path (path tracing), albedo, normals or
-    /// depth; keys 1-9 switch [default: the scene file's; path for scenes with area lights,
-    /// else lab].
+    /// depth; keys 1-9 switch [default: the scene file's; path where a surface emits or a
+    /// light is not a point light, else lab].
     #[arg(long, value_name = "NAME")]
     integrator: Option<IntegratorKind>,
 

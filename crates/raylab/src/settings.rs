@@ -7,8 +7,10 @@
 //! | `path` | `Path` | path tracing (area lights, indirect light, glossy and specular materials) |
 //! | `albedo`, `normals`, `depth` | `Aov(AovKind)` | what the camera sees first (arbitrary output variables) |
 //!
-//! When nothing names one, a scene with area lights is path-traced and any other scene gets the
-//! lab's model ([`IntegratorKind::default_for`]).
+//! When nothing names one, a scene that the lab's model cannot light whole is path-traced (some
+//! surface emits, or some light is not a point light: an environment, a sun, a spot or a
+//! directional light), and any other scene gets the lab's model
+//! ([`IntegratorKind::default_for`], [`Scene::needs_path_tracing`](crate::Scene::needs_path_tracing)).
 
 use std::fmt;
 use std::str::FromStr;

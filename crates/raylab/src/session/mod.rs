@@ -10,7 +10,8 @@
 //! - [`RenderOptions`] are what a caller overrides (the command line's `--spp`, `--integrator`,
 //!   ...); [`ResolvedSettings::resolve`] is the one rule that merges them with the scene file's
 //!   `[render]` settings and the defaults: the integrator is the option's, else the file's, else
-//!   `path` for scenes with area lights and `lab` for others; samples per pixel 1 for `lab` and
+//!   `path` for scenes that some surface or a light other than a point light lights
+//!   (`Scene::needs_path_tracing`) and `lab` for others; samples per pixel 1 for `lab` and
 //!   16 otherwise; the seed 0; unlimited depth.
 //! - [`CameraOptions`] place the camera: the scene file's camera (or an animation's at a frame,
 //!   the lab's, or one framing a model), with any override of position, angles, focal length
