@@ -6,6 +6,7 @@
 //! a ray visits (`Bvh::closest_hit_counted`).
 //!
 //! ```sh
+//! cargo run --release --example path_rays   # the repository's Cornell box, 64×64, 2 passes
 //! cargo run --release --example path_rays -- crates/raylab/tests/data/mitsuba-gltf/boxes.toml
 //! cargo run --release --example path_rays -- scenes/cornell-mitsuba.toml 128 4  # size, passes
 //! ```
@@ -80,10 +81,24 @@ fn best_of_five(mut run: impl FnMut()) -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
-    let file = args.next().ok_or("usage: path_rays SCENE.toml [SIZE [PASSES]]")?;
-    let size: u32 = args.next().map_or(Ok(256), |s| s.parse())?;
-    let passes: u32 = args.next().map_or(Ok(4), |s| s.parse())?;
+    let mut args = std::env::args().skip(1).peekable();
+    // Without arguments: the repository's Mitsuba Cornell box, small and quick.
+    let (file, size, passes) = match args.next_if(|a| !a.starts_with("--")) {
+        Some(file) => {
+            let size: u32 =
+                args.next_if(|a| !a.starts_with("--")).map_or(Ok(256), |s| s.parse())?;
+            let passes: u32 =
+                args.next_if(|a| !a.starts_with("--")).map_or(Ok(4), |s| s.parse())?;
+            (file, size, passes)
+        }
+        None => {
+            let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/cornell-mitsuba.toml");
+            println!(
+                "(no scene given: {file} at 64×64, 2 passes; usage: path_rays [SCENE.toml [SIZE [PASSES]]] [--write DIR] [--split] [--isas] [--group])"
+            );
+            (file.to_string(), 64, 2)
+        }
+    };
     let (mut write, mut split, mut isas, mut group) = (None, false, false, false);
     while let Some(arg) = args.next() {
         match arg.as_str() {
