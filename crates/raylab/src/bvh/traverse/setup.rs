@@ -9,8 +9,8 @@
 //! the origin, the direction and `1/d` into the ray's frame with one `vpermilps` each, where
 //! the portable code picks coordinates by indexed loads from the stack. It broadcasts each
 //! value once. Rays without a fused form (a zero, tiny or huge `1/d`, an origin far from the
-//! world's origin) go to the plain test, set up as [`setup_portable`] does (BENCHMARKS.md, "Ray
-//! queries on AVX2 (issue 46, third sitting)", measures what this saves).
+//! world's origin) go to the plain test, set up as [`setup_portable`] does (BENCHMARKS.md, "The
+//! set-up in SSE registers", measures what this saves).
 //!
 //! Every operation is the portable code's, in the same order, so the two agree bit for bit; the
 //! tests below check it on hostile rays.

@@ -37,10 +37,9 @@
 //! render scenes/cornell-mitsuba.toml --spp 16 --threads 1 -o r.pfm`): 2.12 → 2.07 s.
 //!
 //! Grouping by BSDF kind is what keeps the lanes full and each BSDF's code on whole vectors: a
-//! chunk holds one kind's vertices, whichever paths they belong to. Every kind shades in lanes
-//! (issue 27's eighth step: until then only diffuse vertices did, and the rest ran the scalar
-//! steps): measured on the materials scene (256², 16 spp, 1 thread, CPU time, median of 5),
-//! 0.42 → 0.36 s.
+//! chunk holds one kind's vertices, whichever paths they belong to. Every kind shades in lanes,
+//! not only the diffuse vertices (BENCHMARKS.md, "Every BSDF in lanes", has what that is
+//! worth).
 //!
 //! Packets pay only where rays are coherent. Measured (`cargo bench -p raylab --bench path`, one
 //! thread, 128×96): packets for every bounce made `showcase.toml` 16 times slower (216 ms a
