@@ -4,14 +4,23 @@
 use glam::{Vec2, Vec3};
 
 use super::SampleSettings;
-use super::passes::{MAX_TILE_PIXELS, tile_shape};
 use super::sums::add_finite;
 use crate::camera::RayGenerator;
 use crate::integrator::Integrator;
 use crate::ray::Ray;
 use crate::sampling::{Grid, Sampler, SamplerKind, sample_offset};
 
-/// A band of whole rows of a group of passes ([`add_group`](super::passes)).
+/// The most pixels in a tile: what a band's tile arrays hold.
+pub(super) const MAX_TILE_PIXELS: usize = 1024;
+
+/// A tile shape that fits the tile arrays: both sides at least 1, at most 1,024 pixels.
+pub(super) fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
+    let height = (height as usize).clamp(1, MAX_TILE_PIXELS);
+    let width = (width as usize).clamp(1, MAX_TILE_PIXELS / height);
+    (width, height)
+}
+
+/// A band of whole rows of a group of passes (`passes.rs`).
 pub(super) struct Band<'a> {
     pub(super) camera: &'a RayGenerator,
     pub(super) has_lens: bool,

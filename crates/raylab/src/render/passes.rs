@@ -13,14 +13,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::SampleSettings;
-use super::band::Band;
+use super::band::{Band, MAX_TILE_PIXELS, tile_shape};
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::Integrator;
 use crate::region::Region;
-
-/// The most pixels in a tile: what a band's tile arrays hold (`band.rs`).
-pub(super) const MAX_TILE_PIXELS: usize = 1024;
 
 /// Which passes: samples `sample` to `sample + count − 1` of the pixels of `region` (of the
 /// camera's image), drawn as `settings` say.
@@ -130,13 +127,6 @@ fn add_group(
         progress(rows);
     });
     discarded.into_inner()
-}
-
-/// A tile shape that fits the tile arrays: both sides at least 1, at most 1,024 pixels.
-pub(super) fn tile_shape((width, height): (u32, u32)) -> (usize, usize) {
-    let height = (height as usize).clamp(1, MAX_TILE_PIXELS);
-    let width = (width as usize).clamp(1, MAX_TILE_PIXELS / height);
-    (width, height)
 }
 
 #[cfg(test)]

@@ -28,9 +28,7 @@ mod setup;
 use crate::accel::{Hit, HitRows, RayRows};
 use crate::bvh::bounds::Frustum;
 use crate::bvh::node::{Child, WideBvh, decode};
-use crate::bvh::traverse::Stack;
-#[cfg(doc)]
-use crate::bvh::traverse::{closest_hit, occluded};
+use crate::bvh::traverse::{Stack, closest_hit, occluded};
 use crate::ray::Ray;
 use leaf::PacketKernel;
 use query::{Answers, ClosestHits, OccludedEach, OccludedMask, Query, Rays};
@@ -197,6 +195,50 @@ impl Chunk {
     }
 }
 
+impl Query for ClosestHits {
+    type Answer = Option<Hit>;
+
+    #[inline(always)]
+    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+        // SAFETY: the caller's guarantee.
+        unsafe { closest_hit::<K>(bvh, ray) }
+    }
+
+    #[inline(always)]
+    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+        // SAFETY: the caller's guarantee.
+        unsafe { closest_packet::<K>(bvh, rays) };
+        0
+    }
+
+    #[inline(always)]
+    fn answer(rays: &PacketRays, _: u64, j: usize) -> Option<Hit> {
+        rays.best(j)
+    }
+}
+
+impl Query for OccludedEach {
+    type Answer = bool;
+
+    #[inline(always)]
+    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
+        // SAFETY: the caller's guarantee.
+        unsafe { occluded::<K>(bvh, ray) }
+    }
+
+    /// The rays still open: not occluded.
+    #[inline(always)]
+    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+        // SAFETY: the caller's guarantee.
+        unsafe { occluded_packet::<K>(bvh, rays) }
+    }
+
+    #[inline(always)]
+    fn answer(_: &PacketRays, open: u64, j: usize) -> bool {
+        open & (1 << j) == 0
+    }
+}
+
 /// A stack entry: a child reference, the packet's entry distance, and where its box is
 /// (`8·node + slot`).
 type Entry = (u32, f32, u32);
@@ -246,7 +288,7 @@ pub(crate) unsafe fn closest_hits_rows<K: PacketKernel>(
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(super) unsafe fn closest_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
+unsafe fn closest_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) {
     let all = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));
@@ -338,7 +380,7 @@ pub(crate) unsafe fn occluded_rows<K: PacketKernel>(bvh: &WideBvh, rays: &RayRow
 /// # Safety
 /// The CPU must support `K`'s instruction set.
 #[inline(always)]
-pub(super) unsafe fn occluded_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
+unsafe fn occluded_packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
     let mut open = rays.all();
     let frustum = rays.frustum();
     debug_assert_eq!(Some(frustum), Frustum::of((0..rays.len).map(|i| rays.box_ray(i))));

@@ -1,13 +1,12 @@
 //! What a chunk of rays is traced for, and where its rays come from and its answers go: the
-//! queries (closest hit, occlusion), the rays as records or rows, and the answers as a slice,
-//! as rows of hits or as a mask.
+//! queries (closest hit, occlusion: the trait here, each one's tracing beside the packet
+//! traversals in `mod.rs`, so that this file needs nothing from there), the rays as records or
+//! rows, and the answers as a slice, as rows of hits or as a mask.
 
 use super::leaf::PacketKernel;
 use super::rays::PacketRays;
-use super::{closest_packet, occluded_packet};
 use crate::accel::{Hit, HitRows, RayRows};
 use crate::bvh::node::WideBvh;
-use crate::bvh::traverse::{closest_hit, occluded};
 use crate::ray::Ray;
 
 /// A query traced in packets: closest hit or occlusion. (A trait rather than closures, so that
@@ -106,52 +105,8 @@ impl Answers<OccludedEach> for OccludedMask {
     }
 }
 
-/// [`closest_hits`](super::closest_hits).
+/// [`closest_hits`](super::closest_hits) (its `Query` is beside the packet traversals).
 pub(super) struct ClosestHits;
 
-impl Query for ClosestHits {
-    type Answer = Option<Hit>;
-
-    #[inline(always)]
-    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-        // SAFETY: the caller's guarantee.
-        unsafe { closest_hit::<K>(bvh, ray) }
-    }
-
-    #[inline(always)]
-    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
-        // SAFETY: the caller's guarantee.
-        unsafe { closest_packet::<K>(bvh, rays) };
-        0
-    }
-
-    #[inline(always)]
-    fn answer(rays: &PacketRays, _: u64, j: usize) -> Option<Hit> {
-        rays.best(j)
-    }
-}
-
-/// [`occluded_each`](super::occluded_each).
+/// [`occluded_each`](super::occluded_each) (its `Query` is beside the packet traversals).
 pub(super) struct OccludedEach;
-
-impl Query for OccludedEach {
-    type Answer = bool;
-
-    #[inline(always)]
-    unsafe fn alone<K: PacketKernel>(bvh: &WideBvh, ray: &Ray) -> bool {
-        // SAFETY: the caller's guarantee.
-        unsafe { occluded::<K>(bvh, ray) }
-    }
-
-    /// The rays still open: not occluded.
-    #[inline(always)]
-    unsafe fn packet<K: PacketKernel>(bvh: &WideBvh, rays: &mut PacketRays) -> u64 {
-        // SAFETY: the caller's guarantee.
-        unsafe { occluded_packet::<K>(bvh, rays) }
-    }
-
-    #[inline(always)]
-    fn answer(_: &PacketRays, open: u64, j: usize) -> bool {
-        open & (1 << j) == 0
-    }
-}

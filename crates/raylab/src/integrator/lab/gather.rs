@@ -1,16 +1,15 @@
-//! Gathering a tile's hits for the lab's tile shading ([`TileShading`]): each hit's
+//! Gathering a tile's hits for the lab's tile shading (`tile.rs`): each hit's
 //! triangle (corners, normal, material) and barycentrics into rows, and its albedo. The light
 //! is computed on them in `tile.rs`.
 
 use glam::Vec3;
 
-use super::Lab;
-use super::tile::{TILE, TileShading};
+use super::{Lab, TILE};
 use crate::accel::{Accelerator, Hit, HitRows};
 use crate::geometry::TriangleLine;
 use crate::ray::Ray;
 
-/// The hits of a tile gathered for [`TileShading`]: corners, normals, ray directions and
+/// The hits of a tile gathered for the tile shading: corners, normals, ray directions and
 /// barycentrics, row by row (zeros where a lane misses).
 pub(super) struct Gathered {
     pub(super) corner: [[[f32; TILE]; 3]; 3],
@@ -21,29 +20,28 @@ pub(super) struct Gathered {
     pub(super) hit_mask: [bool; TILE],
 }
 
-impl TileShading {
-    /// Gathers the tile's hits into `gathered` (and their albedo into `self`) one lane at a
+impl Gathered {
+    /// Gathers the tile's hits into `self` (and their albedo into `albedo`) one lane at a
     /// time: the twin of [`gather_avx2`](Self::gather_avx2), and the form for instanced
     /// geometry.
     #[inline(always)]
     pub(super) fn gather_portable<A: Accelerator + ?Sized>(
         &mut self,
-        gathered: &mut Gathered,
+        albedo: &mut [[f32; TILE]; 3],
         lab: &Lab<'_, A>,
         rays: &[Ray],
         hits: &HitRows,
     ) {
         assert!(rays.len() <= TILE, "a tile of rays");
         let geometry = &lab.scene.geometry;
-        let tile = self;
         // Gathered: the corners, normal and barycentrics of each hit, zeros for misses (every
         // lane of the tile written, so nothing needs clearing first).
-        let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
+        let Gathered { corner, normal, direction, b1, b2, hit_mask } = self;
         let mut materials = Albedos::new();
         for (i, ray) in rays.iter().enumerate() {
             let Some(hit) = &hits.hit(i) else {
                 for axis in 0..3 {
-                    tile.albedo[axis][i] = 0.0;
+                    albedo[axis][i] = 0.0;
                     for corner in corner.iter_mut() {
                         corner[axis][i] = 0.0;
                     }
@@ -63,9 +61,9 @@ impl TileShading {
                     (geometry.triangle(triangle), geometry.normal(triangle), id)
                 }
             };
-            let albedo = materials.albedo(lab, ray, hit, id);
+            let value = materials.albedo(lab, ray, hit, id);
             for axis in 0..3 {
-                tile.albedo[axis][i] = albedo[axis];
+                albedo[axis][i] = value[axis];
                 for (j, v) in vertices.iter().enumerate() {
                     corner[j][axis][i] = v[axis];
                 }
@@ -90,7 +88,7 @@ impl TileShading {
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn gather_avx2<A: Accelerator + ?Sized>(
         &mut self,
-        gathered: &mut Gathered,
+        albedo: &mut [[f32; TILE]; 3],
         lab: &Lab<'_, A>,
         lines: &[TriangleLine],
         rays: &[Ray],
@@ -100,7 +98,7 @@ impl TileShading {
         use std::arch::x86_64::*;
         assert!(rays.len() <= TILE, "a tile of rays");
         let n = rays.len();
-        let Gathered { corner, normal, direction, b1, b2, hit_mask } = &mut *gathered;
+        let Gathered { corner, normal, direction, b1, b2, hit_mask } = self;
         // The hits' triangles (0 for a miss and past the rays), each a line: checked here,
         // since the loads below read unchecked.
         let mut index = [0usize; TILE];
@@ -119,7 +117,7 @@ impl TileShading {
         }
         if lines.is_empty() {
             // Every lane missed (the checks above passed): nothing to read.
-            self.albedo = [[0.0; TILE]; 3];
+            *albedo = [[0.0; TILE]; 3];
             *corner = [[[0.0; TILE]; 3]; 3];
             *normal = [[0.0; TILE]; 3];
             return;
@@ -181,12 +179,12 @@ impl TileShading {
         // The albedo, by material, one lane at a time (a texture's is looked up per hit).
         let mut materials = Albedos::new();
         for i in 0..n {
-            let albedo = match &hits.hit(i) {
+            let value = match &hits.hit(i) {
                 None => Vec3::ZERO,
                 Some(hit) => materials.albedo(lab, &rays[i], hit, material[i]),
             };
             for axis in 0..3 {
-                self.albedo[axis][i] = albedo[axis];
+                albedo[axis][i] = value[axis];
             }
         }
     }

@@ -168,7 +168,11 @@ impl Shading {
 mod gather;
 mod tile;
 
-use tile::{TILE, TileArrays};
+use tile::TileArrays;
+
+/// Rays shaded together: one tile of
+/// [`Integrator::radiance_each`](crate::integrator::Integrator::radiance_each).
+const TILE: usize = 64;
 
 impl<A: Accelerator + ?Sized> Lab<'_, A> {
     /// Shades a hit up to the shadow test (inlined into the tile loop: it returns a large

@@ -6,14 +6,10 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::gather::Gathered;
-use super::{Lab, Shading, Stage};
+use super::{Lab, Shading, Stage, TILE};
 use crate::accel::{Accelerator, Hit, HitRows, RayRows};
 use crate::float::gamma;
 use crate::ray::{Ray, step_away};
-
-/// Rays shaded together: one tile of
-/// [`Integrator::radiance_each`](crate::integrator::Integrator::radiance_each).
-pub(super) const TILE: usize = 64;
 
 /// [`Lab::shade`] for a tile's hits, lane by lane in arrays: the triangles' data gathered
 /// first, then every lane computed by the same operations as `shade` (and
@@ -102,7 +98,7 @@ impl TileShading {
     }
 
     /// [`shade`](Self::shade) with AVX2 enabled, its hits gathered from the triangles' lines
-    /// where the geometry has them ([`gather_avx2`](Self::gather_avx2)).
+    /// where the geometry has them ([`Gathered::gather_avx2`]).
     ///
     /// # Safety
     /// The CPU must support AVX2.
@@ -117,8 +113,10 @@ impl TileShading {
     ) {
         match lab.scene.geometry.triangle_lines() {
             // SAFETY: the caller guarantees AVX2.
-            Some(lines) => unsafe { self.gather_avx2(gathered, lab, lines, rays, hits) },
-            None => self.gather_portable(gathered, lab, rays, hits),
+            Some(lines) => unsafe {
+                gathered.gather_avx2(&mut self.albedo, lab, lines, rays, hits)
+            },
+            None => gathered.gather_portable(&mut self.albedo, lab, rays, hits),
         }
         self.light(gathered, lab, rays.len(), hits);
     }
@@ -132,7 +130,7 @@ impl TileShading {
         rays: &[Ray],
         hits: &HitRows,
     ) {
-        self.gather_portable(gathered, lab, rays, hits);
+        gathered.gather_portable(&mut self.albedo, lab, rays, hits);
         self.light(gathered, lab, rays.len(), hits);
     }
 
