@@ -10,7 +10,7 @@
 //! When nothing names one, a scene that the lab's model cannot light whole is path-traced (some
 //! surface emits, or some light is not a point light: an environment, a sun, a spot or a
 //! directional light), and any other scene gets the lab's model
-//! ([`IntegratorKind::default_for`], [`Scene::needs_path_tracing`](crate::Scene::needs_path_tracing)).
+//! ([`IntegratorKind::default_for`], given `Scene::needs_path_tracing`).
 
 use std::fmt;
 use std::str::FromStr;
