@@ -62,19 +62,10 @@ pub(super) unsafe fn rows_avx(rays: &[Ray], origin: &mut [[f32; PACKET]; 3], res
         // (`repr(C)`, asserted above); each store writes 8 floats of a row from `base`, and
         // `base + 8 ≤ rays.len() ≤ PACKET`.
         unsafe {
-            // (No closures here: they would be compiled without the caller's AVX.)
+            // (The closure only computes pointers: no intrinsic is compiled without the
+            // caller's AVX.)
             let p = block.as_ptr().cast::<f32>();
-            let r = [
-                _mm256_loadu_ps(p),
-                _mm256_loadu_ps(p.add(8)),
-                _mm256_loadu_ps(p.add(16)),
-                _mm256_loadu_ps(p.add(24)),
-                _mm256_loadu_ps(p.add(32)),
-                _mm256_loadu_ps(p.add(40)),
-                _mm256_loadu_ps(p.add(48)),
-                _mm256_loadu_ps(p.add(56)),
-            ];
-            let w = crate::bvh::simd::transpose8(r);
+            let w = crate::bvh::simd::transpose8_at(std::array::from_fn(|k| p.wrapping_add(8 * k)));
             // Each row's pointer made at its own store (one borrow at a time).
             _mm256_storeu_ps(origin[0].as_mut_ptr().add(base), w[0]);
             _mm256_storeu_ps(origin[1].as_mut_ptr().add(base), w[1]);

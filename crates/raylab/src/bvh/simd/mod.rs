@@ -289,6 +289,30 @@ impl LaneMask for __mmask16 {
     }
 }
 
+/// The eight floats at each of `rows` (eight pointers, each to eight readable `f32`s, any
+/// alignment), transposed ([`transpose8`]): word `k` of the result's register `i` is
+/// `rows[k][i]`. What both the packets' copy of rays into rows and the lab's triangle lines
+/// load.
+///
+/// # Safety
+/// The CPU must support AVX, and each pointer must be valid for reading eight `f32`s.
+#[inline(always)]
+pub(crate) unsafe fn transpose8_at(rows: [*const f32; 8]) -> [__m256; 8] {
+    // SAFETY: the caller's guarantees (AVX; eight readable floats at each pointer).
+    unsafe {
+        transpose8([
+            _mm256_loadu_ps(rows[0]),
+            _mm256_loadu_ps(rows[1]),
+            _mm256_loadu_ps(rows[2]),
+            _mm256_loadu_ps(rows[3]),
+            _mm256_loadu_ps(rows[4]),
+            _mm256_loadu_ps(rows[5]),
+            _mm256_loadu_ps(rows[6]),
+            _mm256_loadu_ps(rows[7]),
+        ])
+    }
+}
+
 /// The 8×8 transposition of eight AVX registers: word `k` of `r[i]` becomes word `i` of the
 /// result's register `k` (three rounds of eight shuffles). It moves bits, it computes nothing.
 ///

@@ -76,7 +76,7 @@ impl Gathered {
     }
 
     /// [`gather_portable`](Self::gather_portable) for a flat geometry's triangle `lines`,
-    /// eight lanes at a time: each hit's line is two aligned 32-byte loads (a miss, and each
+    /// eight lanes at a time: each hit's line is two 32-byte loads (a miss, and each
     /// lane beyond the rays, loads triangle 0's and is zeroed after), and the eight lanes'
     /// lines are turned into rows by two 8×8 transpositions. The same values (moved, not
     /// computed). Where the arrays would take three dependent reads per hit (the triangle,
@@ -94,7 +94,7 @@ impl Gathered {
         rays: &[Ray],
         hits: &HitRows,
     ) {
-        use crate::bvh::simd::transpose8;
+        use crate::bvh::simd::transpose8_at;
         use std::arch::x86_64::*;
         assert!(rays.len() <= TILE, "a tile of rays");
         let n = rays.len();
@@ -126,8 +126,8 @@ impl Gathered {
         for base in (0..TILE).step_by(8) {
             // Every load reads inside `lines`: `index` holds triangles below `lines.len()`
             // (asserted above, and 0 elsewhere, with `lines` not empty), and each line is 64
-            // bytes aligned to 64 (`TriangleLine`), so its two halves are aligned 32-byte
-            // loads. Loads and stores of rows are 8 lanes from `base ≤ TILE − 8`.
+            // bytes, so its two halves are eight floats each. Loads and stores of rows are 8
+            // lanes from `base ≤ TILE − 8`.
             // SAFETY: AVX2 is the caller's guarantee; every read and write is in bounds (above).
             unsafe {
                 let hit = _mm256_castsi256_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
@@ -138,29 +138,11 @@ impl Gathered {
                     _mm256_castps_si256(hit),
                     _mm256_set1_epi32(1),
                 ));
-                let line = |i: usize| lines.as_ptr().add(index[base + i]).cast::<f32>();
-                let (l0, l1, l2, l3) = (line(0), line(1), line(2), line(3));
-                let (l4, l5, l6, l7) = (line(4), line(5), line(6), line(7));
-                let low = transpose8([
-                    _mm256_load_ps(l0),
-                    _mm256_load_ps(l1),
-                    _mm256_load_ps(l2),
-                    _mm256_load_ps(l3),
-                    _mm256_load_ps(l4),
-                    _mm256_load_ps(l5),
-                    _mm256_load_ps(l6),
-                    _mm256_load_ps(l7),
-                ]);
-                let high = transpose8([
-                    _mm256_load_ps(l0.add(8)),
-                    _mm256_load_ps(l1.add(8)),
-                    _mm256_load_ps(l2.add(8)),
-                    _mm256_load_ps(l3.add(8)),
-                    _mm256_load_ps(l4.add(8)),
-                    _mm256_load_ps(l5.add(8)),
-                    _mm256_load_ps(l6.add(8)),
-                    _mm256_load_ps(l7.add(8)),
-                ]);
+                // Each lane's line, its two halves (pointer arithmetic only in the closure).
+                let line: [*const f32; 8] =
+                    std::array::from_fn(|i| lines.as_ptr().wrapping_add(index[base + i]).cast());
+                let low = transpose8_at(line);
+                let high = transpose8_at(line.map(|p| p.wrapping_add(8)));
                 // Words 0–8 are the corners, 9–11 the normal, 12 the material.
                 for (c, corner) in corner.iter_mut().enumerate() {
                     for (axis, row) in corner.iter_mut().enumerate() {
