@@ -8,7 +8,7 @@ use raylab::interactive::{FrameRenderer, HEADLESS_FPS, scripted_motions};
 
 use crate::screenshot::save_screenshot;
 use crate::stats;
-use crate::view_cmd::Session;
+use crate::view_session::Session;
 
 /// `raylab view --headless`: the window's frames without the window, one line per frame, then
 /// the median.

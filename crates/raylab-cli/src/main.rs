@@ -14,6 +14,7 @@ mod screenshot;
 mod stats;
 mod system;
 mod view_cmd;
+mod view_session;
 mod view_window;
 
 use std::process::ExitCode;

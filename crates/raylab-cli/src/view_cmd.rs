@@ -4,37 +4,18 @@
 //! the library's, pure and tested without a window; this file and [`crate::view_window`] only
 //! connect them.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
 use raylab::interactive::{Controller, Pose, View, ViewMode};
 use raylab::session::{self, RenderJob, RenderOptions, ResolvedSettings};
 use raylab::settings::IntegratorKind;
-use raylab::{Film, PathSettings, SampleSettings, Scene, SceneBvh, image_io};
+use raylab::{Film, SampleSettings, Scene, image_io};
 
 use crate::scene_args::{STAGES_HELP, SceneArgs};
+use crate::view_session::{KEYS_HELP, Session};
 use crate::view_window;
-
-/// The key map, printed by `raylab view --help` and the H key.
-pub const KEYS_HELP: &str = "\
-Keys (motion is per second, not per frame):
-  Up / Down          camera forward / back along its view direction
-  Left / Right       camera yaw, the lab's R(y) (60°/s)
-  Page Up / Down     camera up / down
-  mouse drag         look around: grab the picture (yaw and pitch)
-  W / S              light forward / back (horizontally, as the camera faces)
-  A / D              light left / right
-  Q / E              light up / down
-  + / - , wheel      faster / slower (×√2 a step)
-  1 2 3 4 5          lab stage: flat, direct, reflected, shadows, ambient
-  6 7 8 9            path tracing, albedo, normals, depth
-  P                  screenshot to raylab-view-N.png (the path is printed)
-  R                  reset camera and light
-  H                  print these keys
-  Esc                quit
-The title bar shows frames per second, milliseconds per frame and samples per pixel: a still
-picture keeps refining (anti-aliasing) up to --max-spp samples.";
 
 #[derive(Args, Debug)]
 #[command(after_help = KEYS_HELP, after_long_help = format!("{KEYS_HELP}\n\n{STAGES_HELP}"), allow_negative_numbers = true)]
@@ -75,21 +56,6 @@ pub struct ViewArgs {
     /// A still picture refines up to this many samples per pixel.
     #[arg(long, value_name = "N", default_value = "1024", value_parser = clap::value_parser!(u32).range(1..=65536))]
     max_spp: u32,
-}
-
-/// What the window needs to start.
-pub struct Session<'a> {
-    pub scene: &'a Scene,
-    pub accel: &'a SceneBvh,
-    pub pool: &'a rayon::ThreadPool,
-    pub controller: Controller,
-    pub view: View,
-    pub max_spp: u32,
-    /// The scene file's path-tracing and sampling settings.
-    pub path_settings: PathSettings,
-    pub sample_settings: SampleSettings,
-    pub screenshot: Option<&'a Path>,
-    pub exit_after_frames: Option<u32>,
 }
 
 /// The largest window side `raylab view` opens (X11 windows cannot be wider than 32,767).

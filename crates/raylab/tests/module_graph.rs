@@ -1,4 +1,6 @@
-//! The library's top-level modules import downward only: they form a DAG.
+//! The library's top-level modules import downward only: they form a DAG. So do the files of
+//! every folder of every crate (the library, the command and the Python module), a folder's
+//! module file counting as one of them.
 //!
 //! This test reads the library's sources, finds every path that leaves a top-level module
 //! (`crate::scene::Scene`, `use crate::{bvh::Bounds, Ray}`, a `super::` that climbs past the
@@ -46,20 +48,70 @@ fn the_library_modules_form_a_dag() {
 }
 
 #[test]
-fn the_bvh_submodules_form_a_dag() {
-    // The BVH's files by concept (bounds, build, node, leaf, traverse, packet, refit,
-    // two_level, and isa, simd and queries under them) import downward only.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    collect_rust_files(&root, &root, &mut files);
-    let edges = submodule_edges(&files, &["bvh"]);
-    assert!(
-        edges.iter().any(|e| e.from == "traverse" && e.to == "node"),
-        "the reader found no import of bvh::node from bvh::traverse: {} edges",
-        edges.len()
-    );
-    let cycles = cycles(&edges);
-    assert!(cycles.is_empty(), "{}", describe_cycles(&cycles, &edges));
+fn the_files_of_every_folder_form_a_dag() {
+    // Inside each folder of each crate (the library, the command, the Python module) the files
+    // import downward only: a module file and the files beside it are the nodes, as in
+    // `bvh` (bounds, build, node, leaf, traverse, packet, refit, two_level, and the module's
+    // own items), one folder at a time.
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut report = Vec::new();
+    let mut folders_seen = 0;
+    for krate in ["crates/raylab/src", "crates/raylab-cli/src", "python/src"] {
+        let root = workspace.join(krate);
+        let mut files = Vec::new();
+        collect_rust_files(&root, &root, &mut files);
+        assert!(!files.is_empty(), "no sources under {}", root.display());
+        if krate == "crates/raylab/src" {
+            // The reader must see real imports: bvh's traversal reads its nodes.
+            let edges = submodule_edges(&files, &["bvh"]);
+            assert!(
+                edges.iter().any(|e| e.from == "traverse" && e.to == "node"),
+                "the reader found no import of bvh::node from bvh::traverse: {} edges",
+                edges.len()
+            );
+        }
+        // The library's top level has a test of its own, above.
+        let (folders, cycles) = folder_cycles(&files, krate != "crates/raylab/src");
+        folders_seen += folders;
+        report.extend(cycles.into_iter().map(|cycle| format!("{krate}/{cycle}")));
+    }
+    assert!(folders_seen > 20, "only {folders_seen} folders found");
+    assert!(report.is_empty(), "{}", report.join("\n\n"));
+}
+
+/// The cycles between the files of each folder of a crate (and between its top-level modules
+/// if `with_root`), one message per folder that has any; and how many folders were read.
+fn folder_cycles(files: &[(PathBuf, String)], with_root: bool) -> (usize, Vec<String>) {
+    let mut report = Vec::new();
+    if with_root {
+        let edges = module_edges(files);
+        let cycles = cycles(&edges);
+        if !cycles.is_empty() {
+            report.push(format!("(top level): {}", describe_cycles(&cycles, &edges)));
+        }
+    }
+    let folders = folders(files);
+    for folder in &folders {
+        let parent: Vec<&str> = folder.iter().map(String::as_str).collect();
+        let edges = submodule_edges(files, &parent);
+        let cycles = cycles(&edges);
+        if !cycles.is_empty() {
+            report.push(format!("{}: {}", folder.join("/"), describe_cycles(&cycles, &edges)));
+        }
+    }
+    (folders.len(), report)
+}
+
+/// Every module with files under it (`bvh`, `bvh/leaf`, …), the crate root excepted.
+fn folders(files: &[(PathBuf, String)]) -> BTreeSet<Vec<String>> {
+    let mut folders = BTreeSet::new();
+    for (path, _) in files {
+        let module = module_path_of(path);
+        for n in 1..module.len() {
+            folders.insert(module[..n].to_vec());
+        }
+    }
+    folders
 }
 
 fn collect_rust_files(root: &Path, dir: &Path, out: &mut Vec<(PathBuf, String)>) {
@@ -80,14 +132,14 @@ fn collect_rust_files(root: &Path, dir: &Path, out: &mut Vec<(PathBuf, String)>)
     }
 }
 
-/// The module path of a file relative to `src/`: `lib.rs` is the root (empty), `a.rs` and
+/// The module path of a file relative to `src/`: `lib.rs` (or `main.rs`) is the root (empty), `a.rs` and
 /// `a/mod.rs` are `[a]`, `a/b.rs` is `[a, b]`.
 fn module_path_of(file: &Path) -> Vec<String> {
     let mut parts: Vec<String> =
         file.iter().map(|part| part.to_string_lossy().into_owned()).collect();
     let last = parts.pop().expect("a file name");
     let stem = last.trim_end_matches(".rs");
-    if stem != "mod" && !(parts.is_empty() && stem == "lib") {
+    if stem != "mod" && !(parts.is_empty() && (stem == "lib" || stem == "main")) {
         parts.push(stem.to_owned());
     }
     parts
@@ -97,7 +149,7 @@ fn module_path_of(file: &Path) -> Vec<String> {
 fn module_edges(files: &[(PathBuf, String)]) -> BTreeSet<Edge> {
     let lib = files
         .iter()
-        .find(|(path, _)| path == Path::new("lib.rs"))
+        .find(|(path, _)| path == Path::new("lib.rs") || path == Path::new("main.rs"))
         .map(|(_, text)| strip_comments_and_literals(text))
         .unwrap_or_default();
     let top_modules: BTreeSet<String> =
@@ -785,5 +837,41 @@ mod tests {
                 vec!["x".to_owned(), "y".to_owned()]
             ]
         );
+    }
+
+    #[test]
+    fn a_cycle_inside_a_nested_folder_or_a_binary_is_found() {
+        // `p/q/x.rs` and `p/q/y.rs` import each other, two folders down; `p/r.rs` and
+        // `p/q/x.rs` only import downward.
+        let library = crate_of(&[
+            ("lib.rs", "pub mod p;"),
+            ("p/mod.rs", "mod q; mod r;"),
+            ("p/r.rs", "use super::q::x::X;"),
+            ("p/q/mod.rs", "mod x; mod y;"),
+            ("p/q/x.rs", "use super::y::Y;\npub struct X;"),
+            ("p/q/y.rs", "pub struct Y;\nfn f() { crate::p::q::x::g() }"),
+        ]);
+        let (folders, report) = folder_cycles(&library, false);
+        assert_eq!(folders, 2, "p and p/q");
+        assert_eq!(report.len(), 1, "{report:?}");
+        assert!(report[0].starts_with("p/q: "), "{}", report[0]);
+        assert!(report[0].contains("x -> y  (p/q/x.rs:1)"), "{}", report[0]);
+        assert!(report[0].contains("y -> x  (p/q/y.rs:2)"), "{}", report[0]);
+        // A command's top level, rooted at main.rs.
+        let command = crate_of(&[
+            ("main.rs", "mod a; mod b;\nfn main() {}"),
+            ("a.rs", "use crate::b::B;\npub struct A;"),
+            ("b.rs", "pub struct B;\nfn f(_: crate::a::A) {}"),
+        ]);
+        let (_, report) = folder_cycles(&command, true);
+        assert_eq!(report.len(), 1, "{report:?}");
+        assert!(report[0].contains("cycle: a, b"), "{}", report[0]);
+        // Untied, nothing is reported.
+        let untied = crate_of(&[
+            ("main.rs", "mod a; mod b;"),
+            ("a.rs", "use crate::b::B;"),
+            ("b.rs", "pub struct B;"),
+        ]);
+        assert_eq!(folder_cycles(&untied, true), (0, Vec::new()));
     }
 }

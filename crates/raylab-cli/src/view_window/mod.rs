@@ -26,7 +26,7 @@ mod render_thread;
 use render_thread::{Frame, FrameReady, QuitOnDrop, Shared, State, render_thread};
 
 use crate::screenshot::{next_screenshot_path, save_screenshot};
-use crate::view_cmd::{KEYS_HELP, Session};
+use crate::view_session::{KEYS_HELP, Session};
 
 /// Touchpad scrolling changes the speed by a step per this many pixels.
 const WHEEL_STEP_PIXELS: f64 = 60.0;

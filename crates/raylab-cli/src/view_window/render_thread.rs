@@ -7,7 +7,7 @@ use std::time::Duration;
 use raylab::interactive::{FrameInfo, FrameRenderer, View};
 use winit::event_loop::EventLoopProxy;
 
-use crate::view_cmd::Session;
+use crate::view_session::Session;
 
 /// A moving frame should take at most this long: 30 frames per second with room to spare.
 const MOVING_BUDGET: Duration = Duration::from_millis(25);

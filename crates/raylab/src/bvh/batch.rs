@@ -102,10 +102,10 @@ impl<'a> Batch<'a> {
     /// Rays per chunk of work.
     pub const CHUNK: usize = 2048;
     /// The fewest rays a batch is put in the tree's order for: below it the sort costs about
-    /// what the cache gives back (BENCHMARKS.md, "Large batches in the tree's order").
+    /// what the cache gives back.
     pub const ORDER_MIN_RAYS: usize = 1 << 14;
     /// The smallest tree (`BvhStats::bytes`) a batch is put in its order for: smaller ones stay
-    /// in the caches in any order (the same section).
+    /// in the caches in any order.
     pub const ORDER_MIN_TREE_BYTES: usize = 4 << 20;
     /// How many rays ahead a chunk asks the cache for in the tree's order.
     const AHEAD: usize = 8;

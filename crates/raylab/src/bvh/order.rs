@@ -11,12 +11,10 @@
 //!
 //! The order changes nothing in the answers, only their speed; each ray's answer is the same
 //! in any order. Garanzha and Loop sort rays by a hash of origin and direction ("Fast ray
-//! sorting and breadth-first packet traversal for GPU ray tracing", Eurographics 2010). On 1 M
-//! random rays toward the dragon (871k triangles, a 28 MB tree, one thread), traced pre-sorted,
-//! a Morton code of origin and direction brought the trace from 0.614 to 0.447 s, this segment
-//! key to 0.361 s; the bunny's (2.4 MB) went from 0.303 to 0.263 and 0.227 s (BENCHMARKS.md,
-//! "Large batches in the tree's order"). Small batches, or trees that fit the caches, gain
-//! less than the sort costs.
+//! sorting and breadth-first packet traversal for GPU ray tracing", Eurographics 2010); the
+//! segment key here orders random rays better than a Morton code of origin and direction
+//! (BENCHMARKS.md compares the two on the bunny and the dragon). Small batches, or trees that
+//! fit the caches, gain less than the sort costs.
 //!
 //! ```
 //! use raylab::bvh::{Bvh, order};
@@ -41,7 +39,7 @@ use super::Bounds;
 use crate::ray::Ray;
 
 /// Bits per coordinate of the segment's end points: sixteen cells per axis of the box. (Five
-/// bits made the dragon's trace of 1 M random rays 1–2 % faster and its sort a third slower.)
+/// bits trace a little faster but sort much slower.)
 const BITS: u32 = 4;
 
 /// The key of a segment that misses the box: the largest key, so such rays come last.

@@ -10,7 +10,7 @@
 use super::isa::{Isa, Scalar};
 use super::node::WideBvh;
 use super::packet;
-use super::traverse::{self, TreeRaysKernel, flat::Flat, flat::FlatKernel};
+use super::traverse::{self, TreeRaysKernel, flat::Flat, flat_kernel::FlatKernel};
 use crate::accel::{Hit, HitRows, RayRows};
 use crate::ray::Ray;
 

@@ -13,7 +13,7 @@ use exr::prelude::*;
 // The prelude's `Result` is exr's own.
 use std::result::Result;
 
-use super::{ImageIoError, write_atomically};
+use super::file::{ImageIoError, write_atomically};
 use crate::film::Film;
 use crate::region::Region;
 
@@ -158,20 +158,20 @@ pub(crate) fn guarded<T>(decode: impl FnOnce() -> exr::error::Result<T>) -> Resu
 }
 
 /// Reads an OpenEXR file's first RGB layer as a film (`load_film`'s `.exr`): its headers are
-/// read and checked against [`MAX_FLOAT_IMAGE_PIXELS`](super::MAX_FLOAT_IMAGE_PIXELS) before
+/// read and checked against [`MAX_FLOAT_IMAGE_PIXELS`](super::file::MAX_FLOAT_IMAGE_PIXELS) before
 /// any pixel is decoded, and a decoder that fails in any way gives an error, never a panic.
 pub fn read_exr_film(bytes: &[u8]) -> Result<Film, String> {
     let meta =
         guarded(|| exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false))?;
     if let Some(header) = meta.headers.iter().find(|h| {
         (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64)
-            > super::MAX_FLOAT_IMAGE_PIXELS
+            > super::file::MAX_FLOAT_IMAGE_PIXELS
     }) {
         return Err(format!(
             "it declares {}×{} pixels, more than an image may have ({})",
             header.layer_size.0,
             header.layer_size.1,
-            super::MAX_FLOAT_IMAGE_PIXELS
+            super::file::MAX_FLOAT_IMAGE_PIXELS
         ));
     }
     let image = guarded(|| {

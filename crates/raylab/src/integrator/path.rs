@@ -167,8 +167,7 @@ impl PathState {
     ///
     /// Made as copies of one template whose ray is then set: building each state whole (as
     /// `new` does) compiles to a state assembled on the stack and read back across two of its
-    /// stores, which stalls store-to-load forwarding once per path (measured: 2 % of the
-    /// materials scene's render).
+    /// stores, which stalls store-to-load forwarding once per path.
     pub fn starting(camera_rays: &[Ray]) -> Vec<PathState> {
         let mut states = vec![PathState::START; camera_rays.len()];
         for (state, ray) in states.iter_mut().zip(camera_rays) {

@@ -215,8 +215,7 @@ impl Accumulator {
     /// Adds `count` samples of every pixel (at least 1), as many calls of
     /// [`add_sample`](Self::add_sample) would, to the bit, but with each pixel's samples traced
     /// side by side: a pixel's camera rays make coherent packets, and its paths start on the
-    /// same surface (the materials scene renders 14 % faster in groups of 16; BENCHMARKS.md,
-    /// "Passes in groups"). `progress` gets the rows finished, a row once per sample.
+    /// same surface. `progress` gets the rows finished, a row once per sample.
     pub fn add_samples_with_progress(
         &mut self,
         camera: &Camera,

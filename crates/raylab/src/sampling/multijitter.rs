@@ -15,9 +15,7 @@
 //! Why a second stratified sampler beside `sobol`: at 64 samples, Owen-scrambled Sobol' points
 //! integrate smooth functions with a fifth of this one's error, but functions with an edge (a
 //! shadow, a silhouette, a texture's contour: most of what a render's pixels integrate) with
-//! 13–18 % more (`examples/sampler_edges.rs`); on the glTF boxes compared with Mitsuba, raylab's
-//! Sobol' had 1.08× the error of Mitsuba's `multijitter` though its estimator, with independent
-//! numbers on both sides, had 0.96× (BENCHMARKS.md).
+//! more (`cargo bench -p raylab --bench sampler_edges` prints both).
 //!
 //! Unlike Sobol' points, the pattern depends on `N`: it needs the render's sample count up front
 //! (a render with no known end, `raylab view` or a time limit without `--spp`, and a render of one

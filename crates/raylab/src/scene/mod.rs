@@ -9,12 +9,17 @@
 //! Scenes live in the lab's frame: x right, **y down**, z forward. Model and scene files are
 //! y-up; loaders turn them with [`model_to_lab`], a half turn about x that keeps handedness.
 
+mod built_in;
 mod cornell;
 #[cfg(feature = "io")]
 mod finite;
 #[cfg(feature = "io")]
+mod formats;
+#[cfg(feature = "io")]
 pub(crate) mod gltf;
 mod keyframes;
+#[cfg(feature = "io")]
+mod load_options;
 #[cfg(feature = "io")]
 mod mesh_file;
 mod model;
@@ -33,17 +38,20 @@ pub mod terrain;
 use glam::Vec3;
 
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
+#[cfg(feature = "io")]
+pub use formats::load_mesh;
 pub use keyframes::Keyframe;
+#[cfg(feature = "io")]
+pub use load_options::{AUTO_FLATTEN_TRIANGLES, Instancing, LoadOptions};
 #[cfg(feature = "support")]
 pub(crate) use mesh_file::read_file_bytes;
 #[cfg(feature = "io")]
 pub use mesh_file::{
-    InstancedMesh, LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, load_mesh,
-    read_limit_bytes,
+    InstancedMesh, LoadError, LoadedMesh, Location, SUPPORTED_EXTENSIONS, read_limit_bytes,
 };
 pub use model::model_to_lab;
 #[cfg(feature = "io")]
-pub use open::{AUTO_FLATTEN_TRIANGLES, Instancing, LoadOptions, OpenError, OpenedScene};
+pub use open::{OpenError, OpenedScene};
 #[cfg(feature = "io")]
 pub use scene_file::{
     SceneFileError, load_scene_file, load_scene_file_with, parse_scene, parse_scene_with,
@@ -199,12 +207,6 @@ pub struct RenderSettings {
 }
 
 impl Scene {
-    /// The camera at `frame` of the animation its keyframes describe (see `keyframes.rs`), or
-    /// `None` when it has none.
-    pub fn camera_at(&self, frame: f32) -> Option<CameraSettings> {
-        keyframes::camera_at(&self.keyframes, frame)
-    }
-
     /// A hash of everything in the scene that decides what a ray sees: every triangle (its
     /// vertices, normals, texture coordinates and material), the materials and the lights, by
     /// their bits (XXH3, 64 bits). Not the name, the camera or the render settings. Parts of one
@@ -231,16 +233,6 @@ impl Scene {
             lights: vec![Light::Point(light)],
             ..Scene::default()
         }
-    }
-
-    /// A built-in scene by name: `cornell`, the lab's Cornell box; `terrain` or `terrain:N`, a
-    /// fractal landscape ([`terrain::terrain`]).
-    pub fn built_in(name: &str) -> Result<Scene, SceneError> {
-        if name == "cornell" {
-            return Ok(cornell_box());
-        }
-        terrain::parse_terrain(name)
-            .unwrap_or_else(|| Err(SceneError::UnknownScene { name: name.to_string() }))
     }
 
     /// Every triangle's corners, in order: build an accelerator over them.

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::job::Event;
+use super::event::Event;
 use super::{RenderIdentity, ResolvedSettings, SessionError};
 use crate::film::Film;
 use crate::parts::{self, Channel, Part, PartHeader, PartKind};

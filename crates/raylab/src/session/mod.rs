@@ -32,6 +32,7 @@
 
 mod camera_options;
 mod checkpoint;
+mod event;
 mod identity;
 mod job;
 mod merge;
@@ -41,8 +42,9 @@ use std::time::Duration;
 
 pub use camera_options::CameraOptions;
 pub use checkpoint::{Checkpoints, checkpoint_path};
+pub use event::Event;
 pub use identity::{CameraIdentity, IdentityError, RenderIdentity};
-pub use job::{Event, FilmOutcome, FrameOutcome, RenderJob, check_memory, frame_path};
+pub use job::{FilmOutcome, FrameOutcome, RenderJob, check_memory, frame_path};
 pub use merge::{MergeReport, merge_parts};
 pub use summary::FrameSummary;
 

@@ -6,15 +6,16 @@
 //! `C_trav + (A_L·cost(n_L) + A_R·cost(n_R)) / A` is taken, or a leaf is made when that is cheaper.
 //! Because a leaf record's triangles (up to eight, `bvh/leaf`) are tested in one pass, a leaf
 //! of `n` triangles costs `⌈n/8⌉` record tests (Embree's rule for its blocks of four, with
-//! records of eight; `⌈n/4⌉` for the small scenes' leaves of up to four, see [`unit_shift`]). Measured against `⌈n/4⌉` on the bunny and the dragon (one thread, two
-//! alternating rounds): shadow rays 3–6 % and diffuse rays 4–8 % faster, primary rays the same,
-//! and 23 % fewer nodes (the dragon's tree 32 rather than 36 bytes per triangle).
+//! records of eight; `⌈n/4⌉` for the small scenes' leaves of up to four, see
+//! [`unit_shift`](bins::unit_shift)): against `⌈n/4⌉` on large meshes the tree has fewer nodes,
+//! and shadow and diffuse rays are faster.
 //!
 //! Large nodes are binned in parallel and their two children built in parallel (rayon), so the
 //! build uses every thread of the pool it runs in; on a pool of one thread it is sequential.
 
 use glam::{Vec3, Vec3A, Vec4};
 
+mod bins;
 mod collapse;
 mod optimal;
 mod settings;
@@ -27,6 +28,7 @@ pub use settings::{BuildSettings, Collapse};
 use crate::bvh::bounds::Bounds;
 use crate::bvh::leaf::RECORD_TRIANGLES;
 use crate::triangle::is_degenerate;
+use bins::{Aabb, Bin, records, unit_shift};
 use sweep::sweep;
 
 /// Whether a triangle can be hit at all: finite vertices and non-zero area. The build leaves
@@ -60,8 +62,6 @@ pub(crate) struct BinaryBvh {
     pub order: Vec<u32>,
 }
 
-/// The most bins a build uses ([`BuildSettings::bins`] is clamped to it).
-pub(crate) const MAX_BINS: usize = 256;
 /// Nodes of up to this many bins bin on the stack.
 const STACK_BINS: usize = 32;
 /// Nodes with more primitives than this bin and build their children in parallel.
@@ -156,61 +156,8 @@ impl PrimRef {
     }
 }
 
-/// A box in SIMD-friendly form, for the build only.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Aabb {
-    pub(super) min: Vec3A,
-    pub(super) max: Vec3A,
-}
-
-impl Default for Aabb {
-    fn default() -> Self {
-        Aabb::EMPTY
-    }
-}
-
-impl Aabb {
-    pub(super) const EMPTY: Aabb = Aabb { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
-
-    #[inline]
-    pub(super) fn union(self, other: Aabb) -> Aabb {
-        Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
-    }
-
-    #[inline]
-    fn grow(self, p: Vec3A) -> Aabb {
-        Aabb { min: self.min.min(p), max: self.max.max(p) }
-    }
-
-    #[inline]
-    fn half_area(&self) -> f32 {
-        self.bounds().half_area()
-    }
-
-    /// [`half_area`](Self::half_area) of a box known not to be empty (it holds a primitive):
-    /// no emptiness test.
-    #[cfg(any(test, not(target_arch = "x86_64")))]
-    #[inline]
-    pub(super) fn half_area_nonempty(&self) -> f32 {
-        let d = self.max - self.min;
-        d.x * d.y + d.y * d.z + d.z * d.x
-    }
-
-    #[inline]
-    fn bounds(&self) -> Bounds {
-        Bounds { min: self.min.into(), max: self.max.into() }
-    }
-}
-
 struct Builder<'a> {
     settings: &'a BuildSettings,
-}
-
-/// Per-bin bounds of primitives, and counts.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct Bin {
-    pub(super) bounds: Aabb,
-    pub(super) count: u32,
 }
 
 /// The best split found by binning.
@@ -221,20 +168,6 @@ struct Split {
     cost: f32,
     left: Aabb,
     right: Aabb,
-}
-
-/// How many leaf tests `n` triangles take at least, in leaves of up to `2^unit` triangles:
-/// `⌈n / 2^unit⌉` ([`unit_shift`]).
-#[inline]
-pub(super) fn records(n: u32, unit: u32) -> f32 {
-    ((n + (1 << unit) - 1) >> unit) as f32
-}
-
-/// The leaf cost unit of a build with leaves of up to `max_leaf` triangles, as a shift: a record
-/// of eight (one test pass) where leaves hold eight or more, four otherwise (the small scenes'
-/// leaves of four: then a subtree of `n` triangles needs `⌈n/4⌉` leaves, each a test).
-pub(super) fn unit_shift(max_leaf: usize) -> u32 {
-    if max_leaf >= RECORD_TRIANGLES { RECORD_TRIANGLES.trailing_zeros() } else { 2 }
 }
 
 /// Maps centroids to bins: `bin = ⌊(c − min)·scale⌋`, clamped to the last bin.

@@ -26,7 +26,7 @@
 //! Ylitie et al. build the binary tree down to one triangle a leaf, so that the choice of leaves
 //! is the collapse's alone; [`Collapse::Optimal`](super::Collapse) names the largest binary
 //! leaf, and `high` uses four, which keeps nearly all of the gain at a fraction of the build
-//! time (BENCHMARKS.md, "The collapse of least cost").
+//! time.
 //!
 //! Costs stay numbers in any scene: a box whose half area is not finite (coordinates near
 //! `f32::MAX`, or an infinite extent beside a zero one, whose product is NaN) is priced at
@@ -36,8 +36,9 @@
 
 use glam::Vec3;
 
+use super::BinaryBvh;
+use super::bins::{records, unit_shift};
 use super::collapse::{Reading, push_leaf};
-use super::{BinaryBvh, records, unit_shift};
 use crate::bvh::node::{WIDTH, WideBvh};
 
 /// The costs the collapse weighs: a wide node's test and a leaf record's, and the largest leaf.

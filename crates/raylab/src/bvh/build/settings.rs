@@ -74,11 +74,10 @@ impl BuildSettings {
     pub const PRESETS: [(&'static str, BuildSettings); 3] =
         [("fast", Self::FAST), ("medium", Self::MEDIUM), ("high", Self::HIGH)];
 
-    /// The presets' [`flat_limit`](Self::flat_limit): three blocks of sixteen. Measured
-    /// (`raylab bench --flat-limit`, one thread): on the 32-triangle Cornell box the flat list
-    /// traces primary, shadow and diffuse rays 1.3, 1.6 and 1.6 times as fast as the tree; with
-    /// 52 and 72 triangles it wins on shadow and diffuse rays but loses on primary ones; with 112
-    /// the tree is 1.3 to 1.7 times as fast.
+    /// The presets' [`flat_limit`](Self::flat_limit): three blocks of sixteen. On the
+    /// 32-triangle Cornell box the flat list traces every kind of ray faster than the tree; from
+    /// about 50 triangles the tree wins on primary rays, and from about 100 on all
+    /// (`raylab bench --flat-limit N` compares them).
     pub const FLAT_LIMIT: usize = 48;
 
     /// The largest [`flat_limit`](Self::flat_limit): the rays in lanes put every distinct corner
@@ -95,10 +94,8 @@ impl BuildSettings {
     /// triangles for scenes of fewer than [`SMALL_SCENE`](Self::SMALL_SCENE).
     ///
     /// A small scene's tree stays in cache whatever its size, so smaller leaves cost no memory
-    /// traffic and save triangle tests, above all for packets of camera rays (the lab frame
-    /// renders in 22 rather than 28 ms on one thread). On large meshes, leaves of up to eight
-    /// are faster and smaller (measured with the four-triangle blocks that leaf records replaced;
-    /// the 871k-triangle dragon: 56 rather than 63 bytes per triangle then).
+    /// traffic and save triangle tests, above all for packets of camera rays. On large meshes,
+    /// leaves of up to eight are faster and smaller.
     pub fn for_triangles(triangles: usize) -> BuildSettings {
         if triangles < Self::SMALL_SCENE {
             BuildSettings { max_leaf_size: 4, ..Self::MEDIUM }
@@ -111,7 +108,7 @@ impl BuildSettings {
     pub(crate) fn clamped(&self) -> BuildSettings {
         let max_leaf_size = self.max_leaf_size.clamp(1, MAX_LEAF_TRIANGLES);
         BuildSettings {
-            bins: self.bins.clamp(2, super::MAX_BINS),
+            bins: self.bins.clamp(2, super::bins::MAX_BINS),
             max_leaf_size,
             traversal_cost: if self.traversal_cost.is_finite() {
                 self.traversal_cost.max(0.0)

@@ -5,8 +5,8 @@
 //! the SSE2 version weighs the three axes at once, one per lane, and `sweep_scalar` is its twin.
 
 #[cfg(any(test, not(target_arch = "x86_64")))]
-use super::records;
-use super::{Aabb, Bin, MAX_BINS};
+use super::bins::records;
+use super::bins::{Aabb, Bin, MAX_BINS};
 
 /// Bin counts up to this (the `fast` and `medium` presets' 8 and 16, `high`'s 32) sweep with
 /// short arrays.

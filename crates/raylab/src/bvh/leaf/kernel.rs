@@ -2,7 +2,7 @@
 //! one pass, deciding as [`WatertightRay::intersect`] does (the scalar twin is
 //! [`record_hits_scalar`]). The vector forms are in `leaf/lanes.rs`.
 
-use super::{Record, RecordHits, record_hits_scalar};
+use super::{Record, RecordHits, TriangleRay, record_hits_scalar};
 use crate::bvh::isa::Scalar;
 use crate::triangle::WatertightRay;
 
@@ -28,14 +28,6 @@ pub(crate) trait RecordKernel: Sized {
         record: &Record,
         t_max: f32,
     ) -> RecordHits;
-}
-
-/// A ray prepared for the triangle tests of a kernel whose per-ray form is `R`: the scalar test's
-/// setup (for the triangles a kernel leaves undecided) and the kernel's.
-#[derive(Clone, Copy)]
-pub(crate) struct TriangleRay<R> {
-    pub ray: WatertightRay,
-    pub lanes: R,
 }
 
 /// Prepares `ray` for `K`'s triangle tests.

@@ -9,8 +9,7 @@
 //!   in one pass;
 //! - AVX-512: the same in AVX registers, with the two-table permute `vpermt2ps` of AVX-512 VL
 //!   for records of more than 8 vertices (the 16-lane form, a whole 16-triangle record per pass,
-//!   was measured 5–10 % slower on this machine's Xeon: its 512-bit instructions take a vector
-//!   port from the 8-wide node kernel);
+//!   is slower: its 512-bit instructions take a vector port from the 8-wide node kernel);
 //! - SSE2: the table is transformed four vertices at a time into arrays, and each pass of four
 //!   triangles reads its corners from them.
 //!
@@ -20,8 +19,7 @@
 
 use std::arch::x86_64::*;
 
-use super::kernel::TriangleRay;
-use super::{RECORD_TRIANGLES, RECORD_VERTICES, Record, RecordHits};
+use super::{RECORD_TRIANGLES, RECORD_VERTICES, Record, RecordHits, TriangleRay};
 use crate::bvh::simd::{
     LaneHits, Lanes, RayBroadcast, ShearedLanes, shear_point, watertight_sheared,
 };
@@ -89,7 +87,7 @@ unsafe fn pick16_avx512(low: __m256, high: __m256, index: __m256i) -> __m256 {
 ///
 /// Written without closures, as every kernel here: a closure does not inherit the target
 /// features of the function it is inlined into, and one left out of line passes its vectors
-/// through memory and calls every intrinsic (measured: half the speed).
+/// through memory and calls every intrinsic, at half the speed.
 ///
 /// # Safety
 /// The CPU must support AVX2, and AVX-512 F and VL if `TWO_TABLE`.

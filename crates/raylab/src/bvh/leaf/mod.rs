@@ -47,13 +47,21 @@ use crate::triangle::WatertightRay;
 /// AVX-512 register).
 pub(crate) const RECORD_VERTICES: usize = 16;
 /// The most triangles in one record: one AVX register of each corner, so that a record is
-/// tested in one pass. (Sixteen triangles in AVX-512 registers were measured slower on this
-/// machine's Xeon: 512-bit instructions take a vector port from the 8-wide node kernel.)
+/// tested in one pass. (Sixteen triangles in AVX-512 registers are slower: 512-bit
+/// instructions take a vector port from the 8-wide node kernel.)
 pub(crate) const RECORD_TRIANGLES: usize = 8;
 /// Zero words after the last record.
 pub(crate) const PAD_WORDS: usize = 4;
 
 const MORE: u32 = 1 << 16;
+
+/// A ray prepared for the triangle tests of a kernel whose per-ray form is `R`: the scalar test's
+/// setup (for the triangles a kernel leaves undecided) and the kernel's.
+#[derive(Clone, Copy)]
+pub(crate) struct TriangleRay<R> {
+    pub ray: WatertightRay,
+    pub lanes: R,
+}
 
 /// Every leaf's records, one after another, then [`PAD_WORDS`] zero words.
 #[derive(Clone, Debug)]

@@ -3,7 +3,7 @@
 //! twin, [`packet_leaf_scalar`], runs them ray by ray.
 
 use super::rays::PacketRays;
-use super::setup::RestRows;
+use super::rows::RestRows;
 use crate::bvh::bounds::Bounds;
 use crate::bvh::isa::Scalar;
 use crate::bvh::leaf::kernel::prepare_triangle_ray;
@@ -37,7 +37,7 @@ pub(crate) trait PacketKernel: Kernel {
 
     /// Copies `rays` (at most [`PACKET`](super::rays::PACKET)) into rows for
     /// [`fill`](super::setup::fill): by default one ray at a time
-    /// ([`rows_portable`](super::setup::rows_portable)).
+    /// ([`rows_portable`](super::rows::rows_portable)).
     ///
     /// # Safety
     /// The CPU must support the kernel's instruction set.
@@ -47,7 +47,7 @@ pub(crate) trait PacketKernel: Kernel {
         origin: &mut [[f32; super::rays::PACKET]; 3],
         rest: &mut RestRows,
     ) {
-        super::setup::rows_portable(rays, origin, rest)
+        super::rows::rows_portable(rays, origin, rest)
     }
 }
 
@@ -136,9 +136,9 @@ mod x86 {
                 ) {
                     if $transpose {
                         // SAFETY: the caller's guarantee of the instruction set, which has AVX.
-                        unsafe { crate::bvh::packet::setup::rows_avx(rays, origin, rest) }
+                        unsafe { crate::bvh::packet::rows::rows_avx(rays, origin, rest) }
                     } else {
-                        crate::bvh::packet::setup::rows_portable(rays, origin, rest)
+                        crate::bvh::packet::rows::rows_portable(rays, origin, rest)
                     }
                 }
             }

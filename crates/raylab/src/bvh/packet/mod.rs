@@ -23,6 +23,7 @@ mod lanes;
 pub(crate) mod leaf;
 mod query;
 pub(crate) mod rays;
+mod rows;
 mod setup;
 
 use crate::accel::{Hit, HitRows, RayRows};
@@ -49,7 +50,7 @@ struct Chunk {
     /// A second packet for a group that is not the whole chunk, made when first needed.
     gathered: Option<PacketRays>,
     /// The rays' directions and ranges in rows, on their way into `lanes` ([`setup::fill`]).
-    rows: setup::RestRows,
+    rows: rows::RestRows,
 }
 
 thread_local! {
@@ -70,8 +71,8 @@ fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
 }
 
 impl Chunk {
-    /// This thread's chunk, or a new one: a fresh chunk is kilobytes of arrays to clear, which cost
-    /// about 4 % of the lab frame (one call per tile of 64 rays). Taken out of the thread-local
+    /// This thread's chunk, or a new one: a fresh chunk is kilobytes of arrays to clear, once per
+    /// tile of 64 rays. Taken out of the thread-local
     /// slot rather than borrowed in a closure, so that the tracing stays inlined into the
     /// instruction set's entry point (a closure would not inherit its target features).
     #[inline(always)]

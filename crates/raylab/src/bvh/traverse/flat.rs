@@ -41,7 +41,6 @@ use glam::Vec3;
 
 use super::can_hit;
 use crate::accel::Hit;
-use crate::bvh::isa::Scalar;
 use crate::ray::Ray;
 use crate::triangle::{TriangleBlock, WatertightRay};
 
@@ -208,69 +207,13 @@ pub(crate) fn occluded_scalar(flat: &Flat, ray: &Ray) -> bool {
     })
 }
 
-/// The flat list's tests per instruction set; the scalar twins are [`closest_hit_scalar`] and
-/// [`occluded_scalar`].
-pub(crate) trait FlatKernel {
-    /// The closest hit among the list's triangles.
-    ///
-    /// # Safety
-    /// The CPU must support the kernel's instruction set (checked once when a BVH picks it).
-    unsafe fn closest_hit(flat: &Flat, ray: &Ray) -> Option<Hit>;
-    /// Whether any of the list's triangles is hit.
-    ///
-    /// # Safety
-    /// As for [`closest_hit`](Self::closest_hit).
-    unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool;
-
-    /// The closest hit of each ray, `hits[i]` for `rays[i]`: exactly
-    /// [`closest_hit`](Self::closest_hit)'s answers, by default ray by ray (the scalar twin of
-    /// `flat_rays.rs`).
-    ///
-    /// # Safety
-    /// As for [`closest_hit`](Self::closest_hit).
-    #[inline(always)]
-    unsafe fn closest_hits(flat: &Flat, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        assert_eq!(rays.len(), hits.len(), "one answer per ray");
-        for (ray, hit) in rays.iter().zip(hits) {
-            // SAFETY: the caller's guarantee.
-            *hit = unsafe { Self::closest_hit(flat, ray) };
-        }
-    }
-    /// Whether each ray is occluded, `occluded[i]` for `rays[i]`: exactly
-    /// [`occluded`](Self::occluded)'s answers, by default ray by ray (the scalar twin of
-    /// `flat_rays.rs`).
-    ///
-    /// # Safety
-    /// As for [`closest_hit`](Self::closest_hit).
-    #[inline(always)]
-    unsafe fn occluded_each(flat: &Flat, rays: &[Ray], occluded: &mut [bool]) {
-        assert_eq!(rays.len(), occluded.len(), "one answer per ray");
-        for (ray, o) in rays.iter().zip(occluded) {
-            // SAFETY: the caller's guarantee.
-            *o = unsafe { Self::occluded(flat, ray) };
-        }
-    }
-}
-
-impl FlatKernel for Scalar {
-    #[inline(always)]
-    unsafe fn closest_hit(flat: &Flat, ray: &Ray) -> Option<Hit> {
-        closest_hit_scalar(flat, ray)
-    }
-    #[inline(always)]
-    unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool {
-        occluded_scalar(flat, ray)
-    }
-}
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::{closest_hit_lanes, occluded_lanes};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use std::arch::x86_64::{__m128, __m256, __m512};
-
     use super::*;
-    use crate::bvh::isa::{Avx2, Avx512, Sse};
     use crate::bvh::simd::{LaneHits, LaneMask, Lanes, RayBroadcast, watertight_lanes_with};
-    use crate::bvh::traverse::flat_rays;
 
     /// The lane test of lanes `first..first + W` of `block` for hits below `t_max`.
     ///
@@ -308,8 +251,7 @@ mod x86 {
     ///
     /// Every block is tested against the ray's own range (not the best hit so far, so the
     /// blocks' tests do not wait for each other); a block without a candidate skips the rest of
-    /// its test (measured: 5 % off the path tracer's time on Mitsuba's box, whose rays miss most
-    /// blocks). Each lane keeps the nearest of its hits in registers, the earlier block winning
+    /// its test (rays in a small room miss most blocks). Each lane keeps the nearest of its hits in registers, the earlier block winning
     /// at equal `t` (blocks ascend in index), with no branch on which lanes hit; one reduction
     /// at the end picks the nearest lane, the lowest index among equals. Lanes only the
     /// double-precision test can decide (rare) are merged alongside.
@@ -317,7 +259,10 @@ mod x86 {
     /// # Safety
     /// The CPU must support `V`'s instruction set, and `V` must hold `W` floats.
     #[inline(always)]
-    unsafe fn closest_hit<V: Lanes, const W: usize>(flat: &Flat, ray: &Ray) -> Option<Hit> {
+    pub(crate) unsafe fn closest_hit_lanes<V: Lanes, const W: usize>(
+        flat: &Flat,
+        ray: &Ray,
+    ) -> Option<Hit> {
         if !can_hit(ray) {
             return None;
         }
@@ -384,9 +329,9 @@ mod x86 {
     /// Whether anything is hit, with `W`-lane registers `V`.
     ///
     /// # Safety
-    /// As for [`closest_hit`].
+    /// As for [`closest_hit_lanes`].
     #[inline(always)]
-    unsafe fn occluded<V: Lanes, const W: usize>(flat: &Flat, ray: &Ray) -> bool {
+    pub(crate) unsafe fn occluded_lanes<V: Lanes, const W: usize>(flat: &Flat, ray: &Ray) -> bool {
         if !can_hit(ray) {
             return false;
         }
@@ -411,36 +356,4 @@ mod x86 {
         }
         false
     }
-
-    /// SSE2's four lanes, AVX2's eight, AVX-512's sixteen.
-    macro_rules! flat_kernel {
-        ($isa:ty, $register:ty, $lanes:literal) => {
-            impl FlatKernel for $isa {
-                #[inline(always)]
-                unsafe fn closest_hit(flat: &Flat, ray: &Ray) -> Option<Hit> {
-                    // SAFETY: the caller's guarantee of the instruction set; the register
-                    // holds `$lanes` floats.
-                    unsafe { closest_hit::<$register, $lanes>(flat, ray) }
-                }
-                #[inline(always)]
-                unsafe fn occluded(flat: &Flat, ray: &Ray) -> bool {
-                    // SAFETY: as above.
-                    unsafe { occluded::<$register, $lanes>(flat, ray) }
-                }
-                #[inline(always)]
-                unsafe fn closest_hits(flat: &Flat, rays: &[Ray], hits: &mut [Option<Hit>]) {
-                    // SAFETY: as above.
-                    unsafe { flat_rays::closest_hits::<$register, $lanes>(flat, rays, hits) }
-                }
-                #[inline(always)]
-                unsafe fn occluded_each(flat: &Flat, rays: &[Ray], occluded: &mut [bool]) {
-                    // SAFETY: as above.
-                    unsafe { flat_rays::occluded::<$register, $lanes>(flat, rays, occluded) }
-                }
-            }
-        };
-    }
-    flat_kernel!(Sse, __m128, 4);
-    flat_kernel!(Avx2, __m256, 8);
-    flat_kernel!(Avx512, __m512, 16);
 }

@@ -12,19 +12,10 @@
 //! hit skips the division and the error bound
 //! ([`watertight_sheared_scaled`]'s early out).
 //!
-//! Measured (`cargo bench -p raylab --bench flat_rays`, random rays inside Mitsuba's box, one
-//! thread): 87–94 ns a ray one at a time, 53 ns in lanes, 46 ns with the set-up in lanes too;
-//! the path tracer's whole render of the box (1 thread, 8 spp, CPU time) 1.79 → 1.65 s, and
-//! 1.31 → 1.19 s for the set-up in lanes (with the other changes of the day between).
-//! Occlusion in lanes was tried twice before and not kept: a group runs until its last ray is
-//! blocked or has seen every triangle, where a ray alone stops at its first blocker, and it
-//! measured slower (47 ns a shadow ray against 37 one at a time), then even (the render 1.20 s
-//! against 1.20). With the corners shared (below) it is the faster: 30 ns a shadow ray against
-//! 37 (`occluded_in_lanes` against `occluded_one_by_one` in the bench above), and the path
-//! tracer's whole render 2.08 → 1.95 s (min of 7; 2.02 against 2.08 in medians; `/usr/bin/time
-//! -f %U raylab render scenes/cornell-mitsuba.toml --spp 16 --threads 1 -o r.pfm`: Mitsuba's box,
-//! 512², 16 spp, 1 thread, CPU time, the same pixels). In the box 87 % of shadow rays are
-//! unblocked (BENCHMARKS.md), so a lone ray seldom stops early anyway.
+//! Occlusion runs in lanes too, although a group runs until its last ray is blocked or has seen
+//! every triangle where a ray alone stops at its first blocker: in a closed box most shadow
+//! rays are unblocked, so a lone ray seldom stops early anyway, and with the corners shared
+//! (below) the lanes are the faster (`cargo bench -p raylab --bench flat_rays`).
 //!
 //! ## Corners shared
 //! A closed mesh's corner belongs to about six triangles; Mitsuba's 36-triangle box has 108
@@ -32,9 +23,7 @@
 //! of rays puts each distinct corner in its lanes' ray frames once (the permutation below and
 //! the shear, sixteen operations a corner, and `kz` scaled by `shear_z`), then tests each
 //! triangle from three loads per coordinate. Corners are distinct by their bits, so a
-//! triangle's frame coordinates are those it would compute itself, bit for bit. Measured on
-//! the path tracer's whole render as above: 2.20 → 2.16 s for the shared frame, 2.12 with `kz`
-//! scaled once too (min of 7).
+//! triangle's frame coordinates are those it would compute itself, bit for bit.
 //!
 //! ## The permutation, lane by lane
 //! The watertight test looks at a triangle along the ray's dominant axis `kz`, with `kx`, `ky`
@@ -51,7 +40,7 @@
 //! only if it is strictly nearer, so at equal `t` the lowest index wins, and the rare hits are
 //! merged as [`Hit::keep_first`] orders them: `t`, triangle and barycentrics are bit for bit
 //! [`flat.rs`](super::flat)'s, the tree's and [`BruteForce`](crate::BruteForce)'s. The scalar twin is the
-//! single-ray query, ray by ray ([`FlatKernel`](super::flat::FlatKernel)'s default).
+//! single-ray query, ray by ray (the default of `FlatKernel`, in `flat_kernel.rs`).
 
 use glam::Vec3;
 

@@ -6,103 +6,23 @@
 //! triangle pre-test is then vectorized for the same set too.
 
 pub(crate) mod flat;
+pub(crate) mod flat_kernel;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod flat_rays;
 mod setup;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod tree_rays;
 
+pub(crate) use setup::{Kernel, Prepared, Query, can_hit, run_prepared};
+
 use crate::accel::Hit;
 use crate::bvh::bounds::FAR_SCALE;
 use crate::bvh::leaf::Leaves;
-use crate::bvh::leaf::kernel::{RecordKernel, TriangleRay};
-use crate::bvh::node::kernel::{BoxRay, NodeKernel, NodeRay};
+use crate::bvh::leaf::TriangleRay;
+use crate::bvh::node::kernel::BoxRay;
 use crate::bvh::node::{Child, EMPTY, WIDTH, WideBvh, decode};
 use crate::float::next_float_up;
 use crate::ray::Ray;
-
-/// A single ray's kernels: the node test and the leaf records' test of one instruction set,
-/// and the ray's set-up for both (`setup.rs`).
-pub(crate) trait Kernel: NodeKernel + RecordKernel {
-    /// Sets `ray` up and runs `query` on it, or answers `None` if it can hit nothing
-    /// ([`can_hit`]). The query runs in the branch that set the ray up, fused or plain, so that
-    /// the set-up's values reach the traversal in registers rather than through a merged
-    /// struct, which the compiler copies field by field.
-    ///
-    /// The default is the portable set-up ([`setup::setup_portable`]).
-    ///
-    /// # Safety
-    /// The CPU must support the kernels' instruction set.
-    #[inline(always)]
-    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
-        // SAFETY: the caller's guarantee.
-        let prepared = unsafe { setup::setup_portable::<Self>(bvh, ray) }?;
-        // SAFETY: the caller's guarantee.
-        Some(unsafe { run_prepared(bvh, &prepared, query) })
-    }
-}
-
-/// What a single-ray query does once its ray is set up: a traversal, for either form of the
-/// box test.
-pub(crate) trait Query<K: Kernel> {
-    type Output;
-
-    /// # Safety
-    /// The CPU must support `K`'s instruction set.
-    unsafe fn run<B: BoxRay>(
-        self,
-        bvh: &WideBvh,
-        box_ray: &B,
-        triangle_ray: &TriangleRay<K::RecordRay>,
-        t_max: f32,
-    ) -> Self::Output;
-}
-
-/// `query` on a prepared ray, in its fused or plain form.
-///
-/// # Safety
-/// The CPU must support `K`'s instruction set.
-#[inline(always)]
-pub(crate) unsafe fn run_prepared<K: Kernel, Q: Query<K>>(
-    bvh: &WideBvh,
-    prepared: &Prepared<K>,
-    query: Q,
-) -> Q::Output {
-    let (triangle_ray, t_max) = (&prepared.triangle_ray, prepared.t_max);
-    match &prepared.box_ray {
-        NodeRay::Fused(b) => {
-            // SAFETY: the caller's guarantee.
-            unsafe { query.run(bvh, b, triangle_ray, t_max) }
-        }
-        NodeRay::Plain(b) => {
-            // SAFETY: the caller's guarantee.
-            unsafe { query.run(bvh, b, triangle_ray, t_max) }
-        }
-    }
-}
-
-impl Kernel for crate::bvh::isa::Scalar {}
-
-#[cfg(target_arch = "x86_64")]
-impl Kernel for crate::bvh::isa::Sse {}
-
-#[cfg(target_arch = "x86_64")]
-impl Kernel for crate::bvh::isa::Avx2 {
-    #[inline(always)]
-    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
-        // SAFETY: the caller's guarantee (AVX2 and FMA).
-        unsafe { setup::query_avx2::<Self, Q>(bvh, ray, query) }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Kernel for crate::bvh::isa::Avx512 {
-    #[inline(always)]
-    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
-        // SAFETY: the caller's guarantee (AVX-512 implies AVX2 and FMA).
-        unsafe { setup::query_avx2::<Self, Q>(bvh, ray, query) }
-    }
-}
 
 /// Many incoherent rays through the tree at once, per instruction set: by default one by one
 /// (the single-ray traversals, the scalar twin); the vector sets put them in lanes
@@ -206,17 +126,6 @@ impl<T: Copy> Stack<T> {
         self.entries[i] = std::mem::MaybeUninit::new(entry);
         self.len = top + 1;
     }
-}
-
-/// Whether the ray can hit anything at all: an empty or NaN range, a non-finite origin, or a zero
-/// or NaN direction never hit a triangle (the triangle test rejects them too); the slab kernels
-/// may then assume a finite origin and a finite `1/d` on the dominant axis.
-#[inline(always)]
-pub(crate) fn can_hit(ray: &Ray) -> bool {
-    ray.t_min <= ray.t_max
-        && ray.origin.is_finite()
-        && !ray.direction.is_nan()
-        && ray.direction != glam::Vec3::ZERO
 }
 
 /// What one traversal visits, summed over the queries it is passed to
@@ -514,7 +423,7 @@ pub(crate) unsafe fn closest_in<K: Kernel, B: BoxRay, C: Counter>(
 /// Asks the cache for the four lines of a child (a node's planes and references, or a leaf's
 /// first record, 256 bytes at most for a record of 16 vertices) while its siblings are sorted
 /// and tested, or, in occlusion, while the other children are: a hint, with no effect on the
-/// answers. It pays on trees larger than the caches (BENCHMARKS.md, "Ray queries on AVX2").
+/// answers. It pays on trees larger than the caches.
 #[inline(always)]
 fn prefetch_child(bvh: &WideBvh, child: u32) {
     use crate::memory::prefetch;
@@ -572,26 +481,6 @@ impl<K: Kernel, C: Counter> Query<K> for OccludedQuery<'_, C> {
         let (start, counter) = (self.start, self.counter);
         // SAFETY: the caller's guarantee.
         unsafe { occluded_in::<K, B, C>(bvh, box_ray, triangle_ray, t_max, start, counter) }
-    }
-}
-
-/// A single ray prepared for `K`'s kernels, kept for several queries (`tree_rays.rs`).
-#[derive(Clone, Copy)]
-pub(crate) struct Prepared<K: Kernel> {
-    pub(crate) box_ray: NodeRay<K::Fused, K::Plain>,
-    pub(crate) triangle_ray: TriangleRay<K::RecordRay>,
-    pub(crate) t_max: f32,
-}
-
-impl<K: Kernel> Prepared<K> {
-    /// `ray` prepared, or `None` if it can hit nothing ([`can_hit`]).
-    ///
-    /// # Safety
-    /// The CPU must support `K`'s instruction set.
-    #[inline(always)]
-    pub(crate) unsafe fn new(bvh: &WideBvh, ray: &Ray) -> Option<Self> {
-        // SAFETY: the caller's guarantee.
-        unsafe { setup::setup_portable::<K>(bvh, ray) }
     }
 }
 

@@ -1,4 +1,7 @@
-//! A single ray's set-up: what every query of one ray computes before it tests the root. That
+//! A single ray's kernels ([`Kernel`]: the node test and the leaf records' test of one
+//! instruction set), the queries run on them ([`Query`]), and the ray's set-up.
+//!
+//! The set-up is what every query of one ray computes before it tests the root. That
 //! is the box test's form and margin ([`RayBoxTest`],
 //! [`FusedSlabs`](crate::bvh::bounds::FusedSlabs)), the watertight test's frame and shear
 //! ([`WatertightRay`]), and both broadcast into the kernels' registers.
@@ -9,20 +12,132 @@
 //! the origin, the direction and `1/d` into the ray's frame with one `vpermilps` each, where
 //! the portable code picks coordinates by indexed loads from the stack. It broadcasts each
 //! value once. Rays without a fused form (a zero, tiny or huge `1/d`, an origin far from the
-//! world's origin) go to the plain test, set up as [`setup_portable`] does (BENCHMARKS.md, "The
-//! set-up in SSE registers", measures what this saves).
+//! world's origin) go to the plain test, set up as [`setup_portable`] does.
 //!
 //! Every operation is the portable code's, in the same order, so the two agree bit for bit; the
 //! tests below check it on hostile rays.
 
-#[cfg(target_arch = "x86_64")]
-use super::Query;
-use super::{Kernel, Prepared, can_hit};
 use crate::bvh::bounds::RayBoxTest;
-use crate::bvh::leaf::kernel::prepare_triangle_ray;
+use crate::bvh::leaf::TriangleRay;
+use crate::bvh::leaf::kernel::{RecordKernel, prepare_triangle_ray};
 use crate::bvh::node::WideBvh;
+use crate::bvh::node::kernel::{BoxRay, NodeKernel, NodeRay};
 use crate::ray::Ray;
 use crate::triangle::WatertightRay;
+
+/// A single ray's kernels: the node test and the leaf records' test of one instruction set,
+/// and the ray's set-up for both (this file).
+pub(crate) trait Kernel: NodeKernel + RecordKernel {
+    /// Sets `ray` up and runs `query` on it, or answers `None` if it can hit nothing
+    /// ([`can_hit`]). The query runs in the branch that set the ray up, fused or plain, so that
+    /// the set-up's values reach the traversal in registers rather than through a merged
+    /// struct, which the compiler copies field by field.
+    ///
+    /// The default is the portable set-up ([`setup_portable`]).
+    ///
+    /// # Safety
+    /// The CPU must support the kernels' instruction set.
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee.
+        let prepared = unsafe { setup_portable::<Self>(bvh, ray) }?;
+        // SAFETY: the caller's guarantee.
+        Some(unsafe { run_prepared(bvh, &prepared, query) })
+    }
+}
+
+/// What a single-ray query does once its ray is set up: a traversal, for either form of the
+/// box test.
+pub(crate) trait Query<K: Kernel> {
+    type Output;
+
+    /// # Safety
+    /// The CPU must support `K`'s instruction set.
+    unsafe fn run<B: BoxRay>(
+        self,
+        bvh: &WideBvh,
+        box_ray: &B,
+        triangle_ray: &TriangleRay<K::RecordRay>,
+        t_max: f32,
+    ) -> Self::Output;
+}
+
+/// `query` on a prepared ray, in its fused or plain form.
+///
+/// # Safety
+/// The CPU must support `K`'s instruction set.
+#[inline(always)]
+pub(crate) unsafe fn run_prepared<K: Kernel, Q: Query<K>>(
+    bvh: &WideBvh,
+    prepared: &Prepared<K>,
+    query: Q,
+) -> Q::Output {
+    let (triangle_ray, t_max) = (&prepared.triangle_ray, prepared.t_max);
+    match &prepared.box_ray {
+        NodeRay::Fused(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { query.run(bvh, b, triangle_ray, t_max) }
+        }
+        NodeRay::Plain(b) => {
+            // SAFETY: the caller's guarantee.
+            unsafe { query.run(bvh, b, triangle_ray, t_max) }
+        }
+    }
+}
+
+impl Kernel for crate::bvh::isa::Scalar {}
+
+#[cfg(target_arch = "x86_64")]
+impl Kernel for crate::bvh::isa::Sse {}
+
+#[cfg(target_arch = "x86_64")]
+impl Kernel for crate::bvh::isa::Avx2 {
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee (AVX2 and FMA).
+        unsafe { query_avx2::<Self, Q>(bvh, ray, query) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Kernel for crate::bvh::isa::Avx512 {
+    #[inline(always)]
+    unsafe fn query<Q: Query<Self>>(bvh: &WideBvh, ray: &Ray, query: Q) -> Option<Q::Output> {
+        // SAFETY: the caller's guarantee (AVX-512 implies AVX2 and FMA).
+        unsafe { query_avx2::<Self, Q>(bvh, ray, query) }
+    }
+}
+
+/// Whether the ray can hit anything at all: an empty or NaN range, a non-finite origin, or a zero
+/// or NaN direction never hit a triangle (the triangle test rejects them too); the slab kernels
+/// may then assume a finite origin and a finite `1/d` on the dominant axis.
+#[inline(always)]
+pub(crate) fn can_hit(ray: &Ray) -> bool {
+    ray.t_min <= ray.t_max
+        && ray.origin.is_finite()
+        && !ray.direction.is_nan()
+        && ray.direction != glam::Vec3::ZERO
+}
+
+/// A single ray prepared for `K`'s kernels, kept for several queries (`tree_rays.rs`).
+#[derive(Clone, Copy)]
+pub(crate) struct Prepared<K: Kernel> {
+    pub(crate) box_ray: NodeRay<K::Fused, K::Plain>,
+    pub(crate) triangle_ray: TriangleRay<K::RecordRay>,
+    pub(crate) t_max: f32,
+}
+
+impl<K: Kernel> Prepared<K> {
+    /// `ray` prepared, or `None` if it can hit nothing ([`can_hit`]).
+    ///
+    /// # Safety
+    /// The CPU must support `K`'s instruction set.
+    #[inline(always)]
+    pub(crate) unsafe fn new(bvh: &WideBvh, ray: &Ray) -> Option<Self> {
+        // SAFETY: the caller's guarantee.
+        unsafe { setup_portable::<K>(bvh, ray) }
+    }
+}
 
 /// `ray` set up for `K`'s kernels from the scalar types, or `None` if it can hit nothing
 /// ([`can_hit`]).
@@ -53,7 +168,7 @@ mod x86 {
 
     use super::*;
     use crate::bvh::bounds::{FAR_SCALE, MARGIN_SCALE};
-    use crate::bvh::leaf::kernel::TriangleRay;
+    use crate::bvh::leaf::TriangleRay;
     use crate::bvh::node::kernel::{Broadcast, FusedBroadcast, NodeKernel, broadcast3};
     use crate::bvh::simd::RayBroadcast;
     use crate::float::gamma;
@@ -219,7 +334,8 @@ mod tests {
     use crate::bvh::Isa;
     use crate::bvh::bounds::Bounds;
     use crate::bvh::isa::Avx2;
-    use crate::bvh::leaf::kernel::{RecordKernel, TriangleRay};
+    use crate::bvh::leaf::TriangleRay;
+    use crate::bvh::leaf::kernel::RecordKernel;
     use crate::bvh::node::kernel::BoxRay;
     use crate::bvh::traverse::run_prepared;
 

@@ -26,7 +26,7 @@
 //! A lane leaves the search where it is done: for occlusion at its first blocker, for the
 //! closest hit at entries beyond its best hit so far (each entry keeps its lanes' entry
 //! distances). Children are pushed in the node's order: sorting them by their nearest lane's
-//! entry was measured slower (99.8 against 87.9 ns a bounce on the glTF boxes).
+//! entry is slower.
 //!
 //! # The answers are the single-ray queries'
 //! Every box and triangle decision of a lane is its ray's own, by the same operations in the
@@ -41,18 +41,9 @@
 //! `bvh::tests::tree_rays_in_lanes_give_the_single_ray_answers` compares them bit for bit, and
 //! `bvh::tests::the_lanes_box_test_is_each_rays_own` the box test lane by lane.
 //!
-//! # Measured
-//! The rays a render asks for, recorded and traced again (`cargo run --release --example
-//! path_rays -- SCENE 256 4 --isas`, one thread, ns per ray, single rays against the groups):
-//!
-//! | rays | glTF boxes | materials scene |
-//! |---|---:|---:|
-//! | bounces, AVX-512 | 104 → 89 | 118 → 115 |
-//! | shadow rays, AVX-512 | 66 → 55 | 79 → 70 |
-//! | bounces, AVX2 | 124 → 97 | 129 → 118 |
-//! | shadow rays, AVX2 | 72 → 68 | 86 → 78 |
-//!
-//! SSE2's four lanes did not pay (170 → 168 ns, 104 → 104 ns): it keeps single rays.
+//! AVX2 and AVX-512 trace groups in lanes; SSE2's four lanes do not pay, so it keeps single
+//! rays. (BENCHMARKS.md has the nanoseconds per ray, single and in lanes, on a render's
+//! recorded rays: `cargo bench -p raylab --bench path_rays -- SCENE 256 4 --isas`.)
 
 use glam::Vec3;
 
@@ -75,11 +66,8 @@ use crate::triangle::WatertightRay;
 use std::arch::x86_64::{__m256, __m512};
 
 /// A node that at most this many of a group's open rays enter is left to them one by one
-/// (the single-ray traversal of its subtree). Measured with [`LEAF_SWITCH`] in whole renders
-/// (the materials and glTF scenes, 256², 32 spp, one thread, medians of five): 6 and 4, 8 and
-/// 4, 6 and 6, 10 and 4 all within 0.54–0.55 s and 0.63–0.65 s; on the recorded rays
-/// (`examples/path_rays.rs`) 3 to 10 within 5 % on the glTF boxes, while the materials scene's
-/// bounces want 5 or more.
+/// (the single-ray traversal of its subtree). Whole renders hardly depend on it between 6 and
+/// 10 (with [`LEAF_SWITCH`] 4 to 6); the materials scene's bounces want 5 or more.
 const NODE_SWITCH: u32 = 6;
 /// A leaf that at most this many open rays enter is tested ray by ray with the single-ray
 /// record kernel (the same answers): a record's frames cost sixteen operations a vertex for
@@ -483,8 +471,7 @@ pub(crate) unsafe fn closest_hits_lanes<V: Lanes, K: Kernel, const W: usize>(
                 };
                 let node = &bvh.nodes[index as usize];
                 // The children entered, in the node's order (sorting them by distance, the
-                // nearest popped first, measured slower: 99.8 against 87.9 ns a bounce on the
-                // glTF boxes).
+                // nearest popped first, is slower).
                 for k in 0..WIDTH {
                     let child = node.children[k];
                     if child == EMPTY {

@@ -3,7 +3,7 @@
 
 use glam::{Affine3A, Vec3};
 
-use super::{Margin, Node, Placed};
+use super::top::{Margin, Node, Placed};
 use crate::bvh::Bounds;
 
 /// The most instances in a top-level leaf.

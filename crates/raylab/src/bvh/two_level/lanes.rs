@@ -9,7 +9,7 @@
 
 use glam::Vec3;
 
-use super::{Margin, PACKET};
+use super::top::{Margin, PACKET};
 use crate::bvh::{Bounds, FAR_SCALE, RayBoxTest, SLAB_PAD};
 
 /// Up to [`PACKET`] rays' box-test set-up, lane by lane (unused lanes hold zeros).

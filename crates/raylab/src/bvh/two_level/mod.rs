@@ -5,8 +5,7 @@
 //! its triangles in their own space, and one over every triangle stored in world space (the
 //! meshes drawn once), and a small binary tree over the instances' world boxes on top. Where
 //! the instances are few (up to 64), single rays test all their boxes at once instead, sixteen
-//! per instruction (`rows.rs`; the glTF boxes of `tests/data/mitsuba-gltf`, 16 spp, one thread:
-//! 0.79 → 0.70 s of CPU, the same pixels); packets of rays walk the tree (`lanes.rs`).
+//! per instruction (`rows.rs`); packets of rays walk the tree (`lanes.rs`).
 //!
 //! A ray that reaches an instance's box is carried into the instance's space by its inverse
 //! placement, `o' = M⁻¹·o` and `d' = M⁻¹·d` (not renormalized, so `t` keeps its meaning and hits
@@ -29,15 +28,17 @@ use glam::Vec3;
 mod build;
 mod lanes;
 mod rows;
+mod top;
 
 use crate::accel::{Accelerator, Hit, HitRows, ROWS, RayRows};
 use crate::bvh::{Bounds, Frustum, RayBoxTest};
+use crate::geometry::Geometry;
 use crate::geometry::instance::max_row_sum;
-use crate::geometry::{Geometry, Placement};
 use crate::ray::Ray;
 use build::{build_top, padded, transformed};
 use lanes::BoxLanes;
 use rows::{Entries, TopRows};
+use top::{Margin, Node, PACKET, Placed, RAY_ERROR};
 
 /// Instances over per-mesh accelerators `A` (see the module documentation).
 pub struct TwoLevel<A> {
@@ -49,37 +50,6 @@ pub struct TwoLevel<A> {
     rows: Option<TopRows>,
 }
 
-/// How far, in units of `f32::EPSILON · cond(M) · (|o|∞ + reach)`, the world ray and the
-/// placed image of its object-space copy may drift apart: the rounding of `M⁻¹` itself and of
-/// `M⁻¹·o` (a few ulps each, times the condition number when mapped back), of `M⁻¹`'s
-/// translation (`reach` includes `|T|∞`) and of `M⁻¹·d` over the ray's way to the instance
-/// (`reach` includes the box's coordinates), with a wide margin.
-const RAY_ERROR: f32 = 64.0;
-
-/// How much a top-level box grows for a ray from `o`: `scale · (|o|∞ + reach)`, enough that a
-/// ray which hits a triangle in an instance's space always finds the instance's box in the
-/// world, whatever the rounding of the transform (the bottom level decides on the
-/// object-space ray, exactly as the reference does). An inner node's is the largest of its
-/// subtree's, so it grows at least as much as any box below it.
-#[derive(Clone, Copy, Debug, Default)]
-struct Margin {
-    /// `RAY_ERROR · ε · cond(M)`; 0 for triangles stored in the world.
-    scale: f32,
-    /// The largest coordinate of the box or of `M`'s translation.
-    reach: f32,
-}
-
-impl Margin {
-    #[inline(always)]
-    fn pad(&self, origin_size: f32) -> f32 {
-        self.scale * (origin_size + self.reach)
-    }
-
-    fn max(self, other: Margin) -> Margin {
-        Margin { scale: self.scale.max(other.scale), reach: self.reach.max(other.reach) }
-    }
-}
-
 /// One bottom-level accelerator and how its hits' indices become scene triangles.
 struct Bottom<A> {
     accel: A,
@@ -88,27 +58,6 @@ struct Bottom<A> {
     /// For the bottom over world-space triangles: the scene index of each of its triangles.
     /// Empty for a stored mesh (its instances add their first scene index).
     scene_ids: Vec<u32>,
-}
-
-/// An instance as the top level sees it.
-struct Placed {
-    bottom: u32,
-    /// The scene index of the bottom's triangle 0 here.
-    first: u32,
-    /// How the bottom's triangles are placed, or `None` for world-space triangles.
-    placement: Option<Placement>,
-    bounds: Bounds,
-    margin: Margin,
-}
-
-struct Node {
-    bounds: Bounds,
-    /// The largest margin below it.
-    margin: Margin,
-    /// A leaf's first entry in `placed`, or an inner node's right child.
-    index: u32,
-    /// A leaf's entry count; 0 for an inner node.
-    count: u32,
 }
 
 impl<A: Accelerator> TwoLevel<A> {
@@ -375,9 +324,6 @@ impl<A: Accelerator> TwoLevel<A> {
         }
     }
 }
-
-/// The most rays traced together through the top level: one bit each in a mask.
-const PACKET: usize = 64;
 
 impl<A: Accelerator> TwoLevel<A> {
     /// Visits, for up to [`PACKET`] rays together, each top-level leaf with the mask of the rays

@@ -19,7 +19,7 @@
 //! instance that may hold a hit up to the best one is visited either way, and ties at equal `t`
 //! go to the lowest triangle index as always (`tests/instancing.rs`).
 
-use super::{Margin, Placed};
+use super::top::{Margin, Placed};
 use crate::bvh::{FAR_SCALE, RayBoxTest, SLAB_PAD};
 use crate::cpu::Isa;
 

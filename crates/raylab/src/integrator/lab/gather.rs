@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{Lab, TILE};
+use super::model::{Lab, TILE};
 use crate::accel::{Accelerator, Hit, HitRows};
 use crate::geometry::TriangleLine;
 use crate::ray::Ray;

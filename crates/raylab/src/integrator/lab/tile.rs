@@ -6,7 +6,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::gather::Gathered;
-use super::{Lab, Shading, Stage, TILE};
+use super::model::{Lab, Shading, Stage, TILE};
 use crate::accel::{Accelerator, Hit, HitRows, RayRows};
 use crate::float::gamma;
 use crate::ray::{Ray, step_away};

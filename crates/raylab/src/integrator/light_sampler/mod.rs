@@ -297,9 +297,9 @@ impl LightSet {
         // The environments are picked half the time when there are other lights, and always
         // without (pbrt-v4's `BVHLightSampler`, Mitsuba's uniform choice among two emitters); a
         // black one never. Their power through a disk the size of the scene (PBR 4th ed. §12.5)
-        // ranks them by the floor around the scene's subject: on the materials scene it took 75 %
-        // of the picks from the light above the spheres, and 13 % more squared error at 64 spp
-        // (RMSE 0.0136 against 0.0128 with half, `tests/data/mitsuba-materials`). The others
+        // ranks them by the floor around the scene's subject, so on the materials scene
+        // (`tests/data/mitsuba-materials`) it took most picks from the light above the spheres,
+        // with more error than half. The others
         // are summed as `DiscreteDistribution::new` sums them (in f64, negatives as zero). Several
         // environments share their half by their mean radiance.
         let environments: Vec<(usize, f32)> = lights

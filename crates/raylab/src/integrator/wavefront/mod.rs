@@ -32,21 +32,14 @@
 //! their numbers are drawn and they are shaded, while their rows are still in the first-level
 //! cache (a chunk and its results take about 5.5 KiB, a 1,024-path wavefront's some 350 KiB, more
 //! than the 32 KiB of this machine's first-level cache). Each path draws from its own
-//! sampler, so the order in which paths draw changes no number. Measured on Mitsuba's box
-//! (512², 16 spp, 1 thread, CPU time, min of 7, the same pixels; `/usr/bin/time -f %U raylab
-//! render scenes/cornell-mitsuba.toml --spp 16 --threads 1 -o r.pfm`): 2.12 → 2.07 s.
+//! sampler, so the order in which paths draw changes no number.
 //!
 //! Grouping by BSDF kind is what keeps the lanes full and each BSDF's code on whole vectors: a
-//! chunk holds one kind's vertices, whichever paths they belong to. Every kind shades in lanes,
-//! not only the diffuse vertices (BENCHMARKS.md, "Every BSDF in lanes", has what that is
-//! worth).
+//! chunk holds one kind's vertices, whichever paths they belong to. Every kind shades in lanes.
 //!
-//! Packets pay only where rays are coherent. Measured (`cargo bench -p raylab --bench path`, one
-//! thread, 128×96): packets for every bounce made `showcase.toml` 16 times slower (216 ms a
-//! pass against 13.5), packets for the shadow rays 3.8 times (51.7 ms; occlusion 3,100 ns a
-//! sample against 121), and even on the Cornell box shadow packets doubled the occlusion time;
-//! packets for the camera rays alone gain a few per cent there (10.6 and 10.0 ms against 10.9 and
-//! 10.6 without).
+//! Packets pay only where rays are coherent, so only the camera rays go as packets; the later
+//! bounces and the shadow rays, incoherent, go in lanes one ray per lane
+//! ([`Accelerator::closest_hits_incoherent`]).
 //!
 //! Scenes with cut-out (alpha-masked) materials trace each ray through its holes one at a time,
 //! as the scalar path does.
@@ -138,14 +131,7 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
     }
 
     /// 128×8 tiles: 1,024 paths advance together, which fills the lanes of the later bounces
-    /// better. Measured on Mitsuba's Cornell box (`/usr/bin/time -f %U raylab render
-    /// scenes/cornell-mitsuba.toml --spp 8 --threads 1 -o r.pfm`, CPU time, median of 5): 8×8
-    /// tiles 1.63 s, 32×8 1.52 s, 64×8 1.52 s; the showcase, the materials scene and the engine
-    /// within 3 %. (The lab's integrator keeps 8×8: its frame was 2–5 % slower in 32×8 tiles,
-    /// `raylab view --headless --frames 300`.) BENCHMARKS.md, "Paths in lanes", has the table.
-    /// Once every BSDF shaded in lanes, wider tiles paid again (median of 7, the same pixels):
-    /// the Cornell box 1.03 s in 32×8 tiles, 0.99 s in 64×8 and 128×8; the materials scene
-    /// (`--size 256x256 --spp 16`) 0.38, 0.37 and 0.37 s (BENCHMARKS.md, "Wider tiles").
+    /// better than smaller tiles (the lab's integrator, whose rays are coherent, keeps 8×8).
     fn tile_width(&self) -> u32 {
         128
     }
@@ -161,9 +147,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         }
         let (scene, accel) = (path.scene(), path.accel());
         let rr_depth = path.settings().rr_depth;
-        // The stages' buffers, made per tile: a thread-local set reused from tile to tile was
-        // measured slower at 64-path tiles and equal at 1,024 (BENCHMARKS.md, "The wavefront",
-        // "Every plain hit by the shortcut").
+        // The stages' buffers, made per tile (a thread-local set reused from tile to tile was
+        // no faster).
         let mut states = PathState::starting(rays);
         // The paths still tracing, by index.
         let mut alive: Vec<usize> = (0..rays.len()).collect();
@@ -171,8 +156,8 @@ impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
         let mut hits: Vec<Option<Hit>> = Vec::with_capacity(rays.len());
         let mut shadows = ShadowRays::with_capacity(rays.len());
         let mut numbers = Numbers::with_capacity(rays.len());
-        // The vertices in lanes, a set for each BSDF kind, and their paths. Made per tile: one
-        // reused from tile to tile (thread-local) was measured slower (BENCHMARKS.md).
+        // The vertices in lanes, a set for each BSDF kind, and their paths, made per tile (one
+        // reused from tile to tile, thread-local, was slower).
         let mut sets: [(Lanes, Vec<usize>); LaneKind::ALL.len()] =
             std::array::from_fn(|_| (Lanes::default(), Vec::new()));
         // The paths that go on after this bounce.

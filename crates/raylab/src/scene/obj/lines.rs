@@ -7,7 +7,7 @@ use std::collections::HashSet;
 use std::io::{self, BufRead, Read};
 use std::path::Path;
 
-use super::Shared;
+use super::libraries::Shared;
 use crate::scene::mesh_file::{LoadError, Location, quoted};
 
 /// What the reader hands to tobj for a line.

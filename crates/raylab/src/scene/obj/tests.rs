@@ -5,6 +5,9 @@ use proptest::prelude::*;
 use std::io;
 
 use super::*;
+use crate::mesh::MeshMaterial;
+use crate::scene::mtl::parse_mtl;
+use std::path::PathBuf;
 
 /// Reads `obj` with the material libraries in `libraries` (name → content).
 fn parse_with(obj: &str, libraries: &[(&str, &str)]) -> Result<LoadedMesh, LoadError> {

@@ -1,7 +1,9 @@
 //! PLY's ASCII encoding: one element per line, values separated by white space.
 
+use super::failure::{Failure, fail};
+use super::header::Value;
 use super::header::{Kind, Scalar};
-use super::{Expected, Failure, Place, Reader, Value, fail};
+use super::reader::{Expected, Place, Reader};
 use crate::scene::mesh_file::{Location, quoted};
 
 /// Reads the ASCII encoding: one element per line, values separated by spaces.

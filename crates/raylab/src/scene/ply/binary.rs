@@ -1,7 +1,9 @@
 //! PLY's binary encodings, little- and big-endian: values back to back, no separators.
 
+use super::failure::Failure;
 use super::header::Scalar;
-use super::{Expected, Failure, Place, Reader, Value};
+use super::header::Value;
+use super::reader::{Expected, Place, Reader};
 use crate::scene::mesh_file::Location;
 
 /// Reads the binary encodings; `BIG_ENDIAN` picks the byte order.

@@ -1,7 +1,7 @@
 //! The PLY header: the format line, elements and their properties, and the check that the
 //! data can hold what the header declares before anything is allocated.
 
-use super::{Failure, fail};
+use super::failure::{Failure, fail};
 use crate::scene::mesh_file::{Location, quoted};
 
 /// A PLY scalar type.

@@ -29,26 +29,19 @@ use glam::{Vec2, Vec3};
 
 mod ascii;
 mod binary;
+mod failure;
 mod header;
+mod reader;
 
 use super::mesh_file::{LoadError, LoadedMesh, Location, mesh_name};
 use crate::mesh::{CornerAttribute, Mesh};
 use ascii::AsciiReader;
 use binary::BinaryReader;
+use failure::{Failure, fail};
 use header::{
-    Element, Encoding, Header, Kind, Property, Scalar, Value, check_declared_counts, parse_header,
+    Encoding, Header, Kind, Property, Scalar, Value, check_declared_counts, parse_header,
 };
-
-/// A parse error before the path is attached.
-#[derive(Debug)]
-struct Failure {
-    location: Location,
-    message: String,
-}
-
-fn fail<T>(location: Location, message: impl Into<String>) -> Result<T, Failure> {
-    Err(Failure { location, message: message.into() })
-}
+use reader::{Expected, Place, Reader};
 
 /// Reads the PLY file `bytes` (named `path` in messages).
 pub(crate) fn parse_ply(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadError> {
@@ -251,75 +244,6 @@ impl Builder {
             materials: Vec::new(),
         }
     }
-}
-
-/// What the reader was about to read, for messages.
-#[derive(Clone, Copy)]
-enum Expected<'a> {
-    Value(&'a Property),
-    Count(&'a Property),
-    Items(&'a Property, u64),
-}
-
-impl Expected<'_> {
-    fn describe(self) -> String {
-        match self {
-            Expected::Value(p) => match p.kind {
-                Kind::Scalar(s) => format!("{} ({})", p.name, s.name()),
-                Kind::List { .. } => p.name.clone(),
-            },
-            Expected::Count(p) => format!("the length of list {}", p.name),
-            Expected::Items(p, 1) if is_index_list(p) => "1 index".into(),
-            Expected::Items(p, count) if is_index_list(p) => format!("{count} indices"),
-            Expected::Items(p, 1) => format!("1 value of list {}", p.name),
-            Expected::Items(p, count) => format!("{count} values of list {}", p.name),
-        }
-    }
-}
-
-fn is_index_list(property: &Property) -> bool {
-    matches!(property.name.as_str(), "vertex_indices" | "vertex_index")
-}
-
-/// The element instance being read, for messages.
-#[derive(Clone, Copy)]
-struct Place<'a> {
-    element: &'a Element,
-    index: u64,
-}
-
-impl std::fmt::Display for Place<'_> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} {}", self.element.name, self.index)
-    }
-}
-
-/// The ASCII and the binary encodings, behind one interface.
-trait Reader {
-    /// Starts element instance `place`.
-    fn begin(&mut self, place: Place) -> Result<(), Failure>;
-    /// Reads a scalar of type `ty`.
-    fn value(&mut self, ty: Scalar, place: Place, expected: Expected) -> Result<Value, Failure>;
-    /// Checks that `count` items of type `ty` can follow (a binary file may be cut short).
-    fn expect_items(
-        &mut self,
-        count: u64,
-        ty: Scalar,
-        place: Place,
-        expected: Expected,
-    ) -> Result<(), Failure>;
-    /// Skips `count` items of type `ty`.
-    fn skip_items(
-        &mut self,
-        count: u64,
-        ty: Scalar,
-        place: Place,
-        expected: Expected,
-    ) -> Result<(), Failure>;
-    /// Ends element instance `place`.
-    fn end(&mut self, place: Place) -> Result<(), Failure>;
-    /// Where the last value read starts.
-    fn location(&self) -> Location;
 }
 
 fn read_count<R: Reader>(

@@ -9,7 +9,7 @@ use glam::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::{Builder, Result, RotateDoc, SceneFileError};
+use super::builder::{Builder, Result, RotateDoc, SceneFileError};
 use crate::light::{
     DirectionalLight, EnvironmentMap, Light, PointLight, SpotLight, SpotProfile, SunLight,
 };

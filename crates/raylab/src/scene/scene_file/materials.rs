@@ -6,8 +6,8 @@ use std::ops::Range;
 use glam::Vec3;
 use serde::Deserialize;
 
+use super::builder::{Builder, Result, SceneFileError};
 use super::textures::{ColourDoc, ScalarDoc};
-use super::{Builder, Result, SceneFileError};
 use crate::material::{
     Bsdf, Conductor, Dielectric, Ggx, METALS, Material, MaterialTextures, Pbr, Plastic,
     RoughConductor, RoughDielectric,

@@ -29,7 +29,7 @@ use std::sync::Arc;
 use glam::{Affine2, Vec2, Vec3};
 use serde::Deserialize;
 
-use super::{Builder, Result, SceneFileError};
+use super::builder::{Builder, Result, SceneFileError};
 use crate::texture::{ImageTexture, NoiseTexture, Pattern, Perlin, Texture, Wrap, load_texture};
 
 /// A colour: three numbers or a texture.

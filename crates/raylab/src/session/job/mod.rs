@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 mod frames;
 
+use super::event::Event;
 pub use frames::frame_path;
 
 use super::checkpoint::{Checkpoints, channels_of, checkpoint_path, resume_from};
@@ -22,36 +23,6 @@ use crate::region::Region;
 use crate::render::Accumulator;
 use crate::scene::Scene;
 use crate::settings::{AovKind, IntegratorKind};
-
-/// What a job tells its caller as it goes.
-#[derive(Debug)]
-pub enum Event<'a> {
-    /// A frame's passes begin: `rows` rows of `row_pixels` pixels to render in all (for a
-    /// progress bar), within `time_limit` if there is one.
-    Started {
-        /// Rows in all passes.
-        rows: u64,
-        /// Pixels per row.
-        row_pixels: u64,
-        /// The render's time limit.
-        time_limit: Option<Duration>,
-    },
-    /// Rows just finished (called from the render threads).
-    Rows(u32),
-    /// The frame's passes are over.
-    Finished,
-    /// The output is already rendered, by an earlier run of the same render: it is kept.
-    AlreadyRendered(&'a Path),
-    /// Going on from a checkpoint at `samples` samples per pixel.
-    Resumed {
-        /// The checkpoint.
-        checkpoint: &'a Path,
-        /// Samples per pixel it holds.
-        samples: u32,
-    },
-    /// A checkpoint could not be written (a full disk, say); the render goes on.
-    CheckpointNotWritten(&'a ImageIoError),
-}
 
 /// What rendering a frame did.
 #[derive(Debug)]

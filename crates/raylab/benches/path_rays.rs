@@ -6,9 +6,9 @@
 //! a ray visits (`Bvh::closest_hit_counted`).
 //!
 //! ```sh
-//! cargo run --release --example path_rays   # the repository's Cornell box, 64×64, 2 passes
-//! cargo run --release --example path_rays -- crates/raylab/tests/data/mitsuba-gltf/boxes.toml
-//! cargo run --release --example path_rays -- scenes/cornell-mitsuba.toml 128 4  # size, passes
+//! cargo bench -p raylab --bench path_rays   # the repository's Cornell box, 64×64, 2 passes
+//! cargo bench -p raylab --bench path_rays -- crates/raylab/tests/data/mitsuba-gltf/boxes.toml
+//! cargo bench -p raylab --bench path_rays -- scenes/cornell-mitsuba.toml 128 4  # size, passes
 //! ```
 //!
 //! `--split` (after the other arguments) also times a one-level BVH's bounces by outcome: the
@@ -81,7 +81,8 @@ fn best_of_five(mut run: impl FnMut()) -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1).peekable();
+    // `cargo bench` passes `--bench` to every bench target: not one of this tool's arguments.
+    let mut args = std::env::args().skip(1).filter(|a| a != "--bench").peekable();
     // Without arguments: the repository's Mitsuba Cornell box, small and quick.
     let (file, size, passes) = match args.next_if(|a| !a.starts_with("--")) {
         Some(file) => {

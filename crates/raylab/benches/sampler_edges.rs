@@ -3,7 +3,7 @@
 //! pair 0 of 20,000 pixels; prints the RMSE of the estimates per sampler.
 //!
 //! ```sh
-//! cargo run --release --example sampler_edges
+//! cargo bench -p raylab --bench sampler_edges
 //! ```
 //!
 //! Beside raylab's `sobol` and `multijitter` it prints the same Sobol' points Owen-scrambled bit
