@@ -1,12 +1,11 @@
 #!/bin/bash
-# One sitting of raylab against Mitsuba 3 on the three comparison scenes (BENCHMARKS.md, "A
-# multi-jittered sampler" and later sections): for each scene, three alternating rounds of
+# One sitting of raylab against Mitsuba 3 on the three comparison scenes (BENCHMARKS.md, "Path
+# tracing against Mitsuba 3"): for each scene, three alternating rounds of
 # Mitsuba `multijitter` (its `mi.render` after a warm-up render) and raylab `sobol` and
 # `multijitter` (the whole process), 64 spp, the machine's threads; then the RMSE of each
 # render against a long Mitsuba reference, and raylab's at seeds 2 and 3. raylab writes PFM:
 # Mitsuba's timed call writes no file, and EXR's ZIP compression alone costs raylab about 9 ms
-# of a 256² render's wall time (BENCHMARKS.md, "Measured and not kept: trees, ray order,
-# branches, numbers").
+# of a 256² render's wall time.
 #
 # usage: tools/mitsuba/sitting.sh PYTHON REFS [SCENE...]
 #   SCENE   gltf, materials, cbox, envmap (default: the first three)
