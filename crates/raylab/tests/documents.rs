@@ -1,7 +1,9 @@
 //! README's headline figures come from BENCHMARKS.md: every figure in README's "Headline
 //! numbers" section (a number with a decimal point, or a range such as `0.78–0.90`) must appear,
-//! written the same way, in BENCHMARKS.md, where its command, machine and date are. So README
-//! cannot quote a figure that was never measured, or one BENCHMARKS.md has since replaced.
+//! written the same way, in BENCHMARKS.md, where its command, machine and date are; and the
+//! figures of each row of README's table must all be in one section of BENCHMARKS.md (one
+//! benchmark), not gathered from several. So README cannot quote a figure that was never
+//! measured, or one BENCHMARKS.md has since replaced.
 //!
 //! Version numbers (`3.13.5`) are not figures; whole numbers (sizes, sample counts, years) are
 //! left out, as they name settings more often than results.
@@ -33,6 +35,28 @@ fn every_headline_figure_of_the_readme_is_in_benchmarks() {
         "README.md quotes figures that BENCHMARKS.md does not have (measure them there, with \
          their command, machine and date, or quote the ones it has): {missing:?}"
     );
+    let scattered = rows_without_a_section(section, &benchmarks);
+    assert!(
+        scattered.is_empty(),
+        "rows of README.md's headline table whose figures no one section of BENCHMARKS.md \
+         has together: {scattered:#?}"
+    );
+}
+
+/// The rows of `readme`'s tables (lines starting with `|`) whose figures no one `## ` section
+/// of `benchmarks` holds all of.
+fn rows_without_a_section(readme: &str, benchmarks: &str) -> Vec<String> {
+    let sections: Vec<Vec<String>> = benchmarks.split("\n## ").map(figures).collect();
+    readme
+        .lines()
+        .filter(|line| line.starts_with('|'))
+        .filter(|row| {
+            let wanted = figures(row);
+            !wanted.is_empty()
+                && !sections.iter().any(|known| wanted.iter().all(|f| known.contains(f)))
+        })
+        .map(str::to_owned)
+        .collect()
 }
 
 /// The text of the section that starts at the line `heading`, up to the next `## ` heading.
@@ -103,6 +127,13 @@ mod tests {
         // 9.99 is nowhere; 4.3 only inside 14.3, which is another figure.
         assert_eq!(missing_figures(readme, benchmarks), ["9.99", "4.3"]);
         assert!(missing_figures("4.07 s and 0.78–0.90×", benchmarks).is_empty());
+    }
+
+    #[test]
+    fn a_row_whose_figures_come_from_two_benchmarks_is_reported() {
+        let benchmarks = "# B\n## Rays\n| bunny | 8.17 |\n## Renders\n| box | 4.07 s |\n";
+        let readme = "| rays | 8.17 |\n| both | 8.17 and 4.07 |\n| box | 4.07 s |\n| none | 5 |";
+        assert_eq!(rows_without_a_section(readme, benchmarks), ["| both | 8.17 and 4.07 |"]);
     }
 
     #[test]

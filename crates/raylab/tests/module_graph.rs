@@ -1,6 +1,7 @@
 //! The library's top-level modules import downward only: they form a DAG. So do the files of
 //! every folder of every crate (the library, the command and the Python module), a folder's
-//! module file counting as one of them.
+//! module file (`mod.rs`, or `name.rs` beside `name/`) counting as one of them, which depends on
+//! a file of its folder when it names a path into it or uses a name it re-exports from it.
 //!
 //! This test reads the library's sources, finds every path that leaves a top-level module
 //! (`crate::scene::Scene`, `use crate::{bvh::Bounds, Ray}`, a `super::` that climbs past the
@@ -575,6 +576,7 @@ fn submodule_edges(files: &[(PathBuf, String)], parent: &[&str]) -> BTreeSet<Edg
             .collect();
         if module == parent {
             targets.extend(relative_child_paths(&clean, &children));
+            targets.extend(reexported_name_uses(&clean, &reexports));
         }
         for (name, line) in targets {
             let to = if children.contains(&name) {
@@ -643,6 +645,37 @@ fn relative_child_paths(
             && tokens.get(i + 1).is_some_and(|t| t.0 == "::")
         {
             out.push((token.to_owned(), tokens[i].1));
+        }
+        i += 1;
+    }
+    out
+}
+
+/// Where a module file's own code (outside `use` lines, `mod` declarations and test code) names
+/// an item it re-exports from one of its submodules (`pub use keyframes::Keyframe;` then
+/// `keyframes: Vec<Keyframe>`): the submodule it comes from, with the line. Such a use depends
+/// on that submodule as much as a path into it does.
+fn reexported_name_uses(
+    tokens: &[(String, usize)],
+    reexports: &BTreeMap<String, String>,
+) -> Vec<(String, usize)> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < tokens.len() {
+        if let Some(after) = cfg_test_at(tokens, i) {
+            i = item_end(tokens, after);
+            continue;
+        }
+        let token = tokens[i].0.as_str();
+        if token == "use" || token == "mod" && tokens.get(i + 2).is_some_and(|t| t.0 == ";") {
+            i = item_end(tokens, i);
+            continue;
+        }
+        let preceded_by_path = i > 0 && tokens[i - 1].0 == "::";
+        if let Some(child) = reexports.get(token)
+            && !preceded_by_path
+        {
+            out.push((child.clone(), tokens[i].1));
         }
         i += 1;
     }
@@ -837,6 +870,32 @@ mod tests {
                 vec!["x".to_owned(), "y".to_owned()]
             ]
         );
+    }
+
+    #[test]
+    fn a_module_file_using_what_it_reexports_depends_on_that_file() {
+        // `p/mod.rs` re-exports `k::K` and its own struct holds one; `k.rs` uses that struct:
+        // a circle, although no path in `p/mod.rs` names `k::`. A module file `q.rs` beside a
+        // folder `q/` is read the same way.
+        let files = crate_of(&[
+            ("lib.rs", "pub mod p; pub mod q;"),
+            ("p/mod.rs", "mod k;\npub use k::K;\npub struct S {\n    k: K,\n}"),
+            ("p/k.rs", "use super::S;\npub struct K;"),
+            ("q.rs", "mod r;\npub use r::R;\npub fn f(_: R) {}"),
+            ("q/r.rs", "pub struct R;\nfn g() { super::f(R) }"),
+        ]);
+        let (folders, report) = folder_cycles(&files, false);
+        assert_eq!(folders, 2, "p and q");
+        assert_eq!(report.len(), 2, "{report:?}");
+        assert!(report[0].contains("p (mod.rs) -> k  (p/mod.rs:4)"), "{}", report[0]);
+        assert!(report[1].starts_with("q: "), "{}", report[1]);
+        // Re-exporting alone, or a child that does not use the module file, is no circle.
+        let files = crate_of(&[
+            ("lib.rs", "pub mod p;"),
+            ("p/mod.rs", "mod k;\npub use k::K;\npub struct S {\n    k: K,\n}"),
+            ("p/k.rs", "pub struct K;"),
+        ]);
+        assert_eq!(folder_cycles(&files, false), (1, Vec::new()));
     }
 
     #[test]

@@ -7,7 +7,7 @@
 
 use glam::Vec3;
 
-use super::Hit;
+use super::hit::Hit;
 use crate::ray::Ray;
 
 /// The most rays in rows: one tile of 8×8.

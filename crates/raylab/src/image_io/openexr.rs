@@ -158,7 +158,7 @@ pub(crate) fn guarded<T>(decode: impl FnOnce() -> exr::error::Result<T>) -> Resu
 }
 
 /// Reads an OpenEXR file's first RGB layer as a film (`load_film`'s `.exr`): its headers are
-/// read and checked against [`MAX_FLOAT_IMAGE_PIXELS`](super::file::MAX_FLOAT_IMAGE_PIXELS) before
+/// read and checked against [`MAX_FLOAT_IMAGE_PIXELS`](super::MAX_FLOAT_IMAGE_PIXELS) before
 /// any pixel is decoded, and a decoder that fails in any way gives an error, never a panic.
 pub fn read_exr_film(bytes: &[u8]) -> Result<Film, String> {
     let meta =

@@ -47,7 +47,7 @@ use std::f32::consts::{FRAC_1_PI, PI};
 use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::LightError;
+use super::error::LightError;
 use crate::color::luminance;
 use crate::film::Film;
 use crate::sampling::{

@@ -16,9 +16,11 @@ use std::sync::Arc;
 use glam::Vec3;
 
 mod envmap;
+mod error;
 mod punctual;
 
 pub use envmap::{EnvironmentMap, direction_to_uv, uv_to_direction};
+pub use error::LightError;
 pub use punctual::{DirectionalLight, SpotLight, SpotProfile, SunLight};
 
 /// A light of the scene that is not a surface.
@@ -53,16 +55,6 @@ impl Light {
             Light::Sun(_) => "sun",
         }
     }
-}
-
-/// A light that cannot be made: which, and why.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{light}: {problem}")]
-pub struct LightError {
-    /// The light (an environment map's file).
-    pub light: String,
-    /// What is wrong.
-    pub problem: String,
 }
 
 /// An isotropic point light of power `P` (watts per channel).

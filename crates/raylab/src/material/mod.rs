@@ -22,6 +22,7 @@ mod pbr;
 mod plastic;
 mod rough_conductor;
 mod rough_dielectric;
+mod sample;
 
 use std::borrow::Cow;
 
@@ -35,6 +36,8 @@ pub use pbr::Pbr;
 pub use plastic::Plastic;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
+pub use sample::BsdfSample;
+pub(crate) use sample::cos_theta;
 
 use crate::interaction::SurfaceInteraction;
 use crate::texture::{Texture, TextureQuery};
@@ -220,21 +223,6 @@ impl Material {
         }
         self.bsdf.validate()
     }
-}
-
-/// One sampled direction.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BsdfSample {
-    /// The sampled direction `wo`, in the local frame.
-    pub wo: Vec3,
-    /// Its density per unit solid angle (for a delta lobe, the lobe's discrete probability).
-    pub pdf: f32,
-    /// `eval(wi, wo) / pdf`: what the path's throughput is multiplied by.
-    pub weight: Vec3,
-    /// The sample came from a delta (perfectly specular) lobe.
-    pub delta: bool,
-    /// The relative index of refraction along the sampled direction (1 unless it refracted).
-    pub eta: f32,
 }
 
 /// A bidirectional scattering distribution function.
@@ -448,12 +436,6 @@ pub enum MaterialError {
         /// Its value.
         value: Vec3,
     },
-}
-
-/// `cos θ` of a local direction.
-#[inline(always)]
-pub(crate) fn cos_theta(w: Vec3) -> f32 {
-    w.z
 }
 
 #[cfg(test)]

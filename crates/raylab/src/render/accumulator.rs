@@ -5,8 +5,8 @@ use glam::Vec3;
 use image::RgbImage;
 use rayon::prelude::*;
 
-use super::SampleSettings;
 use super::passes::{Pass, add_pass};
+use super::settings::SampleSettings;
 use crate::camera::Camera;
 use crate::film::{Film, FilmError};
 use crate::integrator::Integrator;

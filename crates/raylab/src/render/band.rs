@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::SampleSettings;
+use super::settings::SampleSettings;
 use super::sums::add_finite;
 use crate::camera::RayGenerator;
 use crate::integrator::Integrator;

@@ -12,8 +12,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::SampleSettings;
 use super::band::{Band, MAX_TILE_PIXELS, tile_shape};
+use super::settings::SampleSettings;
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::Integrator;
@@ -46,7 +46,7 @@ pub(super) fn add_pass(
     let (_, band_rows) = tile_shape(settings.tile);
     // As many of a pixel's samples at once as a tile's arrays hold for a column of a band, and
     // at most `PASS_GROUP` (more fill no packet better).
-    let most = ((MAX_TILE_PIXELS / band_rows).max(1) as u32).min(super::PASS_GROUP);
+    let most = ((MAX_TILE_PIXELS / band_rows).max(1) as u32).min(super::settings::PASS_GROUP);
     let mut discarded = 0;
     let end = sample.saturating_add(count.max(1));
     let mut first = sample;

@@ -12,16 +12,8 @@
 
 use glam::{Mat3, Quat, Vec3};
 
-use super::{CameraSettings, Scene};
+use super::camera_settings::CameraSettings;
 use crate::camera::Camera;
-
-impl Scene {
-    /// The camera at `frame` of the animation its keyframes describe (see `keyframes.rs`), or
-    /// `None` when it has none.
-    pub fn camera_at(&self, frame: f32) -> Option<CameraSettings> {
-        camera_at(&self.keyframes, frame)
-    }
-}
 
 /// The camera at one frame.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -60,8 +60,7 @@ pub const AUTO_FLATTEN_TRIANGLES: usize = 1 << 18;
 
 impl Instancing {
     /// Applies this choice to a loaded model: copies its instanced meshes into
-    /// [`LoadedMesh::mesh`](super::mesh_file::LoadedMesh::mesh) as it says. Returns how many meshes it
-    /// copied.
+    /// [`LoadedMesh::mesh`](super::LoadedMesh::mesh) as it says. Returns how many meshes it copied.
     pub fn apply(self, loaded: &mut super::mesh_file::LoadedMesh) -> usize {
         match self {
             Instancing::Auto => loaded.flatten_within(AUTO_FLATTEN_TRIANGLES),

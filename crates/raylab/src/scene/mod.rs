@@ -10,6 +10,7 @@
 //! y-up; loaders turn them with [`model_to_lab`], a half turn about x that keeps handedness.
 
 mod built_in;
+mod camera_settings;
 mod cornell;
 #[cfg(feature = "io")]
 mod finite;
@@ -37,6 +38,7 @@ pub mod terrain;
 
 use glam::Vec3;
 
+pub use camera_settings::{CameraSettings, FovAxis};
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
 #[cfg(feature = "io")]
 pub use formats::load_mesh;
@@ -129,64 +131,6 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
-/// A camera as a scene describes it, independent of the image size.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraSettings {
-    /// Position, in the lab's frame.
-    pub position: Vec3,
-    /// Yaw in radians (the lab's `R(y)`).
-    pub yaw: f32,
-    /// Pitch in radians, positive looking up.
-    pub pitch: f32,
-    /// Roll in radians about the view direction (see [`Camera::roll`](crate::Camera::roll)).
-    pub roll: f32,
-    /// The field of view in degrees, and the axis it spans.
-    pub fov_deg: f32,
-    /// Which image axis the field of view spans.
-    pub fov_axis: FovAxis,
-    /// Thin-lens radius (0: pinhole).
-    pub aperture_radius: f32,
-    /// Focus distance along the view direction.
-    pub focus_distance: f32,
-}
-
-/// The image axis a field of view spans (Mitsuba's `fov_axis`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum FovAxis {
-    /// The width.
-    #[default]
-    X,
-    /// The height.
-    Y,
-    /// The shorter side.
-    Smaller,
-    /// The longer side.
-    Larger,
-}
-
-impl CameraSettings {
-    /// The camera for a `width×height` image.
-    pub fn camera(&self, width: u32, height: u32) -> crate::Camera {
-        let span = match self.fov_axis {
-            FovAxis::X => width,
-            FovAxis::Y => height,
-            FovAxis::Smaller => width.min(height),
-            FovAxis::Larger => width.max(height),
-        };
-        crate::Camera {
-            position: self.position,
-            yaw: self.yaw,
-            pitch: self.pitch,
-            roll: self.roll,
-            focal_length_px: crate::Camera::focal_length_for_fov(span, self.fov_deg),
-            width,
-            height,
-            aperture_radius: self.aperture_radius,
-            focus_distance: self.focus_distance,
-        }
-    }
-}
-
 /// Render settings a scene file may give (each `None` leaves the renderer's default).
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct RenderSettings {
@@ -207,6 +151,12 @@ pub struct RenderSettings {
 }
 
 impl Scene {
+    /// The camera at `frame` of the animation its keyframes describe (see `keyframes.rs`), or
+    /// `None` when it has none.
+    pub fn camera_at(&self, frame: f32) -> Option<CameraSettings> {
+        keyframes::camera_at(&self.keyframes, frame)
+    }
+
     /// A hash of everything in the scene that decides what a ray sees: every triangle (its
     /// vertices, normals, texture coordinates and material), the materials and the lights, by
     /// their bits (XXH3, 64 bits). Not the name, the camera or the render settings. Parts of one

@@ -547,7 +547,6 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
     }
 }
 
-/// Mitsuba's `rectangle`: `[−1, 1]²` in the plane z = 0, facing +z.
 mod builder;
 mod lights;
 mod materials;

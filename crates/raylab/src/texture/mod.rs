@@ -22,6 +22,7 @@ mod image;
 #[cfg(feature = "io")]
 mod load;
 mod noise;
+mod query;
 
 use std::sync::Arc;
 
@@ -33,17 +34,7 @@ pub use load::{
     MAX_TEXTURE_SIDE, MAX_TEXTURE_TEXELS, TextureError, check_size, decode_texture, load_texture,
 };
 pub use noise::{NoiseTexture, Pattern, Perlin};
-
-/// Where a texture is read: what a [`Texture`] needs to know about a hit.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct TextureQuery {
-    /// The texture coordinates.
-    pub uv: Vec2,
-    /// The point in the scene (for solid textures).
-    pub p: Vec3,
-    /// How wide the pixel's footprint is, in texture-coordinate units (0: a point).
-    pub footprint: f32,
-}
+pub use query::TextureQuery;
 
 /// An image read through a coordinate transform, a wrap mode per axis and a factor.
 #[derive(Clone, Debug, PartialEq)]

@@ -24,7 +24,7 @@
 
 use glam::{Vec3, Vec4};
 
-use super::TextureQuery;
+use super::query::TextureQuery;
 use crate::sampling::Pcg32;
 
 /// Perlin's improved noise with a seeded permutation.

@@ -9,7 +9,8 @@
 //!   in one pass;
 //! - AVX-512: the same in AVX registers, with the two-table permute `vpermt2ps` of AVX-512 VL
 //!   for records of more than 8 vertices (the 16-lane form, a whole 16-triangle record per pass,
-//!   is slower: its 512-bit instructions take a vector port from the 8-wide node kernel);
+//!   was slower on the AVX-512 CPU measured: its 512-bit instructions take a vector port from
+//!   the 8-wide node kernel);
 //! - SSE2: the table is transformed four vertices at a time into arrays, and each pass of four
 //!   triangles reads its corners from them.
 //!

@@ -47,8 +47,8 @@ use crate::triangle::WatertightRay;
 /// AVX-512 register).
 pub(crate) const RECORD_VERTICES: usize = 16;
 /// The most triangles in one record: one AVX register of each corner, so that a record is
-/// tested in one pass. (Sixteen triangles in AVX-512 registers are slower: 512-bit
-/// instructions take a vector port from the 8-wide node kernel.)
+/// tested in one pass. (Sixteen triangles in AVX-512 registers were slower on the
+/// AVX-512 CPU measured: 512-bit instructions take a vector port from the 8-wide node kernel.)
 pub(crate) const RECORD_TRIANGLES: usize = 8;
 /// Zero words after the last record.
 pub(crate) const PAD_WORDS: usize = 4;

@@ -71,8 +71,8 @@ fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
 }
 
 impl Chunk {
-    /// This thread's chunk, or a new one: a fresh chunk is kilobytes of arrays to clear, once per
-    /// tile of 64 rays. Taken out of the thread-local
+    /// This thread's chunk, or a new one: a fresh chunk is kilobytes of arrays to clear, which would
+    /// cost a clearing per tile of 64 rays. Taken out of the thread-local
     /// slot rather than borrowed in a closure, so that the tracing stays inlined into the
     /// instruction set's entry point (a closure would not inherit its target features).
     #[inline(always)]

@@ -6,7 +6,8 @@ use super::rays::PACKET;
 use crate::ray::Ray;
 
 /// A packet's rays' directions (three rows), `t_min` and `t_max`, lane `i` for ray `i`: what
-/// [`fill`](super::setup::fill) reads besides the origins, which it copies straight into the packet's lanes.
+/// [`fill`](super::setup::fill) reads besides the origins, which it copies straight into the
+/// packet's lanes.
 pub(super) type RestRows = [[f32; PACKET]; 5];
 
 /// Copies `rays` (at most [`PACKET`]) into rows: their origins into `origin`, their directions,

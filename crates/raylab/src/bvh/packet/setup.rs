@@ -4,7 +4,7 @@
 //! checks that it can join a packet) takes a large part of a camera packet's time when done
 //! ray by ray ([`PacketRays::set_lane`], kept as the scalar twin): a
 //! division and several data-dependent branches per ray. Here the rays are first copied into
-//! arrays per component, then every lane is computed by the same operations without branches
+//! rows, one per component (`rows.rs`), then every lane is computed by the same operations without branches
 //! (selects only), sixteen lanes per AVX-512 instruction in the instruction sets' entry points.
 //! The values are those of `set_lane`, bit for bit (the test below compares them).
 

@@ -251,7 +251,8 @@ mod x86 {
     ///
     /// Every block is tested against the ray's own range (not the best hit so far, so the
     /// blocks' tests do not wait for each other); a block without a candidate skips the rest of
-    /// its test (rays in a small room miss most blocks). Each lane keeps the nearest of its hits in registers, the earlier block winning
+    /// its test (rays in a small room miss most blocks). Each lane keeps the nearest of its
+    /// hits in registers, the earlier block winning
     /// at equal `t` (blocks ascend in index), with no branch on which lanes hit; one reduction
     /// at the end picks the nearest lane, the lowest index among equals. Lanes only the
     /// double-precision test can decide (rare) are merged alongside.

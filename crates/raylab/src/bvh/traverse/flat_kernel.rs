@@ -1,5 +1,5 @@
 //! The flat list's tests per instruction set ([`FlatKernel`]): one ray against every triangle
-//! ([`flat`](super::flat)) and many rays in lanes ([`flat_rays`](super::flat_rays)), with
+//! ([`flat`](super::flat)) and many rays in lanes (`flat_rays.rs`, on x86-64), with
 //! the scalar twins as the defaults.
 
 use super::flat::{Flat, closest_hit_scalar, occluded_scalar};

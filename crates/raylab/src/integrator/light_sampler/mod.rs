@@ -298,8 +298,8 @@ impl LightSet {
         // without (pbrt-v4's `BVHLightSampler`, Mitsuba's uniform choice among two emitters); a
         // black one never. Their power through a disk the size of the scene (PBR 4th ed. §12.5)
         // ranks them by the floor around the scene's subject, so on the materials scene
-        // (`tests/data/mitsuba-materials`) it took most picks from the light above the spheres,
-        // with more error than half. The others
+        // (`tests/data/mitsuba-materials`) it took most picks from the light above the spheres
+        // and gave more error than picking the environments half the time. The others
         // are summed as `DiscreteDistribution::new` sums them (in f64, negatives as zero). Several
         // environments share their half by their mean radiance.
         let environments: Vec<(usize, f32)> = lights

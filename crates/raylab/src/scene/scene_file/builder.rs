@@ -37,7 +37,8 @@ pub(super) struct Builder<'a, F> {
     /// paths as the scene names them: the uses still to come, and the mesh once read. Such a
     /// file is read and parsed once and kept until its last use; a file used once is not kept.
     pub(super) shared_meshes: std::cell::RefCell<BTreeMap<PathBuf, (usize, Option<LoadedMesh>)>>,
-    /// Meshes given in memory, by the name a shape's `file` gives ([`parse_scene_with_meshes`](super::parse_scene_with_meshes)).
+    /// Meshes given in memory, by the name a shape's `file` gives
+    /// ([`parse_scene_with_meshes`](super::parse_scene_with_meshes)).
     pub(super) in_memory: &'a BTreeMap<String, LoadedMesh>,
 }
 

@@ -4,6 +4,7 @@ use glam::Vec3;
 
 use crate::mesh::Mesh;
 
+/// Mitsuba's `rectangle`: `[−1, 1]²` in the plane z = 0, facing +z.
 pub(super) fn rectangle() -> Mesh {
     Mesh {
         positions: vec![
