@@ -1,17 +1,17 @@
-//! The path tracer, scalar (`Path`, one path at a time) against the wavefront
-//! (`PathWavefront`, a tile's paths stage by stage with batched queries): one pass at a quarter
+//! The path tracer, scalar (`PathScalar`, one path at a time) against the wavefront
+//! (`Path`, a tile's paths stage by stage with batched queries): one pass at a quarter
 //! of the scene's size, one thread, the scenes' own depth limits, on `scenes/`'s Mitsuba box and
 //! showcase and on the two Mitsuba comparison scenes of `tests/data` (the materials and the
 //! instanced glTF boxes, at a quarter of the 256×256 they are compared at).
 //!
 //! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
-//! stage (`PathWavefront::with_stage_times`, 16 passes in one group, one thread), then times
+//! stage (`Path::with_stage_times`, 16 passes in one group, one thread), then times
 //! the sampler's draws for a tile's paths one by one and in batches.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::time::{Duration, Instant};
 
-use raylab::integrator::{Integrator, Path, PathWavefront};
+use raylab::integrator::{Integrator, Path, PathScalar};
 use raylab::sampling::Sampler;
 use raylab::scene::{Instancing, LoadOptions};
 use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
@@ -91,9 +91,8 @@ fn stage_table(_: &mut Criterion) {
     );
     for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes", "gltf-boxes-kept"] {
         let (scene, accel, settings, camera) = load(name);
-        let scalar = Path::new(&scene, &accel, settings.path_settings());
-        let wavefront =
-            PathWavefront::new(&scene, &accel, settings.path_settings()).with_stage_times();
+        let scalar = PathScalar::new(&scene, &accel, settings.path_settings());
+        let wavefront = Path::new(&scene, &accel, settings.path_settings()).with_stage_times();
         let time = |integrator: &dyn Integrator| {
             pool.install(|| {
                 let start = Instant::now();
@@ -186,8 +185,8 @@ fn path(c: &mut Criterion) {
     group.sample_size(20);
     for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes", "gltf-boxes-kept"] {
         let (scene, accel, settings, camera) = load(name);
-        let scalar = Path::new(&scene, &accel, settings.path_settings());
-        let wavefront = PathWavefront::new(&scene, &accel, settings.path_settings());
+        let scalar = PathScalar::new(&scene, &accel, settings.path_settings());
+        let wavefront = Path::new(&scene, &accel, settings.path_settings());
         let integrators: [(&str, &dyn Integrator); 2] =
             [("scalar", &scalar), ("wavefront", &wavefront)];
         for (kind, integrator) in integrators {

@@ -35,7 +35,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use raylab::bvh::TraversalStats;
-use raylab::integrator::PathWavefront;
+use raylab::integrator::Path;
 use raylab::scene::LoadOptions;
 use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
 use raylab::{Accelerator, Accumulator, Hit, Ray, Scene, SceneBvh};
@@ -121,7 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         bounces: Mutex::default(),
         shadows: Mutex::default(),
     };
-    let wavefront = PathWavefront::new(&scene, &recorder, settings.path_settings());
+    let wavefront = Path::new(&scene, &recorder, settings.path_settings());
     let mut accumulator = Accumulator::new(camera.width, camera.height)?;
     accumulator.settings = settings.samples;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;

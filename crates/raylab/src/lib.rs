@@ -199,7 +199,8 @@ pub use film::{Film, FilmError};
 pub use filter::Filter;
 pub use geometry::Geometry;
 pub use integrator::{
-    Aov, AovKind, Integrator, Lab, LightSet, Path, PathSettings, Stage, TriangleSampling,
+    Aov, AovKind, Integrator, Lab, LightSet, Path, PathScalar, PathSettings, Stage,
+    TriangleSampling,
 };
 pub use interaction::SurfaceInteraction;
 pub use light::{Light, PointLight};

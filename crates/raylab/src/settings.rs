@@ -5,6 +5,7 @@
 //! |---|---|---|
 //! | `lab` | `Lab` | the lab's light model (point light, shadows, ambient term) |
 //! | `path` | `Path` | path tracing (area lights, indirect light, glossy and specular materials) |
+//! | `path-scalar` | `PathScalar` | the same path tracer one path at a time (the same pixels) |
 //! | `albedo`, `normals`, `depth` | `Aov(AovKind)` | what the camera sees first (arbitrary output variables) |
 //!
 //! When nothing names one, a scene that the lab's model cannot light whole is path-traced (some
@@ -69,9 +70,9 @@ pub enum IntegratorKind {
     /// The lab's light model, at the stage the render settings give.
     Lab,
     /// The path tracer: the wavefront, whose vertices run sixteen to an instruction
-    /// (`PathWavefront`).
+    /// (`Path`).
     Path,
-    /// The path tracer one path at a time (`Path`): the reference twin of `path`, with the
+    /// The path tracer one path at a time (`PathScalar`): the reference twin of `path`, with the
     /// same samples to the bit.
     #[cfg_attr(feature = "io", serde(rename = "path-scalar"))]
     PathScalar,

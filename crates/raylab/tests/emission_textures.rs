@@ -9,7 +9,8 @@ use raylab::material::MaterialTextures;
 use raylab::mesh::CornerAttribute;
 use raylab::texture::{ImageTexture, Texture, TextureImage, Wrap};
 use raylab::{
-    Camera, Film, Geometry, Material, Mesh, Path, PathSettings, Scene, SceneBvh, render_samples,
+    Camera, Film, Geometry, Material, Mesh, PathScalar, PathSettings, Scene, SceneBvh,
+    render_samples,
 };
 
 /// A quad over `x ∈ [x0, x1]`, `z ∈ [−1, 3]` at height `y`, facing `facing` (±y), with
@@ -72,7 +73,7 @@ fn render(scene: &Scene, size: u32, spp: u32) -> Film {
     let bvh = SceneBvh::build(&scene.geometry).unwrap();
     // Direct light only: the floor is lit by the light, nothing bounces back.
     let settings = PathSettings { max_depth: Some(2), ..PathSettings::default() };
-    let path = Path::new(scene, &bvh, settings);
+    let path = PathScalar::new(scene, &bvh, settings);
     render_samples(&Camera::lab(size, size), &path, spp, &|_| {}).unwrap()
 }
 

@@ -6,9 +6,9 @@
 //! (`path-scalar`), which must agree to the bit; the known answers are then checked once.
 
 use glam::Vec3;
-use raylab::integrator::{Integrator, PathWavefront};
+use raylab::integrator::{Integrator, Path};
 use raylab::{
-    Accumulator, BruteForce, Camera, Geometry, Material, Path, PathSettings, SampleSettings,
+    Accumulator, BruteForce, Camera, Geometry, Material, PathScalar, PathSettings, SampleSettings,
     SamplerKind, Scene, TriangleSampling,
 };
 
@@ -65,8 +65,8 @@ fn render_both<A: raylab::Accelerator>(
     samples: SampleSettings,
     spp: u32,
 ) -> raylab::Film {
-    let scalar = Path::new(scene, accel, settings);
-    let wavefront = PathWavefront::new(scene, accel, settings);
+    let scalar = PathScalar::new(scene, accel, settings);
+    let wavefront = Path::new(scene, accel, settings);
     let [by_path, by_wavefront] = [&scalar as &dyn Integrator, &wavefront].map(|integrator| {
         let mut accumulator = Accumulator::new(camera.width, camera.height).unwrap();
         accumulator.settings = samples;
@@ -146,7 +146,7 @@ fn the_sphere_is_black_from_outside_and_one_sided() {
     // Seen from outside, the triangles' back faces neither emit nor reflect.
     let scene = furnace(0.5, 1.0);
     let accel = BruteForce::new(&scene.vertices());
-    let path = Path::new(&scene, &accel, PathSettings::default());
+    let path = PathScalar::new(&scene, &accel, PathSettings::default());
     let camera = Camera { position: Vec3::new(0.0, 0.0, -3.0), ..Camera::lab(16, 16) };
     let mut accumulator = Accumulator::new(16, 16).unwrap();
     for _ in 0..4 {
@@ -212,8 +212,8 @@ fn samples_that_overflow_are_counted_as_discarded() {
     let count = |emission: f32| {
         let scene = furnace(0.5, emission);
         let accel = BruteForce::new(&scene.vertices());
-        let path = Path::new(&scene, &accel, PathSettings::default());
-        let wavefront = PathWavefront::new(&scene, &accel, PathSettings::default());
+        let path = PathScalar::new(&scene, &accel, PathSettings::default());
+        let wavefront = Path::new(&scene, &accel, PathSettings::default());
         let camera = Camera { position: Vec3::new(0.1, -0.2, 0.05), ..Camera::lab(8, 8) };
         let counts = [&path as &dyn Integrator, &wavefront].map(|integrator| {
             let mut accumulator = Accumulator::new(8, 8).unwrap();

@@ -376,7 +376,7 @@ fn the_instanced_engine_renders_as_its_flattened_obj() {
 #[test]
 fn the_path_tracer_sees_instances_as_their_copies() {
     use raylab::image_compare::{compare_rgb8, save_failure_images};
-    use raylab::{Path as PathTracer, PathSettings, render_samples};
+    use raylab::{PathScalar as PathTracer, PathSettings, render_samples};
     let loaded = load_mesh(&data("2CylinderEngine/2CylinderEngine.glb")).unwrap();
     let instanced = Scene::from_loaded(&loaded);
     let flat = raylab::LoadedMesh { mesh: loaded.flattened(), instanced: vec![], ..loaded.clone() };

@@ -19,9 +19,11 @@ use std::sync::Arc;
 
 use glam::{Mat3, Vec3};
 use raylab::Scene;
-use raylab::integrator::{EnvironmentSampling, Integrator, PathWavefront};
+use raylab::integrator::{EnvironmentSampling, Integrator, Path};
 use raylab::light::{DirectionalLight, EnvironmentMap, SpotLight, SpotProfile, SunLight};
-use raylab::{Bvh, Film, Geometry, Light, Material, Path, PathSettings, Ray, Sampler, SamplerKind};
+use raylab::{
+    Bvh, Film, Geometry, Light, Material, PathScalar, PathSettings, Ray, Sampler, SamplerKind,
+};
 
 /// The diffuse reflectance of every surface here.
 const ALBEDO: f32 = 0.8;
@@ -35,8 +37,8 @@ fn radiance(scene: &Scene, rays: &[Ray], spp: u32) -> Vec<Vec3> {
 /// [`radiance`] with `settings`.
 fn radiance_with(scene: &Scene, rays: &[Ray], spp: u32, settings: PathSettings) -> Vec<Vec3> {
     let accel = Bvh::new(&scene.vertices());
-    let scalar = Path::new(scene, &accel, settings);
-    let wavefront = PathWavefront::new(scene, &accel, settings);
+    let scalar = PathScalar::new(scene, &accel, settings);
+    let wavefront = Path::new(scene, &accel, settings);
     let [by_path, by_wavefront] = [&scalar as &dyn Integrator, &wavefront]
         .map(|integrator| mean_radiance(integrator, rays, spp, SamplerKind::Independent));
     let bits = |v: &[Vec3]| -> Vec<[u32; 3]> {
@@ -333,7 +335,7 @@ fn importance_sampling_a_sky_with_a_sun_pays_fivefold() {
             max_depth: Some(3),
             ..PathSettings::default()
         };
-        let path = Path::new(&lit, &accel, settings);
+        let path = PathScalar::new(&lit, &accel, settings);
         // 32 estimates of 16 samples each: their spread about their mean.
         let estimates: Vec<Vec<Vec3>> = (0..32u32)
             .map(|k| {

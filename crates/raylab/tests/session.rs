@@ -9,7 +9,7 @@ mod common;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use raylab::integrator::{Aov, Integrator, Lab, Path as PathTracer};
+use raylab::integrator::{Aov, Integrator, Lab, PathScalar as PathTracer};
 use raylab::parts::{self, Channel};
 use raylab::scene::{LoadOptions, OpenedScene};
 use raylab::session::{

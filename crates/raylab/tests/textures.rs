@@ -123,7 +123,7 @@ fn bumpy_wall() -> Scene {
 
 #[test]
 fn a_normal_mapped_plane_shades_as_the_bumpy_geometry() {
-    use raylab::{Path, PathSettings};
+    use raylab::{PathScalar, PathSettings};
     let mut camera = Camera::lab(64, 64);
     camera.focal_length_px = 32.0 * 3.0 / 0.9;
     let settings = PathSettings { max_depth: Some(2), ..PathSettings::default() };
@@ -132,7 +132,7 @@ fn a_normal_mapped_plane_shades_as_the_bumpy_geometry() {
         .map(|scene| {
             let accel = raylab::Bvh::new(&scene.vertices());
             let normals = Aov::new(scene, &accel, AovKind::Normals);
-            let path = Path::new(scene, &accel, settings);
+            let path = PathScalar::new(scene, &accel, settings);
             (
                 render_samples(&camera, &normals, 4, &|_| {}).unwrap(),
                 render_samples(&camera, &path, 16, &|_| {}).unwrap(),

@@ -1,4 +1,4 @@
-//! The wavefront path tracer ([`PathWavefront`]) gives the scalar path tracer's samples, bit for
+//! The wavefront path tracer ([`Path`]) gives the scalar path tracer's samples, bit for
 //! bit: every scene in `scenes/`, the lab's box, models (OBJ with textures, glTF), the materials
 //! scene of the Mitsuba comparison, a terrain (noise textures read at the point), the glTF boxes
 //! kept instanced (placed triangles), a normal-mapped wall and a scene with alpha-masked holes,
@@ -8,7 +8,7 @@
 
 mod common;
 
-use raylab::integrator::{Integrator, Path as PathTracer, PathSettings, PathWavefront};
+use raylab::integrator::{Integrator, Path, PathScalar as PathTracer, PathSettings};
 use raylab::scene::{Instancing, LoadOptions};
 use raylab::session::CameraOptions;
 use raylab::{
@@ -65,7 +65,7 @@ fn check(name: &str, scene: &Scene, camera: &Camera) {
     for (max_depth, sampler, light_sampling) in runs {
         let settings = PathSettings { max_depth, light_sampling, ..PathSettings::default() };
         let scalar = PathTracer::new(scene, &accel, settings);
-        let wavefront = PathWavefront::new(scene, &accel, settings);
+        let wavefront = Path::new(scene, &accel, settings);
         let (expected, got) =
             (sums(camera, &scalar, 2, sampler), sums(camera, &wavefront, 2, sampler));
         assert!(

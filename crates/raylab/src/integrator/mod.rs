@@ -1,8 +1,10 @@
 //! Integrators: what colour a camera ray sees.
 //!
-//! One file per integrator. [`Lab`] is the lab's direct-light model with shadows and a constant
-//! ambient term, with a [`Stage`] for each step of the lab; [`Path`] is the path tracer, which
-//! sees the light the lab leaves out (indirect light, soft shadows from area lights).
+//! [`Lab`] is the lab's direct-light model with shadows and a constant ambient term, with a
+//! [`Stage`] for each step of the lab. [`Path`] is the path tracer, which sees the light the lab
+//! leaves out (indirect light, soft shadows from area lights): it runs a tile's paths stage by
+//! stage, their vertices in SIMD lanes (`wavefront/`). [`PathScalar`] is the same estimator one
+//! path at a time (`path.rs`), its twin: the same samples, to the bit.
 //!
 //! An integrator draws every random number it needs from the [`Sampler`] it is given, which the
 //! renderer makes from (seed, pixel, sample index) alone: the same sample gives the same colour
@@ -19,8 +21,8 @@ use glam::Vec3;
 pub use aov::{Aov, AovKind, WithAovs};
 pub use lab::{Lab, Stage};
 pub use light_sampler::{EnvironmentSampling, LightSample, LightSet, TriangleSampling};
-pub use path::{Path, PathSettings};
-pub use wavefront::{PathWavefront, StageTimes};
+pub use path::{PathScalar, PathSettings};
+pub use wavefront::{Path, StageTimes};
 
 use crate::accel::{Accelerator, Hit};
 use crate::ray::Ray;

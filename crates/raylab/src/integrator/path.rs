@@ -58,7 +58,7 @@ impl Default for PathSettings {
 }
 
 /// The path tracer over a scene and an accelerator built from its vertices.
-pub struct Path<'a, A: ?Sized> {
+pub struct PathScalar<'a, A: ?Sized> {
     scene: &'a Scene,
     accel: &'a A,
     lights: Cow<'a, LightSet>,
@@ -67,13 +67,19 @@ pub struct Path<'a, A: ?Sized> {
     discarded: AtomicU64,
 }
 
-impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
+impl<'a, A: Accelerator + ?Sized> PathScalar<'a, A> {
     /// A path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
     pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
         let lights = LightSet::new(scene)
             .with_triangle_sampling(settings.light_sampling)
             .with_environment_sampling(settings.environment_sampling);
-        Path { scene, accel, lights: Cow::Owned(lights), settings, discarded: AtomicU64::new(0) }
+        PathScalar {
+            scene,
+            accel,
+            lights: Cow::Owned(lights),
+            settings,
+            discarded: AtomicU64::new(0),
+        }
     }
 
     /// A path tracer with lights made before (`raylab view` keeps them from frame to frame).
@@ -83,7 +89,13 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
         lights: &'a LightSet,
         settings: PathSettings,
     ) -> Self {
-        Path { scene, accel, lights: Cow::Borrowed(lights), settings, discarded: AtomicU64::new(0) }
+        PathScalar {
+            scene,
+            accel,
+            lights: Cow::Borrowed(lights),
+            settings,
+            discarded: AtomicU64::new(0),
+        }
     }
 
     /// The lights it samples.
@@ -313,9 +325,9 @@ pub(super) fn facing(two_sided: bool, direction: Vec3, frame: Frame) -> (Frame, 
     (frame, flip, wi)
 }
 
-impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
+impl<A: Accelerator + ?Sized> Integrator for PathScalar<'_, A> {
     fn discarded_samples(&self) -> u64 {
-        Path::discarded_samples(self)
+        PathScalar::discarded_samples(self)
     }
 
     fn radiance(&self, camera_ray: &Ray, sampler: &mut Sampler) -> Vec3 {
@@ -345,10 +357,10 @@ impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
     }
 }
 
-/// The steps of a path, shared by [`Path::radiance`] and the wavefront
-/// ([`PathWavefront`](super::PathWavefront)), which runs them stage by stage over many paths:
+/// The steps of a path, shared by [`PathScalar::radiance`] and the wavefront
+/// ([`Path`](super::Path)), which runs them stage by stage over many paths:
 /// the same code, so the same bits.
-impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
+impl<'a, A: Accelerator + ?Sized> PathScalar<'a, A> {
     /// The scene.
     pub(super) fn scene(&self) -> &'a Scene {
         self.scene

@@ -17,7 +17,7 @@ use crate::accel::Accelerator;
 use crate::camera::Camera;
 use crate::film::{Display, FilmError};
 use crate::integrator::LightSet;
-use crate::integrator::{Aov, AovKind, Integrator, Lab, PathSettings, PathWavefront, Stage};
+use crate::integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
 use crate::ray::Ray;
 use crate::render::{Accumulator, SampleSettings};
 use crate::sampling::{Sampler, SamplerKind};
@@ -248,7 +248,7 @@ impl FrameRenderer {
                     self.lights = Some((light, moved));
                 }
                 let lights = &self.lights.as_ref().expect("made above").1;
-                let path = PathWavefront::with_lights(scene, accel, lights, self.path_settings);
+                let path = Path::with_lights(scene, accel, lights, self.path_settings);
                 add(picture, restart, &camera, &path);
             }
             ViewMode::Albedo => {
@@ -362,7 +362,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::integrator::Path;
+    use crate::integrator::PathScalar;
     use crate::{BruteForce, render_samples};
 
     fn lab_view(width: u32, height: u32) -> View {
@@ -492,7 +492,7 @@ mod tests {
             renderer.frame(&scene, &accel, &view, &mut words).unwrap();
         }
         // Three still frames are `render_samples` of three samples with the same path tracer.
-        let path = Path::new(&scene, &accel, PathSettings::default());
+        let path = PathScalar::new(&scene, &accel, PathSettings::default());
         let film = render_samples(&view.camera(1), &path, 3, &|_| {}).unwrap();
         let expected = film.to_rgb8(&Display::SRGB).unwrap();
         assert_eq!(rgb(&words, &view), expected);
@@ -502,7 +502,7 @@ mod tests {
         renderer.frame(&scene, &accel, &moved, &mut words).unwrap();
         let mut scene_moved = scene.clone();
         scene_moved.point_light_mut().position = moved.pose.light;
-        let path = Path::new(&scene_moved, &accel, PathSettings::default());
+        let path = PathScalar::new(&scene_moved, &accel, PathSettings::default());
         let film = render_samples(&moved.camera(1), &path, 1, &|_| {}).unwrap();
         assert_eq!(rgb(&words, &moved), film.to_rgb8(&Display::SRGB).unwrap());
         // Every mode renders, and switching modes starts a new picture.

@@ -72,12 +72,12 @@ mod tests {
     #[test]
     fn regions_are_the_whole_images_pixels() {
         use crate::bvh::Bvh;
-        use crate::integrator::{Lab, Path, PathSettings, Stage};
+        use crate::integrator::{Lab, PathScalar, PathSettings, Stage};
         use crate::scene::Scene;
         let scene = Scene::built_in("cornell").expect("the lab scene");
         let bvh = Bvh::new(&scene.vertices());
         let lab = Lab::new(&scene, &bvh, Stage::Ambient);
-        let path = Path::new(&scene, &bvh, PathSettings::default());
+        let path = PathScalar::new(&scene, &bvh, PathSettings::default());
         let (width, height) = (37, 29);
         let camera = crate::Camera::lab(width, height);
         let integrators: [&dyn Integrator; 2] = [&lab, &path];
@@ -114,7 +114,7 @@ mod tests {
     #[test]
     fn groups_of_passes_give_the_passes_pixels() {
         use crate::bvh::Bvh;
-        use crate::integrator::{Lab, PathSettings, PathWavefront, Stage, WithAovs};
+        use crate::integrator::{Lab, Path, PathSettings, Stage, WithAovs};
         use crate::scene::Scene;
         use crate::settings::AovKind;
         /// Radiance from the ray's direction, NaN or infinite where it points up and left.
@@ -132,7 +132,7 @@ mod tests {
         let scene = Scene::built_in("cornell").expect("the lab scene");
         let bvh = Bvh::new(&scene.vertices());
         let lab = Lab::new(&scene, &bvh, Stage::Ambient);
-        let path = PathWavefront::new(&scene, &bvh, PathSettings::default());
+        let path = Path::new(&scene, &bvh, PathSettings::default());
         let aovs = [AovKind::Albedo, AovKind::Depth];
         let with_layers = WithAovs::new(&path, &scene, &bvh, &aovs);
         let (width, height) = (23, 13);

@@ -306,7 +306,7 @@ mod tests {
     #[test]
     fn bands_are_the_same_bits_with_avx2() {
         use crate::bvh::Bvh;
-        use crate::integrator::{Lab, Path, PathSettings, Stage};
+        use crate::integrator::{Lab, PathScalar, PathSettings, Stage};
         use crate::scene::Scene;
         if !std::arch::is_x86_feature_detected!("avx2") {
             eprintln!("skipped: this CPU has no AVX2 (its band is never used)");
@@ -315,7 +315,7 @@ mod tests {
         let scene = Scene::built_in("cornell").expect("the lab scene");
         let bvh = Bvh::new(&scene.vertices());
         let lab = Lab::new(&scene, &bvh, Stage::Ambient);
-        let path = Path::new(&scene, &bvh, PathSettings::default());
+        let path = PathScalar::new(&scene, &bvh, PathSettings::default());
         let (width, height) = (48, 24);
         for lens in [false, true] {
             let mut camera = crate::Camera::lab(width, height);

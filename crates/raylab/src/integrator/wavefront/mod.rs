@@ -1,7 +1,7 @@
 //! `path` as a wavefront: the paths of a tile advanced together, stage by stage, with their rays
 //! traced as batches and their vertices shaded sixteen lanes per instruction, grouped by BSDF.
 //!
-//! The estimator, the random numbers and the arithmetic are those of [`Path`]: every sample is
+//! The estimator, the random numbers and the arithmetic are those of [`PathScalar`]: every sample is
 //! the scalar path's to the bit (`tests/wavefront.rs` compares whole renders of every scene).
 //! Each lane draws from its own [`Sampler`] in the scalar order; what changes is the order of
 //! the work:
@@ -13,9 +13,9 @@
 //! 2. **surfaces**: emission found, weighted by MIS; paths that leave the scene or reach
 //!    `max_depth` end; each vertex's material, shading normal and BSDF. The vertex goes
 //!    straight into a lane of its BSDF's kind (its point, shading normal, tangent and the
-//!    BSDF's parameters: [`Path::lane_surface`]; the lanes make its frame). The commonest hits,
+//!    BSDF's parameters: [`PathScalar::lane_surface`]; the lanes make its frame). The commonest hits,
 //!    on an unplaced triangle that is no light's, of a material without a normal map
-//!    ([`Path::plain_surface`]), go without building their whole interaction;
+//!    ([`PathScalar::plain_surface`]), go without building their whole interaction;
 //! 3. **draws**: a chunk's numbers (the light's choice and point, the BSDF's lobe and
 //!    direction, the roulette's) in one pass over their samplers
 //!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
@@ -24,7 +24,7 @@
 //!    lights and numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per
 //!    AVX-512 instruction; lights other than area-sampled triangles and the constant
 //!    environment, and the rare lane whose offset point overflows, run the scalar path's steps
-//!    ([`Path::sample_light_with`], `bounce`, `survives_roulette`) one by one;
+//!    ([`PathScalar::sample_light_with`], `bounce`, `survives_roulette`) one by one;
 //! 5. **occlusion** of the shadow rays as one batch ([`Accelerator::occluded_incoherent`]: in
 //!    lanes, against a small scene's flat list or through a tree), and the light they bring.
 //!
@@ -55,7 +55,7 @@ use lanes::{LaneDraws, LaneVertex, Lanes};
 
 use super::Integrator;
 use super::light_sampler::LaneRole;
-use super::path::{LaneKind, Path, PathSettings, PathState, Vertex};
+use super::path::{LaneKind, PathScalar, PathSettings, PathState, Vertex};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
 use crate::material::lanes::LaneBsdf;
@@ -63,20 +63,20 @@ use crate::ray::Ray;
 use crate::sampling::{Sampler, VertexNumbers};
 use crate::scene::Scene;
 
-/// [`Path`] run as a wavefront (see the module documentation): the same samples, the work
+/// [`PathScalar`] run as a wavefront (see the module documentation): the same samples, the work
 /// ordered by stage.
-pub struct PathWavefront<'a, A: ?Sized> {
-    path: Path<'a, A>,
+pub struct Path<'a, A: ?Sized> {
+    path: PathScalar<'a, A>,
     /// The instruction set the lanes run on.
     isa: Isa,
     /// Time per stage, when measured ([`with_stage_times`](Self::with_stage_times)).
     times: Option<StageClock>,
 }
 
-impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
+impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     /// A wavefront path tracer for `scene`, whose [`vertices`](Scene::vertices) `accel` holds.
     pub fn new(scene: &'a Scene, accel: &'a A, settings: PathSettings) -> Self {
-        PathWavefront { path: Path::new(scene, accel, settings), isa: Isa::detect(), times: None }
+        Path { path: PathScalar::new(scene, accel, settings), isa: Isa::detect(), times: None }
     }
 
     /// A wavefront path tracer with lights made before (`raylab view` keeps them from frame
@@ -87,8 +87,8 @@ impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
         lights: &'a super::LightSet,
         settings: PathSettings,
     ) -> Self {
-        let path = Path::with_lights(scene, accel, lights, settings);
-        PathWavefront { path, isa: Isa::detect(), times: None }
+        let path = PathScalar::with_lights(scene, accel, lights, settings);
+        Path { path, isa: Isa::detect(), times: None }
     }
 
     /// The same, with its lanes run on the instruction set `isa` rather than the best this CPU
@@ -116,12 +116,12 @@ impl<'a, A: Accelerator + ?Sized> PathWavefront<'a, A> {
     }
 
     /// The scalar path tracer it runs the stages of.
-    pub fn path(&self) -> &Path<'a, A> {
+    pub fn path(&self) -> &PathScalar<'a, A> {
         &self.path
     }
 }
 
-impl<A: Accelerator + ?Sized> Integrator for PathWavefront<'_, A> {
+impl<A: Accelerator + ?Sized> Integrator for Path<'_, A> {
     fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
         self.path.radiance(ray, sampler)
     }
@@ -281,7 +281,7 @@ struct Chunk<'s, 'c> {
     lap: &'s mut Lap<'c>,
 }
 
-impl<A: Accelerator + ?Sized> PathWavefront<'_, A> {
+impl<A: Accelerator + ?Sized> Path<'_, A> {
     /// [`shade_lanes`](Self::shade_lanes) with the code of `kind`'s BSDF.
     #[inline(never)]
     fn shade_kind(&self, kind: LaneKind, chunk: &mut Chunk, lanes: &mut Lanes, paths: &[usize]) {
@@ -427,7 +427,7 @@ impl Numbers {
     #[inline]
     fn sample_light<A: Accelerator + ?Sized>(
         &self,
-        path: &Path<'_, A>,
+        path: &PathScalar<'_, A>,
         state: &PathState,
         vertex: &Vertex,
         v: usize,
@@ -441,7 +441,7 @@ impl Numbers {
     #[inline]
     fn bounce<A: Accelerator + ?Sized>(
         &self,
-        path: &Path<'_, A>,
+        path: &PathScalar<'_, A>,
         state: &mut PathState,
         vertex: &Vertex,
         v: usize,

@@ -17,7 +17,7 @@ use crate::bvh::{BuildSettings, Bvh, SceneBvh};
 use crate::camera::Camera;
 use crate::film::{Display, Film, ToneMap, format_bytes};
 use crate::image_io::{self, ImageFormat, ImageIoError};
-use crate::integrator::{Aov, Integrator, Lab, Path as PathTracer, PathWavefront, WithAovs};
+use crate::integrator::{Aov, Integrator, Lab, Path as PathTracer, PathScalar, WithAovs};
 use crate::parts::{self, Part, PartHeader, PartKind};
 use crate::region::Region;
 use crate::render::Accumulator;
@@ -403,11 +403,11 @@ impl<'s> RenderJob<'s> {
         let base: &dyn Integrator = match settings.integrator {
             IntegratorKind::Lab => &lab,
             IntegratorKind::Path => {
-                wavefront = PathWavefront::new(scene, accel, settings.path_settings());
+                wavefront = PathTracer::new(scene, accel, settings.path_settings());
                 &wavefront
             }
             IntegratorKind::PathScalar => {
-                scalar = PathTracer::new(scene, accel, settings.path_settings());
+                scalar = PathScalar::new(scene, accel, settings.path_settings());
                 &scalar
             }
             IntegratorKind::Aov(kind) => {

@@ -25,8 +25,8 @@
 //! number ([`rescaled`]), the same [`power_heuristic`] and the same ray offset
 //! ([`offset_ray_origin_finite`]), and Rust neither fuses nor reorders floating-point
 //! operations, in vector code or not. So a lane's shadow ray, contribution, next ray,
-//! throughput, density, η and delta flag are those of [`Path::sample_light_with`],
-//! [`Path::bounce`] and [`Path::survives_roulette`] to the bit (`tests/wavefront.rs` compares
+//! throughput, density, η and delta flag are those of [`PathScalar::sample_light_with`],
+//! [`PathScalar::bounce`] and [`PathScalar::survives_roulette`] to the bit (`tests/wavefront.rs` compares
 //! whole renders; `tests.rs` compares lanes of every kind on hostile inputs on every
 //! instruction set).
 //!
@@ -35,9 +35,9 @@
 //! ([`LaneRole::Other`]: point lights, textured emitters, solid-angle sampling), and the rare point
 //! whose offset is not finite (`exact` is false: the scalar offset's fallback decides it).
 //!
-//! [`Path::sample_light_with`]: super::super::Path
-//! [`Path::bounce`]: super::super::Path
-//! [`Path::survives_roulette`]: super::super::Path
+//! [`PathScalar::sample_light_with`]: super::super::Path
+//! [`PathScalar::bounce`]: super::super::Path
+//! [`PathScalar::survives_roulette`]: super::super::Path
 
 use glam::{Vec2, Vec3};
 
@@ -191,7 +191,7 @@ struct Output {
 }
 
 /// Lane `k`'s frame, whether it is mirrored and the direction toward the viewer, as
-/// `Path::vertex` makes them (`shading_frame`: the tangent's frame only for an anisotropic
+/// `PathScalar::vertex` makes them (`shading_frame`: the tangent's frame only for an anisotropic
 /// BSDF, then [`facing`]), and its BSDF rebuilt from its rows.
 #[inline(always)]
 fn vertex_of<B: LaneBsdf>(input: &Input, k: usize) -> (Frame, bool, Vec3, B) {
@@ -245,7 +245,7 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
         true => (to_sky, towards_sky, f32::INFINITY, to_sky_finite),
         false => (to_end, end - to_end, SHADOW_RAY_LENGTH, end_finite && to_end_finite),
     };
-    // Path::sample_light_with (which a BSDF of delta lobes alone skips).
+    // PathScalar::sample_light_with (which a BSDF of delta lobes alone skips).
     let mut wo = frame.to_local(direction);
     if flip {
         wo.z = -wo.z;
@@ -255,7 +255,7 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
     let contribution = throughput * f * input.radiance.get(k) * (weight / light_pdf);
     let shadowed = B::SMOOTH && input.has_light[k] && faces && f != Vec3::ZERO;
 
-    // Path::bounce.
+    // PathScalar::bounce.
     let u = Vec2::new(input.u_direction[0][k], input.u_direction[1][k]);
     let (sampled, mut wo, pdf, weight, delta, eta) = match bsdf.sample(wi, input.u_lobe[k], u) {
         Some(s) => (true, s.wo, s.pdf, s.weight, s.delta, s.eta),
@@ -270,7 +270,7 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
     let (origin, finite) = offset_ray_origin_finite(&point, direction);
     let throughput_max = next_throughput.max_element();
     let bounced = sampled && throughput_max > 0.0 && throughput_max.is_finite();
-    // Path::survives_roulette.
+    // PathScalar::survives_roulette.
     let mut survives = true;
     if input.roulette[k] {
         let q = (throughput_max * eta * eta).min(0.95);

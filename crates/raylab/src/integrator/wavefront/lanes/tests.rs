@@ -4,7 +4,7 @@
 use glam::{Affine3A, Vec2, Vec3};
 
 use super::super::super::path::{LaneKind, PathState};
-use super::super::super::{Path, PathSettings};
+use super::super::super::{PathScalar, PathSettings};
 use super::*;
 use crate::bvh::Bvh;
 use crate::material::{
@@ -135,7 +135,7 @@ fn lanes_match_the_scalar_path<B: LaneBsdf>(kind: LaneKind) {
 fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: LaneKind, sky: bool) {
     let scene = scene(sky);
     let bvh = Bvh::new(&scene.vertices());
-    let path = Path::new(&scene, &bvh, PathSettings::default());
+    let path = PathScalar::new(&scene, &bvh, PathSettings::default());
     let mut rng = Pcg32::new(27, 16 + kind as u64);
     let below_one = 1.0 - f32::EPSILON / 2.0;
     let mut cases = Vec::new();
