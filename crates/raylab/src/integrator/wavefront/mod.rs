@@ -47,6 +47,7 @@
 mod clock;
 mod lanes;
 mod stages;
+mod surface;
 
 use glam::Vec3;
 

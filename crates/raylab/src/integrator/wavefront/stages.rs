@@ -8,10 +8,11 @@ use glam::Vec3;
 
 use super::clock::{Lap, StageClock};
 use super::lanes::{self, LaneDraws, LaneVertex, Lanes};
+use super::surface::LaneKind;
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
 use crate::integrator::light_sampler::LaneRole;
-use crate::integrator::path::{LaneKind, PathScalar, PathState, Vertex};
+use crate::integrator::path::{PathScalar, PathState, Vertex};
 use crate::integrator::{closest_opaque_hit, occluded_opaque};
 use crate::material::lanes::LaneBsdf;
 use crate::ray::Ray;

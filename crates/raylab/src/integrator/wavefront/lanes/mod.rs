@@ -44,7 +44,8 @@ use glam::{Vec2, Vec3};
 use std::borrow::Cow;
 
 use super::super::light_sampler::{LanePick, LaneRole, SHADOW_RAY_LENGTH};
-use super::super::path::{Frame, LaneKind, LaneSurface, Vertex, facing};
+use super::super::path::{Frame, Vertex, facing};
+use super::surface::{LaneKind, LaneSurface};
 use crate::cpu::Isa;
 use crate::material::lanes::{LaneBsdf, PARAMS};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
@@ -57,7 +58,7 @@ use crate::sampling::{
 /// that maps kinds to the types whose code the lanes compile.
 macro_rules! with_lane_bsdf {
     ($kind:expr, $B:ident => $body:expr) => {{
-        use $crate::integrator::path::LaneKind as Kind;
+        use $crate::integrator::wavefront::surface::LaneKind as Kind;
         use $crate::material as m;
         match $kind {
             Kind::Diffuse => {

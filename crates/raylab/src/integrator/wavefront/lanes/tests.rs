@@ -3,8 +3,9 @@
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::super::super::path::{LaneKind, PathState};
+use super::super::super::path::PathState;
 use super::super::super::{PathScalar, PathSettings};
+use super::super::surface::LaneKind;
 use super::*;
 use crate::bvh::Bvh;
 use crate::material::{
