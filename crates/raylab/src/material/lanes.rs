@@ -1,7 +1,7 @@
 //! The BSDFs as the path tracer's lanes hold them: each kind's parameters as a few floats, so
 //! that sixteen vertices of one kind keep theirs row by row (structure of arrays) and one loop
 //! evaluates and samples all sixteen, sixteen lanes per AVX-512 instruction
-//! (`integrator/wavefront/lanes`).
+//! (`integrator/wavefront/vertices`).
 //!
 //! A kind's [`LaneBsdf::from_params`] rebuilds exactly the BSDF that
 //! [`to_params`](LaneBsdf::to_params) took apart (every field, the derived ones too), and its

@@ -19,7 +19,7 @@
 //! 3. **draws**: a chunk's numbers (the light's choice and point, the BSDF's lobe and
 //!    direction, the roulette's) in one pass over their samplers
 //!    ([`Sampler::next_vertex_each`], sixteen lanes per loop);
-//! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes (`lanes/`:
+//! 4. **shading**: light sampling, BSDF sampling and Russian roulette. The lanes (`vertices/`:
 //!    sixteen to a chunk in structure-of-arrays form, one BSDF kind to a chunk) get their
 //!    lights and numbers and are shaded by one loop the compiler vectorizes, sixteen lanes per
 //!    AVX-512 instruction; lights other than area-sampled triangles and the constant
@@ -45,9 +45,9 @@
 //! as the scalar path does.
 
 mod clock;
-mod lanes;
 mod stages;
 mod surface;
+mod vertices;
 
 use glam::Vec3;
 

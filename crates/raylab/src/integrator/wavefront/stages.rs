@@ -7,8 +7,8 @@ use std::sync::atomic::Ordering;
 use glam::Vec3;
 
 use super::clock::{Lap, StageClock};
-use super::lanes::{self, LaneDraws, LaneVertex, Lanes};
 use super::surface::LaneKind;
+use super::vertices::{self, LaneDraws, LaneVertex, VertexLanes};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
 use crate::integrator::light_sampler::LaneRole;
@@ -40,7 +40,7 @@ struct Tile {
     shadows: ShadowRays,
     numbers: Numbers,
     /// The vertices in lanes, a set for each BSDF kind, and their paths.
-    sets: [(Lanes, Vec<usize>); LaneKind::ALL.len()],
+    sets: [(VertexLanes, Vec<usize>); LaneKind::ALL.len()],
     /// The paths that go on after this bounce.
     bounced: Vec<usize>,
 }
@@ -55,7 +55,7 @@ impl Tile {
             hits: Vec::with_capacity(n),
             shadows: ShadowRays::with_capacity(n),
             numbers: Numbers::with_capacity(n),
-            sets: std::array::from_fn(|_| (Lanes::default(), Vec::new())),
+            sets: std::array::from_fn(|_| (VertexLanes::default(), Vec::new())),
             bounced: Vec::with_capacity(n),
         }
     }
@@ -162,7 +162,7 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
                 },
             );
             paths.push(i);
-            if set.len() == lanes::LANES {
+            if set.len() == vertices::LANES {
                 chunk.lap.end(|t| &t.surfaces);
                 self.shade_kind(kind, &mut chunk, set, paths);
                 set.clear();
@@ -194,19 +194,30 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
 
     /// [`shade_lanes`](Self::shade_lanes) with the code of `kind`'s BSDF.
     #[inline(never)]
-    fn shade_kind(&self, kind: LaneKind, chunk: &mut Chunk, lanes: &mut Lanes, paths: &[usize]) {
-        lanes::with_lane_bsdf!(kind, B => self.shade_lanes::<B>(chunk, lanes, paths))
+    fn shade_kind(
+        &self,
+        kind: LaneKind,
+        chunk: &mut Chunk,
+        lanes: &mut VertexLanes,
+        paths: &[usize],
+    ) {
+        vertices::with_lane_bsdf!(kind, B => self.shade_lanes::<B>(chunk, lanes, paths))
     }
 
     /// Draws the numbers of `lanes` (the vertices of `paths`, whose BSDFs are `B`s), shades
     /// them, and takes their results: shadow rays, and the next rays of the paths that go on.
     #[inline(never)]
-    fn shade_lanes<B: LaneBsdf>(&self, chunk: &mut Chunk, lanes: &mut Lanes, paths: &[usize]) {
+    fn shade_lanes<B: LaneBsdf>(
+        &self,
+        chunk: &mut Chunk,
+        lanes: &mut VertexLanes,
+        paths: &[usize],
+    ) {
         let path = self.path;
         chunk.numbers.draw(chunk.samplers, paths);
         chunk.lap.end(|t| &t.draws);
         // The lanes the scalar steps decide in part or whole (for the stage table).
-        debug_assert!(paths.len() <= lanes::LANES, "a chunk at a time");
+        debug_assert!(paths.len() <= vertices::LANES, "a chunk at a time");
         let mut scalar = 0u32;
         for (lane, &i) in paths.iter().enumerate() {
             let drawn = chunk.numbers.drawn[lane];

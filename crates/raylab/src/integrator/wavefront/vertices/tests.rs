@@ -208,7 +208,7 @@ fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: LaneKind, sky: bool) {
     let forward: Vec<usize> = (0..cases.len()).collect();
     let backward: Vec<usize> = forward.iter().rev().copied().collect();
     for isa in Isa::ALL.into_iter().filter(|isa| isa.is_supported()) {
-        let mut lanes = Lanes::default();
+        let mut lanes = VertexLanes::default();
         for order in [&forward, &backward] {
             lanes.clear();
             for (i, &c) in order.iter().enumerate() {

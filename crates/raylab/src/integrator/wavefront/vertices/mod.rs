@@ -4,7 +4,7 @@
 //! toward the constant environment, the shadow ray, the BSDF's value and the MIS weight), BSDF
 //! sampling (the direction and the next ray) and Russian roulette.
 //!
-//! ## Lanes
+//! ## Vertices in lanes
 //! The vertices of one BSDF kind are gathered sixteen to a chunk (`Input`): every quantity a
 //! row of sixteen floats (structure of arrays), `input.p.x[k]` the `x` of lane `k`'s point, the
 //! BSDF's parameters too ([`LaneBsdf`]: a rough conductor's η, k, tint and roughnesses are
@@ -362,13 +362,13 @@ unsafe fn shade_chunk_on<B: LaneBsdf, const SKY: bool>(
 /// together ([`shade`](Self::shade), with the kind's code), then read back lane by lane
 /// ([`result`](Self::result)).
 #[derive(Debug, Default)]
-pub(super) struct Lanes {
+pub(super) struct VertexLanes {
     inputs: Vec<Input>,
     outputs: Vec<Output>,
     len: usize,
 }
 
-/// A vertex's path, as [`Lanes::push`] takes it with the vertex.
+/// A vertex's path, as [`VertexLanes::push`] takes it with the vertex.
 pub(super) struct LaneVertex {
     /// The direction of the ray that arrived.
     pub arrival: Vec3,
@@ -377,7 +377,7 @@ pub(super) struct LaneVertex {
     pub roulette: bool,
 }
 
-/// A lane's light and numbers, as [`Lanes::set_draws`] takes them.
+/// A lane's light and numbers, as [`VertexLanes::set_draws`] takes them.
 pub(super) struct LaneDraws<'a> {
     pub light: LanePick<'a>,
     /// The light's numbers as drawn (the lanes rescale the first within the light's share).
@@ -399,7 +399,7 @@ pub(super) struct Next {
     pub eta: f32,
 }
 
-/// What [`Lanes::result`] gives for a lane.
+/// What [`VertexLanes::result`] gives for a lane.
 pub(super) struct LaneResult {
     /// The shadow ray and what it brings if unblocked.
     pub shadow: Option<(Ray, Vec3)>,
@@ -411,7 +411,7 @@ pub(super) struct LaneResult {
     pub light_in_lanes: bool,
 }
 
-impl Lanes {
+impl VertexLanes {
     /// No lanes.
     pub(super) fn clear(&mut self) {
         self.len = 0;
