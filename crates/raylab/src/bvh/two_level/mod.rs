@@ -144,8 +144,9 @@ impl<A: Accelerator> TwoLevel<A> {
 
     /// The same accelerator with its single rays walking the top level's tree even where the
     /// instances are few enough for rows (`rows.rs`), or its rows tested with `isa`'s
-    /// instructions (which this CPU must have): for the tests that compare them.
-    #[doc(hidden)]
+    /// instructions (which this CPU must have): for the tests that compare them, with the
+    /// `support` feature.
+    #[cfg(feature = "support")]
     pub fn with_top_rows(mut self, isa: Option<crate::cpu::Isa>) -> Self {
         assert!(isa.is_none_or(|isa| isa.is_supported()), "{isa:?} is not supported here");
         self.rows = isa.and_then(|isa| TopRows::new(&self.placed, isa));

@@ -92,10 +92,12 @@ impl<'a, A: Accelerator + ?Sized> Path<'a, A> {
     }
 
     /// The same, with its lanes run on the instruction set `isa` rather than the best this CPU
-    /// has (the same samples, to the bit): for tests and benchmarks.
+    /// has (the same samples, to the bit): for tests and benchmarks, with the `support`
+    /// feature. (`RAYLAB_ISA` caps the instruction set of a whole process: [`Isa::detect`].)
     ///
     /// # Panics
     /// If this CPU does not support `isa`.
+    #[cfg(feature = "support")]
     pub fn with_isa(mut self, isa: Isa) -> Self {
         assert!(isa.is_supported(), "{} is not supported by this CPU", isa.name());
         self.isa = isa;
