@@ -5,7 +5,7 @@
 //! `tools/mitsuba/cbox_reference.py --variant llvm_ad_rgb --size 64 --spp 4096 --passes 16
 //! --seed 2000` (its own noise is about 0.0016 RMS). Mitsuba is not needed to run these tests.
 //!
-//! The renders are the default `path`, the wavefront ([`Path`]); its pixels are the
+//! The renders are the default `path`, the wavefront ([`Wavefront`]); its pixels are the
 //! scalar path's to the bit (`tests/wavefront.rs`, `tests/furnace.rs`).
 
 use std::path::{Path, PathBuf};
@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use raylab::film::Display;
 use raylab::image_compare::save_failure_images;
-use raylab::integrator::Path as PathTracer;
+use raylab::integrator::Path as Wavefront;
 use raylab::scene::{Instancing, LoadOptions};
 use raylab::{
     Accumulator, Bvh, Camera, Film, PathSettings, SampleSettings, SamplerKind, Scene, SceneBvh,
@@ -50,7 +50,7 @@ fn render_with(
     let bvh = Bvh::new(&scene.vertices());
     let max_depth = scene.settings.max_depth.unwrap();
     let path_settings = PathSettings { max_depth, light_sampling, ..PathSettings::default() };
-    let path = PathTracer::new(scene, &bvh, path_settings);
+    let path = Wavefront::new(scene, &bvh, path_settings);
     let mut accumulator = Accumulator::new(64, 64).unwrap();
     // A render of `spp` samples: the count `multijitter` lays out.
     accumulator.settings = SampleSettings { count: spp, ..settings };
@@ -223,7 +223,7 @@ fn render_beside_its_reference(
     let accel = SceneBvh::build(&scene.geometry).unwrap();
     let max_depth = scene.settings.max_depth.unwrap();
     let path =
-        PathTracer::new(&scene, &accel, PathSettings { max_depth, ..PathSettings::default() });
+        Wavefront::new(&scene, &accel, PathSettings { max_depth, ..PathSettings::default() });
     let mut accumulator = Accumulator::new(width, height).unwrap();
     accumulator.settings = SampleSettings { seed, ..SampleSettings::default() };
     for _ in 0..spp {

@@ -5,7 +5,7 @@
 //! from a [`Sampler`](crate::sampling::Sampler) made from (seed, pixel, sample index) alone, so
 //! the picture is the same for any thread count or tiling.
 //!
-//! The first two numbers place the sample in the pixel (with the [`Filter`]), the next two on
+//! The first two numbers place the sample in the pixel (with the [`Filter`](crate::filter::Filter)), the next two on
 //! the lens when the camera has an aperture, and the integrator takes the rest. With the lab's
 //! sampler, sample 0 of a pixel goes through its centre, which is the lab's one ray per pixel.
 //! An [`Accumulator`] adds samples a pass at a time, which is how `raylab view` refines a still

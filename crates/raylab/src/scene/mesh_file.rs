@@ -25,7 +25,7 @@ pub use crate::file_bytes::read_limit_bytes;
 pub use crate::mesh::InstancedMesh;
 use crate::mesh::Mesh;
 
-/// The file name endings [`load_mesh`] accepts, in any case.
+/// The file name endings [`load_mesh`](super::load_mesh) accepts, in any case.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[".obj", ".obj.gz", ".ply", ".ply.gz", ".gltf", ".glb"];
 
 /// A mesh as loaded, with the warnings the loader has for the caller.

@@ -602,7 +602,7 @@ impl LightSet {
     /// from behind.
     #[inline]
     pub fn emitted(&self, origin: Vec3, hit: &SurfaceInteraction) -> (Vec3, f32) {
-        // `plain_surface` in `path.rs` relies on this: only the triangles of lights emit.
+        // `plain_surface` in `wavefront/surface.rs` relies on this: only the triangles of lights emit.
         let light = self.triangle_light[hit.triangle as usize];
         if light == u32::MAX {
             return (Vec3::ZERO, 0.0);

@@ -17,7 +17,7 @@ use crate::bvh::{BuildSettings, Bvh, SceneBvh};
 use crate::camera::Camera;
 use crate::film::{Display, Film, ToneMap, format_bytes};
 use crate::image_io::{self, ImageFormat, ImageIoError};
-use crate::integrator::{Aov, Integrator, Lab, Path as PathTracer, PathScalar, WithAovs};
+use crate::integrator::{Aov, Integrator, Lab, Path as Wavefront, PathScalar, WithAovs};
 use crate::parts::{self, Part, PartHeader, PartKind};
 use crate::region::Region;
 use crate::render::Accumulator;
@@ -403,7 +403,7 @@ impl<'s> RenderJob<'s> {
         let base: &dyn Integrator = match settings.integrator {
             IntegratorKind::Lab => &lab,
             IntegratorKind::Path => {
-                wavefront = PathTracer::new(scene, accel, settings.path_settings());
+                wavefront = Wavefront::new(scene, accel, settings.path_settings());
                 &wavefront
             }
             IntegratorKind::PathScalar => {

@@ -35,9 +35,9 @@
 //! ([`LaneRole::Other`]: point lights, textured emitters, solid-angle sampling), and the rare point
 //! whose offset is not finite (`exact` is false: the scalar offset's fallback decides it).
 //!
-//! [`PathScalar::sample_light_with`]: super::super::Path
-//! [`PathScalar::bounce`]: super::super::Path
-//! [`PathScalar::survives_roulette`]: super::super::Path
+//! [`PathScalar::sample_light_with`]: super::super::PathScalar
+//! [`PathScalar::bounce`]: super::super::PathScalar
+//! [`PathScalar::survives_roulette`]: super::super::PathScalar
 
 use glam::{Vec2, Vec3};
 
