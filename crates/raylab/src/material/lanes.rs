@@ -264,6 +264,13 @@ pub(crate) fn store_params<B: LaneBsdf>(bsdf: &B, rows: &mut ParamRows, k: usize
     }
 }
 
+/// Writes the parameters of whichever BSDF `bsdf` is into lane `k` of `rows`
+/// ([`store_params`]).
+#[inline(always)]
+pub(crate) fn store(bsdf: &Bsdf, rows: &mut ParamRows, k: usize) {
+    super::each_bsdf!(bsdf, b => store_params(b, rows, k))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

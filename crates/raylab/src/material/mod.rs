@@ -225,39 +225,115 @@ impl Material {
     }
 }
 
-/// A bidirectional scattering distribution function.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Bsdf {
-    /// Lambertian reflection (Mitsuba's `diffuse`).
-    Diffuse(Diffuse),
-    /// A smooth metal (Mitsuba's `conductor`).
-    Conductor(Conductor),
-    /// A rough metal (Mitsuba's `roughconductor`).
-    RoughConductor(RoughConductor),
-    /// Smooth glass (Mitsuba's `dielectric`).
-    Dielectric(Dielectric),
-    /// Rough glass (Mitsuba's `roughdielectric`).
-    RoughDielectric(RoughDielectric),
-    /// A diffuse base under a smooth coating (Mitsuba's `plastic`).
-    Plastic(Plastic),
-    /// glTF's metallic-roughness material.
-    Pbr(Pbr),
-}
-
-/// Calls the same method on whichever BSDF it is.
-macro_rules! each_bsdf {
-    ($self:expr, $b:ident => $call:expr) => {
-        match $self {
-            Bsdf::Diffuse($b) => $call,
-            Bsdf::Conductor($b) => $call,
-            Bsdf::RoughConductor($b) => $call,
-            Bsdf::Dielectric($b) => $call,
-            Bsdf::RoughDielectric($b) => $call,
-            Bsdf::Plastic($b) => $call,
-            Bsdf::Pbr($b) => $call,
+/// The one list of BSDFs: each entry names a variant of [`Bsdf`] and the type it holds (they
+/// share a name), with the variant's documentation.
+///
+/// `bsdf_list!(callback!(args))` hands the list to `callback!`, after `(args)`. Everything that
+/// goes over every BSDF is made from it: the [`Bsdf`] enum and its kinds (`BsdfKind`, below),
+/// dispatch on a BSDF (`each_bsdf!`) and on a kind (`with_bsdf_type!`, which the wavefront's
+/// lanes compile each kind's code with). A new BSDF is a line here, its own file with `eval`,
+/// `pdf` and `sample`, and its lane form (`LaneBsdf`, `lanes.rs`); the compiler then names
+/// every `match` that must learn it.
+macro_rules! bsdf_list {
+    ($callback:ident!($($args:tt)*)) => {
+        $crate::material::$callback! { ($($args)*)
+            /// Lambertian reflection (Mitsuba's `diffuse`).
+            Diffuse,
+            /// A smooth metal (Mitsuba's `conductor`).
+            Conductor,
+            /// A rough metal (Mitsuba's `roughconductor`).
+            RoughConductor,
+            /// Smooth glass (Mitsuba's `dielectric`).
+            Dielectric,
+            /// Rough glass (Mitsuba's `roughdielectric`).
+            RoughDielectric,
+            /// A diffuse base under a smooth coating (Mitsuba's `plastic`).
+            Plastic,
+            /// glTF's metallic-roughness material.
+            Pbr,
         }
     };
 }
+pub(crate) use bsdf_list;
+
+/// Declares [`Bsdf`], `BsdfKind` and `Bsdf::kind` from the list.
+macro_rules! declare_bsdfs {
+    (() $($(#[$doc:meta])* $name:ident,)*) => {
+        /// A bidirectional scattering distribution function: one variant per BSDF, each
+        /// holding the BSDF of the same name.
+        #[derive(Clone, Debug, PartialEq)]
+        pub enum Bsdf {
+            $($(#[$doc])* $name($name),)*
+        }
+
+        /// Which BSDF a [`Bsdf`] is, without its parameters: the wavefront groups its
+        /// vertices by it.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub(crate) enum BsdfKind {
+            $($(#[$doc])* $name,)*
+        }
+
+        impl BsdfKind {
+            /// Every kind, in the list's order (`kind as usize` is its index).
+            pub(crate) const ALL: [BsdfKind; [$(stringify!($name)),*].len()] =
+                [$(BsdfKind::$name),*];
+        }
+
+        impl Bsdf {
+            /// Which BSDF it is.
+            #[inline(always)]
+            pub(crate) fn kind(&self) -> BsdfKind {
+                match self {
+                    $(Bsdf::$name(_) => BsdfKind::$name,)*
+                }
+            }
+        }
+    };
+}
+pub(crate) use declare_bsdfs;
+
+bsdf_list!(declare_bsdfs!());
+
+/// `each_bsdf!(bsdf, b => expr)`: `expr` with `b` bound to the BSDF that `bsdf` (a `&Bsdf`)
+/// holds, whichever it is.
+macro_rules! each_bsdf {
+    ($bsdf:expr, $b:ident => $body:expr) => {
+        $crate::material::bsdf_list!(each_bsdf_match!($bsdf, $b => $body))
+    };
+}
+pub(crate) use each_bsdf;
+
+/// The `match` of [`each_bsdf!`], over the list.
+macro_rules! each_bsdf_match {
+    (($bsdf:expr, $b:ident => $body:expr) $($(#[$doc:meta])* $name:ident,)*) => {
+        match $bsdf {
+            $($crate::material::Bsdf::$name($b) => $body,)*
+        }
+    };
+}
+pub(crate) use each_bsdf_match;
+
+/// `with_bsdf_type!(kind, B => expr)`: `expr` with the type `B` the BSDF of kind `kind` (a
+/// `BsdfKind`): how code generic over the BSDF type is run for a kind known only at run time.
+macro_rules! with_bsdf_type {
+    ($kind:expr, $B:ident => $body:expr) => {
+        $crate::material::bsdf_list!(with_bsdf_type_match!($kind, $B => $body))
+    };
+}
+pub(crate) use with_bsdf_type;
+
+/// The `match` of [`with_bsdf_type!`], over the list.
+macro_rules! with_bsdf_type_match {
+    (($kind:expr, $B:ident => $body:expr) $($(#[$doc:meta])* $name:ident,)*) => {
+        match $kind {
+            $($crate::material::BsdfKind::$name => {
+                type $B = $crate::material::$name;
+                $body
+            })*
+        }
+    };
+}
+pub(crate) use with_bsdf_type_match;
 
 impl Bsdf {
     /// The BSDF times `|cos θo|` for light arriving from `wo` and leaving toward `wi` (local

@@ -7,13 +7,13 @@ use std::sync::atomic::Ordering;
 use glam::Vec3;
 
 use super::clock::{Lap, StageClock};
-use super::surface::LaneKind;
 use super::vertices::{self, LaneDraws, LaneVertex, VertexLanes};
 use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
 use crate::integrator::light_sampler::LaneRole;
 use crate::integrator::path::{PathScalar, PathState, Vertex};
 use crate::integrator::{closest_opaque_hit, occluded_opaque};
+use crate::material::BsdfKind;
 use crate::material::lanes::LaneBsdf;
 use crate::ray::Ray;
 use crate::sampling::{Sampler, VertexNumbers};
@@ -40,7 +40,7 @@ struct Tile {
     shadows: ShadowRays,
     numbers: Numbers,
     /// The vertices in lanes, a set for each BSDF kind, and their paths.
-    sets: [(VertexLanes, Vec<usize>); LaneKind::ALL.len()],
+    sets: [(VertexLanes, Vec<usize>); BsdfKind::ALL.len()],
     /// The paths that go on after this bounce.
     bounced: Vec<usize>,
 }
@@ -150,7 +150,7 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
                     path.lane_surface(&state.ray, &interaction)
                 }
             };
-            let kind = LaneKind::kind(&surface.bsdf);
+            let kind = surface.bsdf.kind();
             let (set, paths) = &mut sets[kind as usize];
             set.push(
                 &surface,
@@ -170,7 +170,7 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
             }
         }
         chunk.lap.end(|t| &t.surfaces);
-        for (kind, (set, paths)) in LaneKind::ALL.into_iter().zip(sets.iter_mut()) {
+        for (kind, (set, paths)) in BsdfKind::ALL.into_iter().zip(sets.iter_mut()) {
             if set.len() > 0 {
                 self.shade_kind(kind, &mut chunk, set, paths);
                 set.clear();
@@ -196,12 +196,12 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
     #[inline(never)]
     fn shade_kind(
         &self,
-        kind: LaneKind,
+        kind: BsdfKind,
         chunk: &mut Chunk,
         lanes: &mut VertexLanes,
         paths: &[usize],
     ) {
-        vertices::with_lane_bsdf!(kind, B => self.shade_lanes::<B>(chunk, lanes, paths))
+        crate::material::with_bsdf_type!(kind, B => self.shade_lanes::<B>(chunk, lanes, paths))
     }
 
     /// Draws the numbers of `lanes` (the vertices of `paths`, whose BSDFs are `B`s), shades

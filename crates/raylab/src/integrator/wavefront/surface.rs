@@ -1,5 +1,4 @@
-//! A vertex as the wavefront's lanes take it ([`LaneSurface`]), which kind of BSDF it holds
-//! ([`LaneKind`]), and how the scalar path tracer's surfaces become it: in general
+//! A vertex as the wavefront's lanes take it ([`LaneSurface`]), and how the scalar path tracer's surfaces become it: in general
 //! ([`PathScalar::lane_surface`]) and by the shortcut for the commonest hits
 //! ([`PathScalar::plain_surface`]).
 
@@ -11,7 +10,6 @@ use crate::accel::{Accelerator, Hit};
 use crate::integrator::path::PathScalar;
 use crate::interaction::SurfaceInteraction;
 use crate::material::Bsdf;
-use crate::material::lanes::{ParamRows, store_params};
 use crate::ray::{Ray, SurfacePoint};
 use crate::texture::TextureQuery;
 
@@ -27,59 +25,6 @@ pub(super) struct LaneSurface<'s> {
     pub two_sided: bool,
     pub tangent: Option<Vec3>,
     pub bsdf: Cow<'s, Bsdf>,
-}
-
-/// Which kind of BSDF a lane holds: one variant per [`Bsdf`] variant.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum LaneKind {
-    Diffuse,
-    Conductor,
-    RoughConductor,
-    Dielectric,
-    RoughDielectric,
-    Plastic,
-    Pbr,
-}
-
-impl LaneKind {
-    /// Every kind, in the order of their indices.
-    pub(super) const ALL: [LaneKind; 7] = [
-        LaneKind::Diffuse,
-        LaneKind::Conductor,
-        LaneKind::RoughConductor,
-        LaneKind::Dielectric,
-        LaneKind::RoughDielectric,
-        LaneKind::Plastic,
-        LaneKind::Pbr,
-    ];
-
-    /// Writes `bsdf`'s floats into lane `k` of `rows` ([`store_params`]).
-    #[inline(always)]
-    pub(super) fn store(bsdf: &Bsdf, rows: &mut ParamRows, k: usize) {
-        match bsdf {
-            Bsdf::Diffuse(b) => store_params(b, rows, k),
-            Bsdf::Conductor(b) => store_params(b, rows, k),
-            Bsdf::RoughConductor(b) => store_params(b, rows, k),
-            Bsdf::Dielectric(b) => store_params(b, rows, k),
-            Bsdf::RoughDielectric(b) => store_params(b, rows, k),
-            Bsdf::Plastic(b) => store_params(b, rows, k),
-            Bsdf::Pbr(b) => store_params(b, rows, k),
-        }
-    }
-
-    /// `bsdf`'s kind.
-    #[inline(always)]
-    pub(super) fn kind(bsdf: &Bsdf) -> LaneKind {
-        match bsdf {
-            Bsdf::Diffuse(_) => LaneKind::Diffuse,
-            Bsdf::Conductor(_) => LaneKind::Conductor,
-            Bsdf::RoughConductor(_) => LaneKind::RoughConductor,
-            Bsdf::Dielectric(_) => LaneKind::Dielectric,
-            Bsdf::RoughDielectric(_) => LaneKind::RoughDielectric,
-            Bsdf::Plastic(_) => LaneKind::Plastic,
-            Bsdf::Pbr(_) => LaneKind::Pbr,
-        }
-    }
 }
 
 impl<'a, A: Accelerator + ?Sized> PathScalar<'a, A> {

@@ -45,7 +45,7 @@ use std::borrow::Cow;
 
 use super::super::light_sampler::{LanePick, LaneRole, SHADOW_RAY_LENGTH};
 use super::super::path::{Frame, Vertex, facing};
-use super::surface::{LaneKind, LaneSurface};
+use super::surface::LaneSurface;
 use crate::cpu::Isa;
 use crate::material::lanes::{LaneBsdf, PARAMS};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
@@ -53,46 +53,6 @@ use crate::sampling::{
     power_heuristic, rescaled, square_to_uniform_sphere, square_to_uniform_triangle,
     uniform_sphere_pdf,
 };
-
-/// Runs `$body` with `$B` the BSDF type of the kind `$kind` (a [`LaneKind`]): the one place
-/// that maps kinds to the types whose code the lanes compile.
-macro_rules! with_lane_bsdf {
-    ($kind:expr, $B:ident => $body:expr) => {{
-        use $crate::integrator::wavefront::surface::LaneKind as Kind;
-        use $crate::material as m;
-        match $kind {
-            Kind::Diffuse => {
-                type $B = m::Diffuse;
-                $body
-            }
-            Kind::Conductor => {
-                type $B = m::Conductor;
-                $body
-            }
-            Kind::RoughConductor => {
-                type $B = m::RoughConductor;
-                $body
-            }
-            Kind::Dielectric => {
-                type $B = m::Dielectric;
-                $body
-            }
-            Kind::RoughDielectric => {
-                type $B = m::RoughDielectric;
-                $body
-            }
-            Kind::Plastic => {
-                type $B = m::Plastic;
-                $body
-            }
-            Kind::Pbr => {
-                type $B = m::Pbr;
-                $body
-            }
-        }
-    }};
-}
-pub(super) use with_lane_bsdf;
 
 /// Lanes per chunk: one AVX-512 register of floats (the BSDFs' parameter rows have as many).
 pub(super) const LANES: usize = crate::material::lanes::LANES;
@@ -442,7 +402,7 @@ impl VertexLanes {
         }
         input.two_sided[k] = surface.two_sided;
         input.arrival.set(k, v.arrival);
-        LaneKind::store(&surface.bsdf, &mut input.params, k);
+        crate::material::lanes::store(&surface.bsdf, &mut input.params, k);
         input.throughput.set(k, v.throughput);
         input.eta[k] = v.eta;
         input.roulette[k] = v.roulette;

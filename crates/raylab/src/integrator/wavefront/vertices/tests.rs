@@ -5,13 +5,13 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use super::super::super::path::PathState;
 use super::super::super::{PathScalar, PathSettings};
-use super::super::surface::LaneKind;
 use super::*;
 use crate::bvh::Bvh;
 use crate::material::{
     Bsdf, Conductor, Dielectric, Diffuse, Ggx, Material, Pbr, Plastic, RoughConductor,
     RoughDielectric,
 };
+use crate::material::{BsdfKind, with_bsdf_type};
 use crate::mesh::Mesh;
 use crate::sampling::Pcg32;
 use crate::scene::Scene;
@@ -72,7 +72,7 @@ fn same3(a: Vec3, b: Vec3) -> bool {
 
 /// A BSDF of each kind with hostile parameters: zero and huge colours, roughnesses at the
 /// clamp and anisotropic, indices of refraction above and below 1.
-fn hostile_bsdf(rng: &mut Pcg32, kind: LaneKind) -> Bsdf {
+fn hostile_bsdf(rng: &mut Pcg32, kind: BsdfKind) -> Bsdf {
     let colour = |rng: &mut Pcg32| {
         Vec3::new(hostile(rng, 1.0, 0.0), rng.next_f32(), hostile(rng, 1.0, 0.0)).abs()
     };
@@ -90,24 +90,24 @@ fn hostile_bsdf(rng: &mut Pcg32, kind: LaneKind) -> Bsdf {
         specular_reflectance: colour(rng),
     };
     match kind {
-        LaneKind::Diffuse => Bsdf::Diffuse(Diffuse { reflectance: colour(rng) }),
-        LaneKind::Conductor => Bsdf::Conductor(conductor(rng)),
-        LaneKind::RoughConductor => Bsdf::RoughConductor(RoughConductor {
+        BsdfKind::Diffuse => Bsdf::Diffuse(Diffuse { reflectance: colour(rng) }),
+        BsdfKind::Conductor => Bsdf::Conductor(conductor(rng)),
+        BsdfKind::RoughConductor => Bsdf::RoughConductor(RoughConductor {
             conductor: conductor(rng),
             distribution: Ggx::new(alpha(rng), alpha(rng)),
         }),
-        LaneKind::Dielectric => Bsdf::Dielectric(Dielectric { eta: eta(rng) }),
-        LaneKind::RoughDielectric => Bsdf::RoughDielectric(RoughDielectric {
+        BsdfKind::Dielectric => Bsdf::Dielectric(Dielectric { eta: eta(rng) }),
+        BsdfKind::RoughDielectric => Bsdf::RoughDielectric(RoughDielectric {
             eta: eta(rng),
             distribution: Ggx::new(alpha(rng), alpha(rng)),
         }),
-        LaneKind::Plastic => Bsdf::Plastic(Plastic::new(
+        BsdfKind::Plastic => Bsdf::Plastic(Plastic::new(
             colour(rng),
             colour(rng),
             eta(rng),
             rng.next_u32().is_multiple_of(2),
         )),
-        LaneKind::Pbr => Bsdf::Pbr(Pbr {
+        BsdfKind::Pbr => Bsdf::Pbr(Pbr {
             base_color: colour(rng),
             metallic: rng.next_f32(),
             roughness: alpha(rng),
@@ -122,18 +122,18 @@ fn hostile_bsdf(rng: &mut Pcg32, kind: LaneKind) -> Bsdf {
 /// they are not exact), numbers at 0 and just below 1, and lights picked of both kinds.
 #[test]
 fn lanes_are_the_scalar_paths_bits_on_every_instruction_set() {
-    for kind in LaneKind::ALL {
-        with_lane_bsdf!(kind, B => lanes_match_the_scalar_path::<B>(kind));
+    for kind in BsdfKind::ALL {
+        with_bsdf_type!(kind, B => lanes_match_the_scalar_path::<B>(kind));
     }
 }
 
-fn lanes_match_the_scalar_path<B: LaneBsdf>(kind: LaneKind) {
+fn lanes_match_the_scalar_path<B: LaneBsdf>(kind: BsdfKind) {
     for sky in [true, false] {
         lanes_match_the_scalar_path_in::<B>(kind, sky);
     }
 }
 
-fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: LaneKind, sky: bool) {
+fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: BsdfKind, sky: bool) {
     let scene = scene(sky);
     let bvh = Bvh::new(&scene.vertices());
     let path = PathScalar::new(&scene, &bvh, PathSettings::default());
@@ -175,7 +175,7 @@ fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: LaneKind, sky: bool) {
             None => Frame::about(shading_normal),
         };
         let (frame, flip, wi) = facing(two_sided, arrival, frame);
-        assert_eq!(LaneKind::kind(&bsdf), kind);
+        assert_eq!(bsdf.kind(), kind);
         let surface = LaneSurface {
             point,
             normal: shading_normal,
@@ -225,7 +225,7 @@ fn lanes_match_the_scalar_path_in<B: LaneBsdf>(kind: LaneKind, sky: bool) {
                 // (Bit for bit: a huge colour gives a plastic a NaN weight, which `==` refuses.)
                 let bits = |bsdf: &Bsdf| {
                     let mut rows = [[0.0; LANES]; PARAMS];
-                    LaneKind::store(bsdf, &mut rows, 0);
+                    crate::material::lanes::store(bsdf, &mut rows, 0);
                     rows.map(|row| row[0].to_bits())
                 };
                 assert!(bits(&rebuilt.bsdf) == bits(&vertex.bsdf) && rebuilt.flip == vertex.flip);
