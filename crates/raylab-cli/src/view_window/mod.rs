@@ -394,13 +394,13 @@ fn mode_for(code: KeyCode) -> Option<ViewMode> {
         KeyCode::Digit3 | KeyCode::Numpad3 => 2,
         KeyCode::Digit4 | KeyCode::Numpad4 => 3,
         KeyCode::Digit5 | KeyCode::Numpad5 => 4,
-        KeyCode::Digit6 | KeyCode::Numpad6 => return Some(ViewMode::Path),
-        KeyCode::Digit7 | KeyCode::Numpad7 => return Some(ViewMode::Albedo),
-        KeyCode::Digit8 | KeyCode::Numpad8 => return Some(ViewMode::Normals),
-        KeyCode::Digit9 | KeyCode::Numpad9 => return Some(ViewMode::Depth),
+        KeyCode::Digit6 | KeyCode::Numpad6 => return Some(ViewMode::PATH),
+        KeyCode::Digit7 | KeyCode::Numpad7 => return Some(ViewMode::ALBEDO),
+        KeyCode::Digit8 | KeyCode::Numpad8 => return Some(ViewMode::NORMALS),
+        KeyCode::Digit9 | KeyCode::Numpad9 => return Some(ViewMode::DEPTH),
         _ => return None,
     };
-    Some(ViewMode::Lab(Stage::ALL[index]))
+    Some(ViewMode::lab(Stage::ALL[index]))
 }
 
 impl ApplicationHandler<FrameReady> for App<'_> {
@@ -526,11 +526,11 @@ mod tests {
         let stages =
             [KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5];
         for (code, stage) in stages.into_iter().zip(Stage::ALL) {
-            assert_eq!(mode_for(code), Some(ViewMode::Lab(stage)));
+            assert_eq!(mode_for(code), Some(ViewMode::lab(stage)));
         }
-        assert_eq!(mode_for(KeyCode::Numpad5), Some(ViewMode::Lab(Stage::Ambient)));
-        assert_eq!(mode_for(KeyCode::Digit6), Some(ViewMode::Path));
-        assert_eq!(mode_for(KeyCode::Numpad9), Some(ViewMode::Depth));
+        assert_eq!(mode_for(KeyCode::Numpad5), Some(ViewMode::lab(Stage::Ambient)));
+        assert_eq!(mode_for(KeyCode::Digit6), Some(ViewMode::PATH));
+        assert_eq!(mode_for(KeyCode::Numpad9), Some(ViewMode::DEPTH));
         assert_eq!(mode_for(KeyCode::Digit0), None);
     }
 }

@@ -4,13 +4,16 @@
 //! [`Stage`] for each step of the lab. [`Path`] is the path tracer, which sees the light the lab
 //! leaves out (indirect light, soft shadows from area lights): it runs a tile's paths stage by
 //! stage, their vertices in SIMD lanes (`wavefront/`). [`PathScalar`] is the same estimator one
-//! path at a time (`path.rs`), its twin: the same samples, to the bit.
+//! path at a time (`path.rs`), its twin: the same samples, to the bit. [`Aov`] shows what the
+//! camera sees first. [`Chosen`] builds whichever a [`Choice`] names: the one place that
+//! chooses, for rendering and viewing alike.
 //!
 //! An integrator draws every random number it needs from the [`Sampler`] it is given, which the
 //! renderer makes from (seed, pixel, sample index) alone: the same sample gives the same colour
 //! on any thread.
 
 mod aov;
+mod choice;
 mod lab;
 mod light_sampler;
 mod path;
@@ -19,6 +22,7 @@ mod wavefront;
 use glam::Vec3;
 
 pub use aov::{Aov, AovKind, WithAovs};
+pub use choice::{Choice, Chosen};
 pub use lab::{Lab, Stage};
 pub use light_sampler::{EnvironmentSampling, LightSample, LightSet, TriangleSampling};
 pub use path::{PathScalar, PathSettings};

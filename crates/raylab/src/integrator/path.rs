@@ -323,17 +323,17 @@ impl<'a, A: Accelerator + ?Sized> PathScalar<'a, A> {
         };
         let Some(hit) = hit else {
             let direction = state.ray.direction.normalize();
-            self.lights.escaped(direction, |radiance, light_pdf| {
-                let weight = found(light_pdf);
-                state.radiance += state.throughput * radiance * weight;
+            self.lights.escaped(direction, |light| {
+                let weight = found(light.pdf);
+                state.radiance += state.throughput * light.radiance * weight;
             });
             return None;
         };
         let interaction = self.scene.interaction(&state.ray, hit);
-        let (emitted, light_pdf) = self.lights.emitted(state.previous_point, &interaction);
-        if emitted != Vec3::ZERO {
-            let weight = found(light_pdf);
-            state.radiance += state.throughput * emitted * weight;
+        let light = self.lights.emitted(state.previous_point, &interaction);
+        if light.radiance != Vec3::ZERO {
+            let weight = found(light.pdf);
+            state.radiance += state.throughput * light.radiance * weight;
         }
         Some(interaction)
     }

@@ -17,58 +17,71 @@ use crate::accel::Accelerator;
 use crate::camera::Camera;
 use crate::film::{Display, FilmError};
 use crate::integrator::LightSet;
-use crate::integrator::{Aov, AovKind, Integrator, Lab, Path, PathSettings, Stage};
+use crate::integrator::{AovKind, Choice, Chosen, Integrator, PathSettings, Stage};
 use crate::ray::Ray;
 use crate::render::{Accumulator, SampleSettings};
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::settings::IntegratorKind;
 
-/// What a frame computes: the lab's light model at one of its stages, path tracing, or a
-/// first-hit image (see [`crate::integrator`]).
+/// What a frame computes: an integrator, and for the lab's its stage. The integrator is
+/// built by the one chooser renders use ([`Chosen`]); a view shows normals as `(n + 1)/2` and
+/// depth relative to the scene's size.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ViewMode {
-    /// The lab's model at a stage.
-    Lab(Stage),
-    /// Path tracing, refined progressively while the view is still.
-    Path,
-    /// The first surface's albedo.
-    Albedo,
-    /// The first surface's shading normal, shown as `(n + 1)/2`.
-    Normals,
-    /// The distance to the first surface, shown relative to the scene's size.
-    Depth,
+pub struct ViewMode {
+    /// Which integrator.
+    pub integrator: IntegratorKind,
+    /// The lab's stage (only the lab reads it).
+    pub stage: Stage,
 }
 
 impl ViewMode {
-    /// The mode that shows what `integrator` computes; `lab` shows `stage`.
-    pub fn of(integrator: IntegratorKind, stage: Stage) -> ViewMode {
-        match integrator {
-            IntegratorKind::Lab => ViewMode::Lab(stage),
-            IntegratorKind::Path | IntegratorKind::PathScalar => ViewMode::Path,
-            IntegratorKind::Aov(AovKind::Albedo) => ViewMode::Albedo,
-            IntegratorKind::Aov(AovKind::Normals) => ViewMode::Normals,
-            IntegratorKind::Aov(AovKind::Depth) => ViewMode::Depth,
-        }
+    /// Path tracing (the wavefront).
+    pub const PATH: ViewMode = ViewMode::of(IntegratorKind::Path, Stage::Ambient);
+    /// The first surface's albedo.
+    pub const ALBEDO: ViewMode = ViewMode::of(IntegratorKind::Aov(AovKind::Albedo), Stage::Ambient);
+    /// The first surface's shading normal, shown as `(n + 1)/2`.
+    pub const NORMALS: ViewMode =
+        ViewMode::of(IntegratorKind::Aov(AovKind::Normals), Stage::Ambient);
+    /// The distance to the first surface, shown relative to the scene's size.
+    pub const DEPTH: ViewMode = ViewMode::of(IntegratorKind::Aov(AovKind::Depth), Stage::Ambient);
+
+    /// The mode that shows what `integrator` computes; the lab shows `stage` (the others keep
+    /// the last stage, which they do not read, so that modes compare by what they show).
+    pub const fn of(integrator: IntegratorKind, stage: Stage) -> ViewMode {
+        let stage = match integrator {
+            IntegratorKind::Lab => stage,
+            _ => Stage::Ambient,
+        };
+        ViewMode { integrator, stage }
     }
 
-    /// How its radiance is shown: the lab's linear clamp, sRGB for the physically based modes.
+    /// The lab's model at `stage`.
+    pub const fn lab(stage: Stage) -> ViewMode {
+        ViewMode { integrator: IntegratorKind::Lab, stage }
+    }
+
+    /// How its radiance is shown: the lab's linear clamp for the lab, normals and depth, sRGB
+    /// for the physically based modes.
     pub fn display(self) -> Display {
-        match self {
-            ViewMode::Lab(_) | ViewMode::Normals | ViewMode::Depth => Display::LAB,
-            ViewMode::Path | ViewMode::Albedo => Display::SRGB,
+        match self.integrator {
+            IntegratorKind::Lab
+            | IntegratorKind::Aov(AovKind::Normals)
+            | IntegratorKind::Aov(AovKind::Depth) => Display::LAB,
+            IntegratorKind::Path
+            | IntegratorKind::PathScalar
+            | IntegratorKind::Aov(AovKind::Albedo) => Display::SRGB,
         }
     }
 }
 
 impl std::fmt::Display for ViewMode {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ViewMode::Lab(stage) => write!(f, "stage {stage}"),
-            ViewMode::Path => f.write_str("path tracing"),
-            ViewMode::Albedo => f.write_str("albedo"),
-            ViewMode::Normals => f.write_str("normals"),
-            ViewMode::Depth => f.write_str("depth"),
+        match self.integrator {
+            IntegratorKind::Lab => write!(f, "stage {}", self.stage),
+            IntegratorKind::Path => f.write_str("path tracing"),
+            IntegratorKind::PathScalar => f.write_str("path tracing (scalar)"),
+            IntegratorKind::Aov(kind) => f.write_str(kind.name()),
         }
     }
 }
@@ -233,13 +246,8 @@ impl FrameRenderer {
             }
         }
         let (_, _, picture) = self.picture.as_mut().expect("a picture was just made");
-        match view.mode {
-            ViewMode::Lab(stage) => {
-                let mut lab = Lab::new(scene, accel, stage).for_camera(&camera);
-                lab.light.position = view.pose.light;
-                add(picture, restart, &camera, &lab);
-            }
-            ViewMode::Path => {
+        let lights = match view.mode.integrator {
+            IntegratorKind::Path | IntegratorKind::PathScalar => {
                 let light = view.pose.light;
                 if self.lights.as_ref().is_none_or(|(at, _)| *at != light) {
                     // The scene's point light, where the controller moved it.
@@ -247,29 +255,30 @@ impl FrameRenderer {
                     moved.move_first_point_light(light);
                     self.lights = Some((light, moved));
                 }
-                let lights = &self.lights.as_ref().expect("made above").1;
-                let path = Path::with_lights(scene, accel, lights, self.path_settings);
-                add(picture, restart, &camera, &path);
+                self.lights.as_ref().map(|(_, lights)| lights)
             }
-            ViewMode::Albedo => {
-                add(picture, restart, &camera, &Aov::new(scene, accel, AovKind::Albedo))
+            _ => None,
+        };
+        let choice = Choice {
+            kind: view.mode.integrator,
+            stage: view.mode.stage,
+            path: self.path_settings,
+            lights,
+        };
+        let mut integrator = Chosen::new(&choice, scene, accel, &camera);
+        integrator.move_lab_light(view.pose.light);
+        match view.mode.integrator {
+            IntegratorKind::Aov(AovKind::Normals) => {
+                add(picture, restart, &camera, &ShownNormals(&integrator))
             }
-            ViewMode::Normals => {
-                let normals = ShownNormals(Aov::new(scene, accel, AovKind::Normals));
-                add(picture, restart, &camera, &normals)
-            }
-            ViewMode::Depth => {
+            IntegratorKind::Aov(AovKind::Depth) => {
                 let size = scene
                     .bounds()
                     .map_or(1.0, |(lo, hi)| (hi - lo).length())
                     .max(f32::MIN_POSITIVE);
-                add(
-                    picture,
-                    restart,
-                    &camera,
-                    &ShownDepth(Aov::new(scene, accel, AovKind::Depth), size),
-                );
+                add(picture, restart, &camera, &ShownDepth(&integrator, size))
             }
+            _ => add(picture, restart, &camera, &integrator),
         }
         let words = view.width as usize * view.height as usize;
         if window.len() != words {
@@ -321,9 +330,9 @@ fn add(
 }
 
 /// Normals as colours: `(n + 1)/2`.
-struct ShownNormals<'a, A: ?Sized>(Aov<'a, A>);
+struct ShownNormals<'a, I: ?Sized>(&'a I);
 
-impl<A: Accelerator + ?Sized> Integrator for ShownNormals<'_, A> {
+impl<I: Integrator + ?Sized> Integrator for ShownNormals<'_, I> {
     fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
         let n = self.0.radiance(ray, sampler);
         if n == Vec3::ZERO { n } else { (n + Vec3::ONE) * 0.5 }
@@ -334,9 +343,9 @@ impl<A: Accelerator + ?Sized> Integrator for ShownNormals<'_, A> {
 }
 
 /// Depth as grey: near is bright, a scene's diagonal away is black.
-struct ShownDepth<'a, A: ?Sized>(Aov<'a, A>, f32);
+struct ShownDepth<'a, I: ?Sized>(&'a I, f32);
 
-impl<A: Accelerator + ?Sized> Integrator for ShownDepth<'_, A> {
+impl<I: Integrator + ?Sized> Integrator for ShownDepth<'_, I> {
     fn radiance(&self, ray: &Ray, sampler: &mut Sampler) -> Vec3 {
         let depth = self.0.radiance(ray, sampler).x;
         if depth == 0.0 { Vec3::ZERO } else { Vec3::splat((1.0 - depth / self.1).max(0.0)) }
@@ -362,7 +371,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::integrator::PathScalar;
+    use crate::integrator::{Lab, PathScalar};
     use crate::{BruteForce, render_samples};
 
     fn lab_view(width: u32, height: u32) -> View {
@@ -373,7 +382,7 @@ mod tests {
                 pitch: 0.0,
                 light: Vec3::new(0.0, -0.5, -0.7),
             },
-            mode: ViewMode::Lab(Stage::Ambient),
+            mode: ViewMode::lab(Stage::Ambient),
             width,
             height,
             focal: (width, width as f32),
@@ -485,7 +494,7 @@ mod tests {
     fn still_path_tracing_refines_to_the_render_and_shows_srgb() {
         let scene = Scene::built_in("cornell").unwrap();
         let accel = BruteForce::new(&scene.vertices());
-        let view = View { mode: ViewMode::Path, ..lab_view(24, 16) };
+        let view = View { mode: ViewMode::PATH, ..lab_view(24, 16) };
         let mut renderer = FrameRenderer::new(None, 8);
         let mut words = Vec::new();
         for _ in 0..3 {
@@ -507,15 +516,15 @@ mod tests {
         assert_eq!(rgb(&words, &moved), film.to_rgb8(&Display::SRGB).unwrap());
         // Every mode renders, and switching modes starts a new picture.
         for mode in
-            [ViewMode::Albedo, ViewMode::Normals, ViewMode::Depth, ViewMode::Lab(Stage::Flat)]
+            [ViewMode::ALBEDO, ViewMode::NORMALS, ViewMode::DEPTH, ViewMode::lab(Stage::Flat)]
         {
             let info = renderer.frame(&scene, &accel, &View { mode, ..view }, &mut words).unwrap();
             assert_eq!(info.samples, 1, "{mode}");
             assert!(words.iter().any(|&w| w != 0), "{mode} shows something");
         }
-        assert_eq!(ViewMode::of(IntegratorKind::Path, Stage::Flat), ViewMode::Path);
-        assert_eq!(ViewMode::of(IntegratorKind::Lab, Stage::Flat), ViewMode::Lab(Stage::Flat));
-        assert_eq!(ViewMode::Lab(Stage::Shadows).to_string(), "stage shadows");
+        assert_eq!(ViewMode::of(IntegratorKind::Path, Stage::Flat), ViewMode::PATH);
+        assert_eq!(ViewMode::of(IntegratorKind::Lab, Stage::Flat), ViewMode::lab(Stage::Flat));
+        assert_eq!(ViewMode::lab(Stage::Shadows).to_string(), "stage shadows");
     }
 
     #[test]

@@ -48,6 +48,7 @@ use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::error::LightError;
+use super::sample::DirectionSample;
 use crate::color::luminance;
 use crate::film::Film;
 use crate::sampling::{
@@ -291,7 +292,7 @@ impl EnvironmentMap {
     /// to the map's luminance, with the radiance arriving along it and its density per unit
     /// solid angle; `None` on a pole, where the density is not finite.
     #[inline]
-    pub fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+    pub fn sample(&self, u: Vec2) -> Option<DirectionSample> {
         let ((column, row), probability, rest) = self.patches.sample_bin(u);
         let (columns, rows) = (self.width, self.height - 1);
         let f = self.corners(column, row);
@@ -308,7 +309,7 @@ impl EnvironmentMap {
             return None;
         }
         let pdf = pdf_uv / (2.0 * PI * PI * sin_theta);
-        Some((self.to_lab * local, self.lookup(uv), pdf))
+        Some(DirectionSample { direction: self.to_lab * local, radiance: self.lookup(uv), pdf })
     }
 
     /// The density per unit solid angle with which [`sample`](Self::sample) picks the unit

@@ -1,27 +1,47 @@
-//! Lights that are not surfaces: the lab's point light, Mitsuba 3's `directional`, `spot` and
-//! `envmap`, a sun disc, and a constant environment.
+//! Lights: the lab's point light, Mitsuba 3's `directional`, `spot`, `envmap` and `area`
+//! (triangles whose material emits), a sun disc, and a constant environment.
 //!
-//! Area lights are triangles whose material emits (see `Material::emission`);
-//! the path integrator gathers every light, these and the area lights, into one set that it
-//! samples by power, the environments half the time beside other lights
-//! (`integrator::LightSet`). The lab's integrator knows only the point light (its light model
-//! is the lab's).
+//! A scene lists the lights that are not surfaces ([`Light`]); its emitting triangles are area
+//! lights (see `Material::emission`). The path tracer gathers all of them, each as an
+//! [`Emitter`], into one set that picks among them by power
+//! (`integrator::LightSet`). Each kind owns what is particular to it, in its own file, as in
+//! pbrt-v4 and Mitsuba 3: sampling a direction toward it from a shading point (`sample`,
+//! giving a [`LightSample`]), what a ray that finds it sees with the density sampling would
+//! have given it (`eval_pdf`, an [`Emission`]), and its power:
+//!
+//! | light | file |
+//! |---|---|
+//! | point, directional, spot, sun | `punctual.rs` |
+//! | area (an emitting triangle) | `triangle.rs` |
+//! | constant environment, environment map | `environment.rs`, `envmap.rs` (the map itself) |
+//! | any, as a light sampler holds it | `emitter.rs` |
+//! | the lanes' form (the wavefront's) | `lanes.rs` |
+//!
+//! The lab's integrator knows only the point light (its light model is the lab's).
 //!
 //! Every direction and position here is in the lab's frame (y down); scene files and glTF
 //! give them y-up and their loaders turn them.
 
-use std::f32::consts::PI;
 use std::sync::Arc;
 
 use glam::Vec3;
 
+mod emitter;
+mod environment;
 mod envmap;
 mod error;
+pub(crate) mod lanes;
 mod punctual;
+mod sample;
+mod triangle;
 
+pub use emitter::Emitter;
+pub use environment::{ConstantEnvironment, EnvironmentSampling, MapLight};
 pub use envmap::{EnvironmentMap, direction_to_uv, uv_to_direction};
 pub use error::LightError;
-pub use punctual::{DirectionalLight, SpotLight, SpotProfile, SunLight};
+pub use punctual::{DirectionalLight, PointLight, SpotLight, SpotProfile, SunLight};
+pub use sample::{DirectionSample, Emission, LightSample, SHADOW_RAY_LENGTH};
+pub use triangle::{EmissionPattern, TriangleLight, TriangleSampling};
 
 /// A light of the scene that is not a surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -54,60 +74,5 @@ impl Light {
             Light::Spot(_) => "spot",
             Light::Sun(_) => "sun",
         }
-    }
-}
-
-/// An isotropic point light of power `P` (watts per channel).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointLight {
-    /// Where the light is.
-    pub position: Vec3,
-    /// Power `P` per colour channel.
-    pub power: Vec3,
-}
-
-impl PointLight {
-    /// The lab's light: at (0, −0.5, −0.7), power 14 in every channel.
-    pub fn lab() -> Self {
-        PointLight { position: Vec3::new(0.0, -0.5, -0.7), power: Vec3::splat(14.0) }
-    }
-
-    /// The radiant intensity `I = P/4π` (watts per steradian per channel).
-    #[inline]
-    pub fn intensity(&self) -> Vec3 {
-        self.power / (4.0 * PI)
-    }
-
-    /// Power per unit area arriving at `point` on a surface with unit normal `normal`, ignoring
-    /// occlusion. Lab eq. (27): `D = P·max(r̂·n̂, 0) / (4πr²)`.
-    #[inline]
-    pub fn direct(&self, point: Vec3, normal: Vec3) -> Vec3 {
-        let to_light = self.position - point;
-        let r2 = to_light.length_squared();
-        if r2 == 0.0 {
-            return Vec3::ZERO;
-        }
-        // max(r̂·n̂, 0)/(4πr²) = max(r·n, 0)/(4πr³): one square root and one division.
-        let r_dot_n = to_light.dot(normal).max(0.0);
-        self.power * (r_dot_n / (4.0 * PI * r2 * r2.sqrt()))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn direct_light_falls_off_with_the_square_of_distance_and_the_cosine() {
-        let light = PointLight { position: Vec3::new(0.0, 2.0, 0.0), power: Vec3::splat(4.0 * PI) };
-        // r = 2, head on: D = 4π / (4π·4) = 1/4.
-        assert!((light.direct(Vec3::ZERO, Vec3::Y) - Vec3::splat(0.25)).length() < 1e-6);
-        // Tilted by 60°: half of it.
-        let n = Vec3::new(3f32.sqrt() / 2.0, 0.5, 0.0);
-        assert!((light.direct(Vec3::ZERO, n) - Vec3::splat(0.125)).length() < 1e-6);
-        // Facing away: nothing.
-        assert_eq!(light.direct(Vec3::ZERO, -Vec3::Y), Vec3::ZERO);
-        // At the light itself: nothing rather than infinity.
-        assert_eq!(light.direct(light.position, Vec3::Y), Vec3::ZERO);
     }
 }

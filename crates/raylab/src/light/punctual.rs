@@ -1,6 +1,9 @@
-//! Lights from one direction or one point: Mitsuba 3's `directional` and `spot`, glTF's spot
-//! profile, and a sun disc of physical size.
+//! Lights from one direction or one point: the lab's point light, Mitsuba 3's `directional`
+//! and `spot`, glTF's spot profile, and a sun disc of physical size. Each samples the
+//! direction toward it from a shading point (`sample`, with the shadow ray).
 //!
+//! - [`PointLight`]: an isotropic point of power `P`, radiant intensity `I = P/4π`. A delta
+//!   light.
 //! - [`DirectionalLight`]: parallel light of irradiance `E` (W/m² per channel on a surface
 //!   facing it), travelling along `direction`, as Mitsuba's `directional`. A delta light: only
 //!   light sampling finds it.
@@ -19,9 +22,70 @@
 
 use std::f32::consts::PI;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
+use super::sample::{DirectionSample, Emission, LightSample};
+use crate::ray::SurfacePoint;
 use crate::sampling::{orthonormal_basis, square_to_uniform_cone, uniform_cone_pdf};
+
+/// An isotropic point light of power `P` (watts per channel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    /// Where the light is.
+    pub position: Vec3,
+    /// Power `P` per colour channel.
+    pub power: Vec3,
+}
+
+impl PointLight {
+    /// The lab's light: at (0, −0.5, −0.7), power 14 in every channel.
+    pub fn lab() -> Self {
+        PointLight { position: Vec3::new(0.0, -0.5, -0.7), power: Vec3::splat(14.0) }
+    }
+
+    /// The radiant intensity `I = P/4π` (watts per steradian per channel).
+    #[inline]
+    pub fn intensity(&self) -> Vec3 {
+        self.power / (4.0 * PI)
+    }
+
+    /// Power per unit area arriving at `point` on a surface with unit normal `normal`, ignoring
+    /// occlusion. Lab eq. (27): `D = P·max(r̂·n̂, 0) / (4πr²)`.
+    #[inline]
+    pub fn direct(&self, point: Vec3, normal: Vec3) -> Vec3 {
+        let to_light = self.position - point;
+        let r2 = to_light.length_squared();
+        if r2 == 0.0 {
+            return Vec3::ZERO;
+        }
+        // max(r̂·n̂, 0)/(4πr²) = max(r·n, 0)/(4πr³): one square root and one division.
+        let r_dot_n = to_light.dot(normal).max(0.0);
+        self.power * (r_dot_n / (4.0 * PI * r2 * r2.sqrt()))
+    }
+
+    /// The light seen from `point`: `I/d²` along the direction toward it (a delta light, of
+    /// density 1); `None` at the light itself.
+    #[inline]
+    pub fn sample(&self, point: &SurfacePoint) -> Option<LightSample> {
+        let to_light = self.position - point.p;
+        let distance_squared = to_light.length_squared();
+        if distance_squared == 0.0 {
+            return None;
+        }
+        Some(LightSample {
+            direction: to_light / distance_squared.sqrt(),
+            radiance: self.intensity() / distance_squared,
+            pdf: 1.0,
+            delta: true,
+            shadow_ray: point.spawn_ray_to(self.position),
+        })
+    }
+
+    /// Its power, for choosing among lights: `4π Ī`.
+    pub fn power(&self) -> f32 {
+        4.0 * PI * (self.intensity().element_sum() / 3.0)
+    }
+}
 
 /// Parallel light from infinitely far away, as Mitsuba 3's `directional`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -30,6 +94,22 @@ pub struct DirectionalLight {
     pub direction: Vec3,
     /// The irradiance on a surface facing the light, per channel.
     pub irradiance: Vec3,
+}
+
+impl DirectionalLight {
+    /// The light seen from `point`: its irradiance, from the direction it comes from (a delta
+    /// light, of density 1).
+    #[inline]
+    pub fn sample(&self, point: &SurfacePoint) -> LightSample {
+        let toward = -self.direction.normalize_or_zero();
+        LightSample {
+            direction: toward,
+            radiance: self.irradiance,
+            pdf: 1.0,
+            delta: true,
+            shadow_ray: point.spawn_ray(toward),
+        }
+    }
 }
 
 /// How a spot light's intensity falls off away from its axis.
@@ -145,6 +225,29 @@ impl SpotLight {
         self.intensity * self.falloff(self.axis.dot(direction))
     }
 
+    /// The light seen from `point`: the intensity it sends that way over `d²` (a delta light,
+    /// of density 1); `None` at the light itself and outside its cone.
+    #[inline]
+    pub fn sample(&self, point: &SurfacePoint) -> Option<LightSample> {
+        let to_light = self.position - point.p;
+        let distance_squared = to_light.length_squared();
+        if distance_squared == 0.0 {
+            return None;
+        }
+        let direction = to_light / distance_squared.sqrt();
+        let intensity = self.intensity_toward(-direction);
+        if intensity == Vec3::ZERO {
+            return None;
+        }
+        Some(LightSample {
+            direction,
+            radiance: intensity / distance_squared,
+            pdf: 1.0,
+            delta: true,
+            shadow_ray: point.spawn_ray_to(self.position),
+        })
+    }
+
     /// The power it sends, about: the centre's intensity over the solid angle of a cone half way
     /// between the beam width and the cutoff (pbrt-v4's `SpotLight::Phi`), averaged over the
     /// channels. For choosing among lights.
@@ -210,14 +313,41 @@ impl SunLight {
     }
 
     /// A unit direction toward the disc that `u ∈ [0, 1)²` picks, uniform in its solid angle,
-    /// and that density.
+    /// its radiance and that density.
     #[inline]
-    pub fn sample(&self, u: glam::Vec2) -> (Vec3, f32) {
+    pub fn sample_direction(&self, u: Vec2) -> DirectionSample {
         let toward = -self.direction;
         let local = square_to_uniform_cone(u, self.one_minus_cos);
         let (s, t) = orthonormal_basis(toward);
         let direction = (s * local.x + t * local.y + toward * local.z).normalize();
-        (direction, uniform_cone_pdf(self.one_minus_cos))
+        DirectionSample {
+            direction,
+            radiance: self.radiance,
+            pdf: uniform_cone_pdf(self.one_minus_cos),
+        }
+    }
+
+    /// [`sample_direction`](Self::sample_direction), seen from `point`.
+    #[inline]
+    pub fn sample(&self, point: &SurfacePoint, u: Vec2) -> LightSample {
+        let DirectionSample { direction, radiance, pdf } = self.sample_direction(u);
+        LightSample {
+            direction,
+            radiance,
+            pdf,
+            delta: false,
+            shadow_ray: point.spawn_ray(direction),
+        }
+    }
+
+    /// What a ray leaving the scene along the unit `direction` sees of it, with the density
+    /// of [`sample`](Self::sample); [`Emission::NONE`] off the disc.
+    #[inline]
+    pub fn eval_pdf(&self, direction: Vec3) -> Emission {
+        if !self.sees(direction) {
+            return Emission::NONE;
+        }
+        Emission { radiance: self.radiance, pdf: self.pdf(direction) }
     }
 
     /// Whether the unit `direction` looks at the disc: `1 − cos θ ≤ 1 − cos α`, with
@@ -243,6 +373,20 @@ impl SunLight {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn direct_light_falls_off_with_the_square_of_distance_and_the_cosine() {
+        let light = PointLight { position: Vec3::new(0.0, 2.0, 0.0), power: Vec3::splat(4.0 * PI) };
+        // r = 2, head on: D = 4π / (4π·4) = 1/4.
+        assert!((light.direct(Vec3::ZERO, Vec3::Y) - Vec3::splat(0.25)).length() < 1e-6);
+        // Tilted by 60°: half of it.
+        let n = Vec3::new(3f32.sqrt() / 2.0, 0.5, 0.0);
+        assert!((light.direct(Vec3::ZERO, n) - Vec3::splat(0.125)).length() < 1e-6);
+        // Facing away: nothing.
+        assert_eq!(light.direct(Vec3::ZERO, -Vec3::Y), Vec3::ZERO);
+        // At the light itself: nothing rather than infinity.
+        assert_eq!(light.direct(light.position, Vec3::Y), Vec3::ZERO);
+    }
 
     /// Mitsuba's `falloff_curve` at sampled angles: 1 within the beam, linear in the angle to
     /// 0 at the cutoff, nothing beyond; glTF's is the square of the cosine's place.
@@ -313,7 +457,8 @@ mod tests {
             let pdf = (1.0 / (2.0 * std::f64::consts::PI * (1.0 - (radius as f64).cos()))) as f32;
             let mut rng = crate::sampling::Pcg32::new(3, 4);
             for _ in 0..1000 {
-                let (d, p) = sun.sample(glam::Vec2::new(rng.next_f32(), rng.next_f32()));
+                let sample = sun.sample_direction(Vec2::new(rng.next_f32(), rng.next_f32()));
+                let (d, p) = (sample.direction, sample.pdf);
                 assert!((p - pdf).abs() <= 1e-3 * pdf, "α {radius}: {p} against {pdf}");
                 let angle = (d.as_dvec3().cross(-direction.as_dvec3().normalize())).length().asin();
                 assert!(angle <= radius as f64 * 1.001, "α {radius}: {angle}");

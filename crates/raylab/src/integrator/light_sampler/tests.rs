@@ -4,37 +4,8 @@ use super::*;
 /// densities, summed (one light's, or zeros).
 fn escaped(lights: &LightSet, direction: Vec3) -> (Vec3, f32) {
     let mut sum = (Vec3::ZERO, 0.0);
-    lights.escaped(direction, |radiance, pdf| sum = (sum.0 + radiance, sum.1 + pdf));
+    lights.escaped(direction, |e| sum = (sum.0 + e.radiance, sum.1 + e.pdf));
     sum
-}
-
-/// `mean_over` weighs the texture by the emission channel by channel, finds a pattern's
-/// share of the triangle, and keeps a floor for a pattern its points miss.
-#[test]
-fn a_textured_emitter_s_power_is_its_mean_emission() {
-    use crate::texture::{ImageTexture, TextureImage, Wrap};
-    use std::sync::Arc;
-    let image = |texels: Vec<[f32; 4]>, width: u32| {
-        let image = TextureImage::from_rgba_f32("t", width, 1, texels);
-        let texture = ImageTexture::new(Arc::new(image));
-        Texture::Image(ImageTexture { wrap: [Wrap::Clamp; 2], ..texture })
-    };
-    let corners = [Vec3::ZERO, Vec3::X, Vec3::Y];
-    let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
-    // A constant texture scales the emission.
-    let grey = image(vec![[0.5, 0.25, 1.0, 1.0]], 1);
-    let emission = Vec3::new(2.0, 4.0, 1.0);
-    let expected = mean(emission * Vec3::new(0.5, 0.25, 1.0));
-    assert!((mean_over(&grey, emission, corners, uvs) - expected).abs() < 1e-6);
-    // Red emission through a blue texture emits nothing: only the floor remains.
-    let blue = image(vec![[0.0, 0.0, 1.0, 1.0]], 1);
-    let red = Vec3::new(3.0, 0.0, 0.0);
-    assert_eq!(mean_over(&blue, red, corners, uvs), 0.01 * mean(red));
-    // White where u < ½ (256 texels): the triangle's part with u < ½ is ¾ of its area.
-    let texels = (0..256).map(|x| if x < 128 { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] });
-    let half = image(texels.collect(), 256);
-    let share = mean_over(&half, Vec3::ONE, corners, uvs);
-    assert!((share - 0.75).abs() < 0.02, "{share}");
 }
 
 #[test]

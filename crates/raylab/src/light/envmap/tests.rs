@@ -140,7 +140,8 @@ fn sampling_fits_its_density() {
     for (name, m, smooth) in &maps {
         let (mut drawn, mut mismatches) = (0u32, 0u32);
         let mut sample = |rng: &mut Pcg32| {
-            let (d, radiance, pdf) = m.sample(Vec2::new(rng.next_f32(), rng.next_f32()))?;
+            let sample = m.sample(Vec2::new(rng.next_f32(), rng.next_f32()))?;
+            let (d, radiance, pdf) = (sample.direction, sample.radiance, sample.pdf);
             assert!((d.length() - 1.0).abs() < 1e-5);
             // The radiance found looking along the sampled direction, but for the rounding
             // of the direction (beside the sun, the map climbs by 6000 across a texel).

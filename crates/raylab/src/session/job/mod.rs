@@ -17,7 +17,7 @@ use crate::bvh::{BuildSettings, Bvh, SceneBvh};
 use crate::camera::Camera;
 use crate::film::{Display, Film, ToneMap, format_bytes};
 use crate::image_io::{self, ImageFormat, ImageIoError};
-use crate::integrator::{Aov, Integrator, Lab, Path as Wavefront, PathScalar, WithAovs};
+use crate::integrator::{Choice, Chosen, Integrator, WithAovs};
 use crate::parts::{self, Part, PartHeader, PartKind};
 use crate::region::Region;
 use crate::render::Accumulator;
@@ -398,25 +398,15 @@ impl<'s> RenderJob<'s> {
         let (scene, settings) = (self.scene, self.settings);
         let region = accumulator.region();
         // The integrator, with its layers.
-        let lab = Lab::new(scene, accel, settings.stage).for_camera(camera);
-        let (wavefront, scalar, aov);
-        let base: &dyn Integrator = match settings.integrator {
-            IntegratorKind::Lab => &lab,
-            IntegratorKind::Path => {
-                wavefront = Wavefront::new(scene, accel, settings.path_settings());
-                &wavefront
-            }
-            IntegratorKind::PathScalar => {
-                scalar = PathScalar::new(scene, accel, settings.path_settings());
-                &scalar
-            }
-            IntegratorKind::Aov(kind) => {
-                aov = Aov::new(scene, accel, kind);
-                &aov
-            }
+        let choice = Choice {
+            kind: settings.integrator,
+            stage: settings.stage,
+            path: settings.path_settings(),
+            lights: None,
         };
-        let with_layers = WithAovs::new(base, scene, accel, &self.aovs);
-        let integrator: &dyn Integrator = if self.aovs.is_empty() { base } else { &with_layers };
+        let base = Chosen::new(&choice, scene, accel, camera);
+        let with_layers = WithAovs::new(&base, scene, accel, &self.aovs);
+        let integrator: &dyn Integrator = if self.aovs.is_empty() { &base } else { &with_layers };
 
         let first_sample = accumulator.samples();
         let passes = settings.spp.saturating_sub(first_sample) as u64;

@@ -43,16 +43,14 @@ use glam::{Vec2, Vec3};
 
 use std::borrow::Cow;
 
-use super::super::light_sampler::{LanePick, LaneRole, SHADOW_RAY_LENGTH};
+use super::super::light_sampler::LanePick;
 use super::super::path::{Frame, Vertex, facing};
 use super::surface::LaneSurface;
 use crate::cpu::Isa;
+use crate::light::lanes::{LaneRole, LaneSample, sample_environment, sample_triangle};
 use crate::material::lanes::{LaneBsdf, PARAMS};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
-use crate::sampling::{
-    power_heuristic, rescaled, square_to_uniform_sphere, square_to_uniform_triangle,
-    uniform_sphere_pdf,
-};
+use crate::sampling::{power_heuristic, rescaled};
 
 /// Lanes per chunk: one AVX-512 register of floats (the BSDFs' parameter rows have as many).
 pub(super) const LANES: usize = crate::material::lanes::LANES;
@@ -130,7 +128,7 @@ struct Input {
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 struct Output {
-    /// The shadow ray (a segment to `origin + direction`, [`SHADOW_RAY_LENGTH`] of it; toward
+    /// The shadow ray (a segment to `origin + direction`, `SHADOW_RAY_LENGTH` of it; toward
     /// the environment a ray without end) and the light it brings if unblocked, where
     /// `shadowed`.
     shadow_origin: Rows3,
@@ -175,37 +173,24 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
     let (frame, flip, wi, bsdf) = vertex_of::<B>(input, k);
     let throughput = input.throughput.get(k);
 
-    // LightSet::sample's triangle, sampled by area.
+    // The light's sample (`light::lanes`): a triangle by area, or where the chunk has lanes
+    // that sample it (`SKY`) the constant environment.
     let u_x = rescaled(input.u_point[0][k], input.start[k], input.selection[k]);
     let u = Vec2::new(u_x, input.u_point[1][k]);
-    let [b0, b1, b2] = square_to_uniform_triangle(u);
-    let target = b0 * input.v0.get(k) + b1 * input.v1.get(k) + b2 * input.v2.get(k);
-    let to_light = target - point.p;
-    let distance_squared = to_light.length_squared();
-    let towards_triangle = to_light / distance_squared.sqrt();
-    let light_normal = input.light_normal.get(k);
-    let cos_light = -towards_triangle.dot(light_normal);
-    // The scalar test's very words: a NaN cosine passes it, as it passes the scalar one.
-    #[allow(clippy::nonminimal_bool, clippy::neg_cmp_op_on_partial_ord)]
-    let faces = !(cos_light <= 0.0 || !distance_squared.is_normal());
-    let end = SurfacePoint { p: target, error: input.light_error.get(k), normal: light_normal };
-    let (end, end_finite) = offset_ray_origin_finite(&end, point.p - target);
-    let (to_end, to_end_finite) = offset_ray_origin_finite(&point, end - point.p);
-    let triangle_pdf = input.selection[k] * (distance_squared / (cos_light * input.area[k]));
-    // LightSet::sample's environment, uniform over the sphere (where the chunk has lanes that
-    // sample it: `SKY`).
-    let towards_sky = square_to_uniform_sphere(u);
-    let sky_pdf = input.selection[k] * uniform_sphere_pdf(towards_sky);
-    let (to_sky, to_sky_finite) = offset_ray_origin_finite(&point, towards_sky);
-    let sky = SKY && input.environment[k];
-    let (direction, light_pdf, faces) = match sky {
-        true => (towards_sky, sky_pdf, true),
-        false => (towards_triangle, triangle_pdf, faces),
-    };
-    let (shadow_origin, shadow_direction, shadow_t_max, shadow_finite) = match sky {
-        true => (to_sky, towards_sky, f32::INFINITY, to_sky_finite),
-        false => (to_end, end - to_end, SHADOW_RAY_LENGTH, end_finite && to_end_finite),
-    };
+    let corners = [input.v0.get(k), input.v1.get(k), input.v2.get(k)];
+    let (normal, error) = (input.light_normal.get(k), input.light_error.get(k));
+    let triangle = sample_triangle(corners, normal, error, input.area[k], &point, u);
+    let sky = sample_environment(&point, u);
+    let LaneSample {
+        direction,
+        pdf: light_pdf,
+        faces,
+        shadow_origin,
+        shadow_direction,
+        shadow_t_max,
+        finite: shadow_finite,
+    } = if SKY && input.environment[k] { sky } else { triangle };
+    let light_pdf = input.selection[k] * light_pdf;
     // PathScalar::sample_light_with (which a BSDF of delta lobes alone skips).
     let mut wo = frame.to_local(direction);
     if flip {
