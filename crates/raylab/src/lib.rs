@@ -178,7 +178,7 @@ pub mod parts;
 #[cfg(feature = "io")]
 mod quiet_panic;
 pub mod ray;
-#[cfg(feature = "support")]
+#[cfg(feature = "bench")]
 #[doc(hidden)]
 pub mod ray_sets;
 pub mod region;

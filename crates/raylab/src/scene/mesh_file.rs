@@ -190,7 +190,7 @@ pub enum LoadError {
 
 /// Reads the whole file, decompressing it if `gzip`, within [`read_limit_bytes`]: for other
 /// readers of untrusted files (the ray-set files).
-#[cfg(feature = "support")]
+#[cfg(feature = "bench")]
 pub(crate) fn read_file_bytes(path: &Path, gzip: bool) -> Result<Vec<u8>, LoadError> {
     read_bytes(path, gzip, read_limit_bytes())
 }

@@ -45,7 +45,7 @@ pub use formats::load_mesh;
 pub use keyframes::Keyframe;
 #[cfg(feature = "io")]
 pub use load_options::{AUTO_FLATTEN_TRIANGLES, Instancing, LoadOptions};
-#[cfg(feature = "support")]
+#[cfg(feature = "bench")]
 pub(crate) use mesh_file::read_file_bytes;
 #[cfg(feature = "io")]
 pub use mesh_file::{
