@@ -24,7 +24,7 @@ use raylab::mesh::CornerAttribute;
 use raylab::scene::{LoadOptions, OpenError, OpenedScene, parse_scene_with_meshes};
 use raylab::session::{CameraOptions, Event, FilmOutcome, RenderJob, RenderOptions};
 use raylab::session::{ResolvedSettings, SessionError};
-use raylab::settings::{AovKind, IntegratorKind};
+use raylab::settings::{AovKind, IntegratorKind, MaxDepth};
 use raylab::{Film, Region, SamplerKind, Scene};
 
 /// A film as a `float32` array of shape `(height, width, 3)`.
@@ -183,7 +183,7 @@ pub fn render<'py>(
             .transpose()
             .map_err(value_error)?,
         spp,
-        max_depth: max_depth.map(Some),
+        max_depth: max_depth.map(MaxDepth::Segments),
         seed,
         sampler: sampler.map(|s| s.parse::<SamplerKind>()).transpose().map_err(value_error)?,
         ..RenderOptions::default()

@@ -11,7 +11,7 @@ use raylab::session::{
     Checkpoints, Event, FrameOutcome, FrameSummary, MAX_SPP, RenderJob, RenderOptions,
     ResolvedSettings,
 };
-use raylab::settings::{AovKind, IntegratorKind};
+use raylab::settings::{AovKind, IntegratorKind, MaxDepth};
 use raylab::{Filter, Region, SamplerKind, TriangleSampling};
 
 use crate::args;
@@ -146,7 +146,9 @@ fn render(args: &RenderArgs, command: Option<Command>, state: Option<Part>) -> R
         integrator: args.integrator,
         stage: args.scene.stage,
         spp: args.spp,
-        max_depth: args.max_depth.map(|d| u32::try_from(d).ok()),
+        max_depth: args
+            .max_depth
+            .map(|d| u32::try_from(d).map_or(MaxDepth::Unlimited, MaxDepth::Segments)),
         seed: args.seed,
         sampler: args.sampler,
         filter: args.filter,

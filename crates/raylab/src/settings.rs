@@ -1,5 +1,9 @@
-//! What a render computes, by name: the integrator choice that scene files, the command line,
-//! `raylab view` and the render session share.
+//! The render settings a scene file gives ([`RenderSettings`], its `[render]` table), and the
+//! choices scene files, the command line, `raylab view` and the render session name alike:
+//! what a render computes ([`IntegratorKind`], [`AovKind`]) and how long its paths may be
+//! ([`MaxDepth`]). (The settings of one part live with it: the path tracer's
+//! `PathSettings`, the sampling's `SampleSettings`, the BVH's `BuildSettings`; a render
+//! session resolves all of a render's into `ResolvedSettings`.)
 //!
 //! | name | [`IntegratorKind`] | computes |
 //! |---|---|---|
@@ -16,7 +20,49 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::filter::Filter;
+use crate::sampling::SamplerKind;
 use crate::unknown_name::UnknownName;
+
+/// Render settings a scene file may give (each `None` leaves the renderer's default).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct RenderSettings {
+    /// Image size in pixels.
+    pub size: Option<(u32, u32)>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// The longest path.
+    pub max_depth: Option<MaxDepth>,
+    /// The seed.
+    pub seed: Option<u64>,
+    /// The integrator.
+    pub integrator: Option<IntegratorKind>,
+    /// The sampler.
+    pub sampler: Option<SamplerKind>,
+    /// The pixel filter.
+    pub filter: Option<Filter>,
+}
+
+/// How long the path tracer's paths may be: Mitsuba's `max_depth`, which counts segments, the
+/// camera's included (1 shows only the emitters seen directly, 2 adds direct light), or no
+/// limit (Mitsuba's `-1`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MaxDepth {
+    /// At most this many segments.
+    Segments(u32),
+    /// No limit.
+    Unlimited,
+}
+
+impl MaxDepth {
+    /// The limit in segments, `None` for none (as `PathSettings::max_depth` takes it).
+    pub fn segments(self) -> Option<u32> {
+        match self {
+            MaxDepth::Segments(n) => Some(n),
+            MaxDepth::Unlimited => None,
+        }
+    }
+}
 
 /// Which first-hit quantity an AOV (arbitrary output variable) shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -48,7 +48,7 @@ fn render_with(
 ) -> Film {
     let camera = scene.camera.unwrap().camera(64, 64);
     let bvh = Bvh::new(&scene.vertices());
-    let max_depth = scene.settings.max_depth.unwrap();
+    let max_depth = scene.settings.max_depth.unwrap().segments();
     let path_settings = PathSettings { max_depth, light_sampling, ..PathSettings::default() };
     let path = Wavefront::new(scene, &bvh, path_settings);
     let mut accumulator = Accumulator::new(64, 64).unwrap();
@@ -221,7 +221,7 @@ fn render_beside_its_reference(
     let (width, height) = (reference.width(), reference.height());
     let camera = scene.camera.unwrap().camera(width, height);
     let accel = SceneBvh::build(&scene.geometry).unwrap();
-    let max_depth = scene.settings.max_depth.unwrap();
+    let max_depth = scene.settings.max_depth.unwrap().segments();
     let path =
         Wavefront::new(&scene, &accel, PathSettings { max_depth, ..PathSettings::default() });
     let mut accumulator = Accumulator::new(width, height).unwrap();

@@ -47,7 +47,7 @@ fn by_hand(scene: &Scene, settings: &ResolvedSettings, camera: &Camera, region: 
     };
     let mut accumulator = Accumulator::for_region(camera.width, camera.height, region).unwrap();
     accumulator.settings = settings.samples;
-    for _ in 0..settings.spp {
+    for _ in 0..settings.spp() {
         accumulator.add_sample(camera, integrator);
     }
     accumulator.mean().unwrap()

@@ -90,10 +90,7 @@ impl MapLight {
     #[inline]
     pub fn eval_pdf(&self, direction: Vec3) -> Emission {
         match self.sampling {
-            EnvironmentSampling::Importance => {
-                let (radiance, pdf) = self.map.eval_pdf(direction);
-                Emission { radiance, pdf }
-            }
+            EnvironmentSampling::Importance => self.map.eval_pdf(direction),
             EnvironmentSampling::Uniform => {
                 Emission { radiance: self.map.eval(direction), pdf: uniform_sphere_pdf(direction) }
             }

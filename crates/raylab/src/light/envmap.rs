@@ -48,7 +48,7 @@ use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::error::LightError;
-use super::sample::DirectionSample;
+use super::sample::{DirectionSample, Emission};
 use crate::color::luminance;
 use crate::film::Film;
 use crate::sampling::{
@@ -316,21 +316,21 @@ impl EnvironmentMap {
     /// `direction` (the lab's frame).
     #[inline]
     pub fn pdf(&self, direction: Vec3) -> f32 {
-        self.eval_pdf(direction).1
+        self.eval_pdf(direction).pdf
     }
 
     /// [`eval`](Self::eval) and [`pdf`](Self::pdf) together, the direction's place on the map
     /// found once: what a ray that leaves the scene needs.
     #[inline]
-    pub fn eval_pdf(&self, direction: Vec3) -> (Vec3, f32) {
+    pub fn eval_pdf(&self, direction: Vec3) -> Emission {
         let local = self.to_local * direction;
         let uv = direction_to_uv(local);
         let radiance = self.lookup(uv);
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
         if sin_theta <= 0.0 {
-            return (radiance, 0.0);
+            return Emission { radiance, pdf: 0.0 };
         }
-        (radiance, self.pdf_at(uv, sin_theta))
+        Emission { radiance, pdf: self.pdf_at(uv, sin_theta) }
     }
 
     /// The density per unit solid angle at `uv`, where `sin θ` is `sin_theta` (not zero).

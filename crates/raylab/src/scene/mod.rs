@@ -38,6 +38,7 @@ pub mod terrain;
 
 use glam::Vec3;
 
+pub use crate::settings::RenderSettings;
 pub use camera_settings::{CameraSettings, FovAxis};
 pub use cornell::{CORNELL_BOX_SIZE, cornell_box};
 #[cfg(feature = "io")]
@@ -129,25 +130,6 @@ pub struct Scene {
     /// Problems that did not stop the load (a model's texture that could not be read), one
     /// line each naming the file: for the caller to show.
     pub warnings: Vec<String>,
-}
-
-/// Render settings a scene file may give (each `None` leaves the renderer's default).
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct RenderSettings {
-    /// Image size in pixels.
-    pub size: Option<(u32, u32)>,
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Longest path in segments; `Some(None)` is unlimited.
-    pub max_depth: Option<Option<u32>>,
-    /// The seed.
-    pub seed: Option<u64>,
-    /// The integrator.
-    pub integrator: Option<crate::settings::IntegratorKind>,
-    /// The sampler.
-    pub sampler: Option<crate::SamplerKind>,
-    /// The pixel filter.
-    pub filter: Option<crate::filter::Filter>,
 }
 
 impl Scene {

@@ -21,7 +21,7 @@ use crate::geometry::Geometry;
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::sampling::SamplerKind;
-use crate::settings::IntegratorKind;
+use crate::settings::{IntegratorKind, MaxDepth};
 
 /// The most bytes a scene file may have (it holds no geometry, only references to it).
 const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
@@ -514,8 +514,8 @@ impl<F: Fn(Option<Range<usize>>, String) -> SceneFileError> Builder<'_, F> {
         }
         settings.max_depth = match doc.max_depth {
             None => None,
-            Some(-1) => Some(None),
-            Some(d) if (0..=1 << 16).contains(&d) => Some(Some(d as u32)),
+            Some(-1) => Some(MaxDepth::Unlimited),
+            Some(d) if (0..=1 << 16).contains(&d) => Some(MaxDepth::Segments(d as u32)),
             Some(d) => {
                 return self.error(
                     render.span(),

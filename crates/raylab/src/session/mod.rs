@@ -54,7 +54,7 @@ use crate::integrator::{PathSettings, Stage, TriangleSampling};
 use crate::render::SampleSettings;
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
-use crate::settings::IntegratorKind;
+use crate::settings::{IntegratorKind, MaxDepth};
 
 /// The most samples per pixel a render takes.
 pub const MAX_SPP: u32 = 1 << 16;
@@ -107,8 +107,8 @@ pub struct RenderOptions {
     pub stage: Stage,
     /// Samples per pixel (at least 1, at most [`MAX_SPP`]).
     pub spp: Option<u32>,
-    /// The longest path in segments as Mitsuba counts them; `Some(None)`: unlimited.
-    pub max_depth: Option<Option<u32>>,
+    /// The longest path.
+    pub max_depth: Option<MaxDepth>,
     /// The seed of every random number.
     pub seed: Option<u64>,
     /// The sample generator.
@@ -130,13 +130,13 @@ pub struct ResolvedSettings {
     pub integrator: IntegratorKind,
     /// The lab integrator's stage.
     pub stage: Stage,
-    /// Samples per pixel to reach (with a time limit and no `spp` asked for: [`MAX_SPP`]).
-    pub spp: u32,
     /// The longest path, `None` unlimited.
     pub max_depth: Option<u32>,
     /// How points on area lights are sampled.
     pub light_sampling: TriangleSampling,
-    /// The seed, the sampler (`None`: the integrator's), the filter and the tiling.
+    /// The seed, the sampler (`None`: the integrator's), the filter, the tiling, and the
+    /// samples per pixel to reach (`count`; 0 where a time limit ends the render: see
+    /// [`spp`](Self::spp)).
     pub samples: SampleSettings,
     /// Stop after this long.
     pub time_limit: Option<Duration>,
@@ -152,23 +152,22 @@ impl ResolvedSettings {
             .or(file.integrator)
             .unwrap_or_else(|| IntegratorKind::default_for(scene.needs_path_tracing()));
         let default_spp = if integrator == IntegratorKind::Lab { 1 } else { 16 };
-        let spp = match (options.time_limit, options.spp) {
-            // With a time limit, the passes stop at the time (or at an --spp asked for).
-            (Some(_), None) => MAX_SPP,
-            _ => options.spp.or(file.spp).unwrap_or(default_spp),
+        // With a time limit, the passes stop at the time (or at an --spp asked for): a count
+        // not known in advance.
+        let count = match (options.time_limit, options.spp) {
+            (Some(_), None) => 0,
+            _ => options.spp.or(file.spp).unwrap_or(default_spp).clamp(1, MAX_SPP),
         };
         ResolvedSettings {
             integrator,
             stage: options.stage,
-            spp,
-            max_depth: options.max_depth.or(file.max_depth).unwrap_or(None),
+            max_depth: options.max_depth.or(file.max_depth).and_then(MaxDepth::segments),
             light_sampling: options.light_sampling,
             samples: SampleSettings {
                 seed: options.seed.or(file.seed).unwrap_or(0),
                 sampler: options.sampler.or(file.sampler),
                 filter: options.filter.or(file.filter).unwrap_or_default(),
-                // A time limit without `--spp` has no known end.
-                count: if options.time_limit.is_some() && options.spp.is_none() { 0 } else { spp },
+                count,
                 ..SampleSettings::default()
             },
             time_limit: options.time_limit,
@@ -189,6 +188,14 @@ impl ResolvedSettings {
             if ignored.len() == 1 { "" } else { "s" },
             if ignored.len() == 1 { "it" } else { "them" },
         )]
+    }
+
+    /// Samples per pixel to reach: the count, or with a time limit and no count [`MAX_SPP`].
+    pub fn spp(&self) -> u32 {
+        match self.samples.count {
+            0 => MAX_SPP,
+            count => count,
+        }
     }
 
     /// The path tracer's settings.
@@ -216,29 +223,29 @@ mod tests {
     fn options_override_the_scene_file_which_overrides_the_defaults() {
         let mut scene = Scene::built_in("cornell").unwrap();
         let lab = ResolvedSettings::resolve(&scene, &RenderOptions::default());
-        assert_eq!((lab.integrator, lab.spp, lab.samples.seed), (IntegratorKind::Lab, 1, 0));
+        assert_eq!((lab.integrator, lab.spp(), lab.samples.seed), (IntegratorKind::Lab, 1, 0));
         assert_eq!(lab.max_depth, None);
         scene.settings.integrator = Some(IntegratorKind::Path);
         scene.settings.spp = Some(64);
         scene.settings.seed = Some(9);
-        scene.settings.max_depth = Some(Some(8));
+        scene.settings.max_depth = Some(MaxDepth::Segments(8));
         let file = ResolvedSettings::resolve(&scene, &RenderOptions::default());
-        assert_eq!((file.integrator, file.spp, file.samples.seed), (IntegratorKind::Path, 64, 9));
+        assert_eq!((file.integrator, file.spp(), file.samples.seed), (IntegratorKind::Path, 64, 9));
         assert_eq!(file.max_depth, Some(8));
         let options = RenderOptions {
             integrator: Some(IntegratorKind::Aov(AovKind::Depth)),
             spp: Some(2),
-            max_depth: Some(None),
+            max_depth: Some(MaxDepth::Unlimited),
             seed: Some(3),
             ..RenderOptions::default()
         };
         let given = ResolvedSettings::resolve(&scene, &options);
         assert_eq!(given.integrator, IntegratorKind::Aov(AovKind::Depth));
-        assert_eq!((given.spp, given.samples.seed, given.max_depth), (2, 3, None));
+        assert_eq!((given.spp(), given.samples.seed, given.max_depth), (2, 3, None));
         // A time limit without samples asked for runs until the time is up.
         let timed = RenderOptions { time_limit: Some(Duration::from_secs(1)), ..options };
         assert_eq!(
-            ResolvedSettings::resolve(&scene, &RenderOptions { spp: None, ..timed }).spp,
+            ResolvedSettings::resolve(&scene, &RenderOptions { spp: None, ..timed }).spp(),
             MAX_SPP
         );
         // Without a scene file's choice, area lights make it path-traced, 16 samples.
@@ -251,7 +258,7 @@ mod tests {
         let mut plain = mitsuba.clone();
         plain.settings = Default::default();
         let path = ResolvedSettings::resolve(&plain, &RenderOptions::default());
-        assert_eq!((path.integrator, path.spp), (IntegratorKind::Path, 16));
+        assert_eq!((path.integrator, path.spp()), (IntegratorKind::Path, 16));
         assert!(path.display(0.0, ToneMap::Clamp).srgb && !lab.display(0.0, ToneMap::Clamp).srgb);
     }
 }

@@ -67,7 +67,7 @@ fn a_room_parses_into_the_lab_frame() {
     let scene = parse(ROOM).unwrap();
     assert_eq!(scene.settings.size, Some((64, 48)));
     assert_eq!(scene.settings.spp, Some(16));
-    assert_eq!(scene.settings.max_depth, Some(Some(8)));
+    assert_eq!(scene.settings.max_depth, Some(crate::settings::MaxDepth::Segments(8)));
     assert_eq!(scene.settings.integrator, Some(crate::settings::IntegratorKind::Path));
     assert_eq!(scene.settings.filter, Some(Filter::GAUSSIAN));
     // The camera at y-up (0, 0, 3.9) looking at −z is the lab's camera at (0, 0, −3.9), yaw 0.

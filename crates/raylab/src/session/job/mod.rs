@@ -234,7 +234,7 @@ impl<'s> RenderJob<'s> {
             camera,
             s.integrator,
             s.stage,
-            s.spp,
+            s.spp(),
             s.samples.seed,
             sampler,
             s.samples.filter,
@@ -286,7 +286,13 @@ impl<'s> RenderJob<'s> {
             && parts::read_part(output).is_ok_and(|done| {
                 let h = &done.header;
                 (h.kind, h.samples, &h.scene_hash, &h.settings, h.region)
-                    == (PartKind::Image, settings.spp, &header.scene_hash, &header.settings, region)
+                    == (
+                        PartKind::Image,
+                        settings.spp(),
+                        &header.scene_hash,
+                        &header.settings,
+                        region,
+                    )
             })
         {
             events(Event::AlreadyRendered(output));
@@ -294,8 +300,8 @@ impl<'s> RenderJob<'s> {
                 output: output.to_path_buf(),
                 camera: *camera,
                 film: None,
-                samples: settings.spp,
-                first_sample: settings.spp,
+                samples: settings.spp(),
+                first_sample: settings.spp(),
                 discarded: 0,
                 elapsed: Duration::ZERO,
                 checkpoint_time: Duration::ZERO,
@@ -409,7 +415,7 @@ impl<'s> RenderJob<'s> {
         let integrator: &dyn Integrator = if self.aovs.is_empty() { &base } else { &with_layers };
 
         let first_sample = accumulator.samples();
-        let passes = settings.spp.saturating_sub(first_sample) as u64;
+        let passes = settings.spp().saturating_sub(first_sample) as u64;
         events(Event::Started {
             rows: region.height() as u64 * passes,
             row_pixels: region.width() as u64,
@@ -425,12 +431,12 @@ impl<'s> RenderJob<'s> {
         // time limit leaves room for. The first group is one pass, which times them.
         let mut group = 1;
         self.pool.install(|| {
-            while accumulator.samples() < settings.spp {
+            while accumulator.samples() < settings.spp() {
                 if self.stopped() {
                     interrupted = true;
                     break;
                 }
-                let count = group.min(settings.spp - accumulator.samples());
+                let count = group.min(settings.spp() - accumulator.samples());
                 let pass_start = Instant::now();
                 accumulator.add_samples_with_progress(camera, integrator, count, &|rows| {
                     events(Event::Rows(rows))
@@ -442,7 +448,7 @@ impl<'s> RenderJob<'s> {
                 }
                 if let Some((path, every)) = &checkpoint
                     && last_checkpoint.elapsed() >= *every
-                    && accumulator.samples() < settings.spp
+                    && accumulator.samples() < settings.spp()
                 {
                     checkpoint_time += write_checkpoint(accumulator, path);
                     last_checkpoint = Instant::now();
