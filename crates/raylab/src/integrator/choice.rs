@@ -28,7 +28,8 @@ pub struct Choice<'a> {
     pub stage: Stage,
     /// The path tracers' settings.
     pub path: PathSettings,
-    /// The path tracers' lights; `None`: made from the scene.
+    /// The path tracers' lights; `None`: made from the scene with `path`'s light and
+    /// environment sampling (a set given keeps its own).
     pub lights: Option<&'a LightSet>,
 }
 

@@ -29,10 +29,9 @@ use crate::settings::IntegratorKind;
 /// depth relative to the scene's size.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ViewMode {
-    /// Which integrator.
-    pub integrator: IntegratorKind,
-    /// The lab's stage (only the lab reads it).
-    pub stage: Stage,
+    integrator: IntegratorKind,
+    /// The lab's stage; the last for the others, which do not read it.
+    stage: Stage,
 }
 
 impl ViewMode {
@@ -46,8 +45,9 @@ impl ViewMode {
     /// The distance to the first surface, shown relative to the scene's size.
     pub const DEPTH: ViewMode = ViewMode::of(IntegratorKind::Aov(AovKind::Depth), Stage::Ambient);
 
-    /// The mode that shows what `integrator` computes; the lab shows `stage` (the others keep
-    /// the last stage, which they do not read, so that modes compare by what they show).
+    /// The mode that shows what `integrator` computes; the lab shows `stage` (the others are
+    /// given the last stage, which they do not read, so that modes compare equal exactly when
+    /// they show the same).
     pub const fn of(integrator: IntegratorKind, stage: Stage) -> ViewMode {
         let stage = match integrator {
             IntegratorKind::Lab => stage,
@@ -59,6 +59,16 @@ impl ViewMode {
     /// The lab's model at `stage`.
     pub const fn lab(stage: Stage) -> ViewMode {
         ViewMode { integrator: IntegratorKind::Lab, stage }
+    }
+
+    /// Which integrator it runs.
+    pub fn integrator(self) -> IntegratorKind {
+        self.integrator
+    }
+
+    /// The lab's stage it shows (the last for the other integrators).
+    pub fn stage(self) -> Stage {
+        self.stage
     }
 
     /// How its radiance is shown: the lab's linear clamp for the lab, normals and depth, sRGB

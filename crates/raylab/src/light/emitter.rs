@@ -1,14 +1,15 @@
-//! [`Emitter`]: any light, as a light sampler holds it. Each kind owns its sampling and
-//! evaluation (`sample`, `eval_pdf`, `power`, in its own file); an emitter only says which
-//! kind it is and passes the call on, so that a light sampler chooses among lights without
-//! knowing their shapes.
+//! [`Emitter`]: any light, as a light sampler holds it. Each kind owns its sampling, its
+//! evaluation and its power (`sample`, `eval_pdf`, `power`, in its own file); an emitter says
+//! which kind it is and passes the call on, so that a light sampler chooses among lights
+//! without knowing how each is sampled. (The lanes' form of each, `lane_light`, is in
+//! `lanes.rs`.)
 
 use glam::{Vec2, Vec3};
 
 use super::environment::{ConstantEnvironment, MapLight};
 use super::punctual::{DirectionalLight, PointLight, SpotLight, SunLight};
 use super::sample::{Emission, LightSample};
-use super::triangle::{TriangleLight, mean};
+use super::triangle::TriangleLight;
 use crate::ray::SurfacePoint;
 
 /// A light, whatever its kind, ready to be sampled.
@@ -70,10 +71,10 @@ impl Emitter {
     /// [`environment_power`]: Self::environment_power
     pub fn power(&self, through_scene: f32) -> f32 {
         match self {
-            Emitter::Point(light) => light.power(),
+            Emitter::Point(light) => light.mean_power(),
             Emitter::Triangle(light) => light.power(),
-            Emitter::Directional(light) => through_scene * mean(light.irradiance),
-            Emitter::Sun(light) => through_scene * mean(light.irradiance()),
+            Emitter::Directional(light) => light.power(through_scene),
+            Emitter::Sun(light) => light.power(through_scene),
             Emitter::Spot(light) => light.power(),
             Emitter::Environment(_) | Emitter::EnvironmentMap(_) => 0.0,
         }
@@ -83,8 +84,8 @@ impl Emitter {
     /// environments share their picks; `None` for any other light.
     pub fn environment_power(&self) -> Option<f32> {
         match self {
-            Emitter::Environment(light) => Some(mean(light.radiance)),
-            Emitter::EnvironmentMap(light) => Some(mean(light.map.mean())),
+            Emitter::Environment(light) => Some(light.mean_radiance()),
+            Emitter::EnvironmentMap(light) => Some(light.mean_radiance()),
             _ => None,
         }
     }

@@ -32,6 +32,12 @@ impl ConstantEnvironment {
         }
     }
 
+    /// Its mean radiance (the mean of its channels), by which several environments share
+    /// their picks.
+    pub fn mean_radiance(&self) -> f32 {
+        self.radiance.element_sum() / 3.0
+    }
+
     /// What a ray leaving the scene along `direction` sees, and its density under
     /// [`sample`](Self::sample).
     #[inline]
@@ -83,6 +89,12 @@ impl MapLight {
             delta: false,
             shadow_ray: point.spawn_ray(direction),
         })
+    }
+
+    /// The map's mean radiance (the mean of its channels), by which several environments share
+    /// their picks.
+    pub fn mean_radiance(&self) -> f32 {
+        self.map.mean().element_sum() / 3.0
     }
 
     /// What a ray leaving the scene along the unit `direction` sees, and the density with which

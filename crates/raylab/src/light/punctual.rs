@@ -17,7 +17,8 @@
 //!   it subtends, it casts soft-edged shadows, and as `α → 0` with `E` fixed it becomes a
 //!   directional light. Rays that leave the scene toward it see it.
 //!
-//! Tests: `light::punctual::tests` (the profiles at known angles, the sun's irradiance) and
+//! Tests: `light::punctual::tests` (the point light's falloff, the profiles at known angles,
+//! the sun's irradiance) and
 //! `sampling::tests` (chi-square of the cone).
 
 use std::f32::consts::PI;
@@ -81,8 +82,8 @@ impl PointLight {
         })
     }
 
-    /// Its power, for choosing among lights: `4π Ī`.
-    pub fn power(&self) -> f32 {
+    /// Its power, the mean of its channels, for choosing among lights: `4π Ī`.
+    pub fn mean_power(&self) -> f32 {
         4.0 * PI * (self.intensity().element_sum() / 3.0)
     }
 }
@@ -109,6 +110,12 @@ impl DirectionalLight {
             delta: true,
             shadow_ray: point.spawn_ray(toward),
         }
+    }
+
+    /// Its power, the mean of its channels, for choosing among lights: its irradiance through
+    /// a disk of area `through_scene` the size of the scene (PBR 4th ed. §12.5).
+    pub fn power(&self, through_scene: f32) -> f32 {
+        through_scene * (self.irradiance.element_sum() / 3.0)
     }
 }
 
@@ -338,6 +345,12 @@ impl SunLight {
             delta: false,
             shadow_ray: point.spawn_ray(direction),
         }
+    }
+
+    /// Its power, the mean of its channels, for choosing among lights: its irradiance through
+    /// a disk of area `through_scene` the size of the scene (PBR 4th ed. §12.5).
+    pub fn power(&self, through_scene: f32) -> f32 {
+        through_scene * (self.irradiance().element_sum() / 3.0)
     }
 
     /// What a ray leaving the scene along the unit `direction` sees of it, with the density

@@ -83,7 +83,8 @@ pub struct TriangleLight {
 
 impl TriangleLight {
     /// Its power, for choosing among lights: `π A L̄`, with `L̄` the mean of the radiance's
-    /// channels, or over a pattern its mean over the triangle ([`mean_over`]).
+    /// channels, or with a pattern the mean of radiance times pattern over the triangle
+    /// (estimated on a grid, and kept above 1% of the plain radiance's).
     pub fn power(&self) -> f32 {
         let mean = match &self.pattern {
             None => mean(self.radiance),
@@ -191,7 +192,7 @@ impl TriangleLight {
 
 /// The mean of a colour's channels.
 #[inline]
-pub(super) fn mean(c: Vec3) -> f32 {
+fn mean(c: Vec3) -> f32 {
     c.element_sum() / 3.0
 }
 

@@ -156,7 +156,7 @@ impl ResolvedSettings {
         // not known in advance.
         let count = match (options.time_limit, options.spp) {
             (Some(_), None) => 0,
-            _ => options.spp.or(file.spp).unwrap_or(default_spp).clamp(1, MAX_SPP),
+            _ => options.spp.or(file.spp).unwrap_or(default_spp).max(1),
         };
         ResolvedSettings {
             integrator,

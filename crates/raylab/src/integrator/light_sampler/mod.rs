@@ -9,8 +9,9 @@
 //! infinite lights (environments and suns) with their densities, for multiple importance
 //! sampling ([`LightSet::escaped`]), and a ray that hits an emitting triangle finds its light
 //! ([`LightSet::emitted`]). One pair of numbers picks the light (its first number, rescaled
-//! within the light's share) and the point on it, as in Mitsuba. The set knows the lights'
-//! powers, not their shapes: each light samples and evaluates itself (the `light` module).
+//! within the light's share) and the point on it, as in Mitsuba. The set makes the area lights
+//! from the scene's emitting triangles and knows which triangle is whose; otherwise it picks
+//! by power, and each light samples and evaluates itself (the `light` module).
 
 use std::f32::consts::PI;
 use std::sync::Arc;

@@ -20,8 +20,8 @@
 //! ## The scalar path's bits
 //! `shade_lane` is the scalar path's arithmetic, operation for operation: it calls the same
 //! frame ([`Frame::about`], [`Frame::new`], [`facing`]), the same BSDF methods (rebuilt from
-//! their rows exactly, [`LaneBsdf::from_params`]), the same warps
-//! ([`square_to_uniform_triangle`], the polynomial sines and cosines), the light's rescaled
+//! their rows exactly, [`LaneBsdf::from_params`]), the same light sampling (`light::lanes`:
+//! the same warps, the polynomial sines and cosines), the light's rescaled
 //! number ([`rescaled`]), the same [`power_heuristic`] and the same ray offset
 //! ([`offset_ray_origin_finite`]), and Rust neither fuses nor reorders floating-point
 //! operations, in vector code or not. So a lane's shadow ray, contribution, next ray,
