@@ -425,9 +425,10 @@ fn outside_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(Str
         .collect()
 }
 
-/// Every path in this module's non-test code that starts at the crate root (`crate::…`) or
-/// climbs with `super::…`, as the absolute path it names (`use crate::{a, b::{c, d}}` gives
-/// `[a]`, `[b, c]` and `[b, d]`), with its line.
+/// Every path in this module's non-test code that starts at the crate root (`crate::…`),
+/// climbs with `super::…` or starts at the module itself (`self::…`, outside a `pub use`
+/// re-export), as the absolute path it names (`use crate::{a, b::{c, d}}` gives `[a]`,
+/// `[b, c]` and `[b, d]`), with its line.
 fn absolute_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(Vec<String>, usize)> {
     let mut out = Vec::new();
     // The module path at each point: the file's, plus inline `mod name { … }` blocks.
@@ -454,14 +455,21 @@ fn absolute_references(tokens: &[(String, usize)], module: &[String]) -> Vec<(Ve
             _ => {}
         }
         let preceded_by_path = i > 0 && tokens[i - 1].0 == "::";
-        if (token == "crate" || token == "super") && !preceded_by_path {
-            // Climb: `crate` goes to the root; each `super` one level up.
+        let reexport =
+            i >= 2 && tokens[i - 1].0 == "use" && matches!(tokens[i - 2].0.as_str(), "pub" | ")");
+        let starts_here = token == "self"
+            && tokens.get(i + 1).is_some_and(|t| t.0 == "::")
+            && !(preceded_by_path || reexport);
+        if (token == "crate" || token == "super") && !preceded_by_path || starts_here {
+            // Climb: `crate` goes to the root; each `super` one level up; `self` stays.
             let here: Vec<String> =
                 module.iter().cloned().chain(inline.iter().map(|(name, _)| name.clone())).collect();
             let mut level = here.len();
             let mut j = i;
             if token == "crate" {
                 level = 0;
+                j += 1;
+            } else if token == "self" {
                 j += 1;
             } else {
                 while tokens.get(j).is_some_and(|t| t.0 == "super") {
@@ -558,6 +566,16 @@ fn submodule_edges(files: &[(PathBuf, String)], parent: &[&str]) -> BTreeSet<Edg
         .map(|(_, text)| tokens(&strip_comments_and_literals(text)))
         .unwrap_or_default();
     let reexports = submodule_reexports(&parent_tokens, &children);
+    // A path to a name the crate root re-exports (`crate::Bvh`) goes where the name comes
+    // from (`crate::bvh::Bvh`).
+    let top_modules: BTreeSet<String> =
+        files.iter().filter_map(|(path, _)| module_path_of(path).first().cloned()).collect();
+    let root_tokens = files
+        .iter()
+        .find(|(path, _)| module_path_of(path).is_empty())
+        .map(|(_, text)| tokens(&strip_comments_and_literals(text)))
+        .unwrap_or_default();
+    let root_names = root_reexports(&root_tokens, &top_modules);
     let test_files = test_files(files);
     let mut edges = BTreeSet::new();
     for (path, text) in files {
@@ -571,6 +589,12 @@ fn submodule_edges(files: &[(PathBuf, String)], parent: &[&str]) -> BTreeSet<Edg
         let clean = tokens(&strip_comments_and_literals(text));
         let mut targets: Vec<(String, usize)> = absolute_references(&clean, &module)
             .into_iter()
+            .map(|(absolute, line)| match absolute.first().and_then(|n| root_names.get(n)) {
+                Some(module) if !top_modules.contains(&absolute[0]) => {
+                    (std::iter::once(module.clone()).chain(absolute).collect(), line)
+                }
+                _ => (absolute, line),
+            })
             .filter(|(absolute, _)| absolute.len() > parent.len() && absolute.starts_with(&parent))
             .map(|(absolute, line)| (absolute[parent.len()].clone(), line))
             .collect();
@@ -894,6 +918,73 @@ mod tests {
             ("lib.rs", "pub mod p;"),
             ("p/mod.rs", "mod k;\npub use k::K;\npub struct S {\n    k: K,\n}"),
             ("p/k.rs", "pub struct K;"),
+        ]);
+        assert_eq!(folder_cycles(&files, false), (1, Vec::new()));
+    }
+
+    #[test]
+    fn self_paths_and_the_crate_root_s_reexports_are_followed() {
+        // `q.rs` reaches `r` by `self::r`, and `r` uses the module file's `Q`: a circle. In
+        // `p`, `x` names `crate::Y`, which the crate root re-exports from `p::y`, and `y`
+        // names `x`: a circle although neither path spells the other's file.
+        let files = crate_of(&[
+            (
+                "lib.rs",
+                "pub mod p; pub mod q;
+pub use p::Y;",
+            ),
+            (
+                "q.rs",
+                "mod r;
+pub struct Q;
+fn f() { self::r::g() }",
+            ),
+            (
+                "q/r.rs",
+                "pub fn g() {}
+fn h(_: super::Q) {}",
+            ),
+            (
+                "p/mod.rs",
+                "mod x; mod y;
+pub use y::Y;",
+            ),
+            (
+                "p/x.rs",
+                "pub struct X;
+fn f(_: crate::Y) {}",
+            ),
+            (
+                "p/y.rs",
+                "pub struct Y;
+fn g(_: super::x::X) {}",
+            ),
+        ]);
+        let (folders, report) = folder_cycles(&files, false);
+        assert_eq!(folders, 2, "p and q");
+        assert_eq!(report.len(), 2, "{report:?}");
+        assert!(report[0].contains("x -> y  (p/x.rs:2)"), "{}", report[0]);
+        assert!(report[1].contains("q (mod.rs) -> r  (q.rs:3)"), "{}", report[1]);
+        // A re-export through `self::` is no edge, and neither is a root name from elsewhere.
+        let files = crate_of(&[
+            (
+                "lib.rs",
+                "pub mod p; pub mod q;
+pub use q::Q;",
+            ),
+            ("q.rs", "pub struct Q;"),
+            (
+                "p/mod.rs",
+                "mod x; mod y;
+pub use self::y::Y;
+pub struct P;",
+            ),
+            ("p/x.rs", "fn f(_: crate::Q, _: super::y::Y) {}"),
+            (
+                "p/y.rs",
+                "pub struct Y;
+fn g(_: super::P) {}",
+            ),
         ]);
         assert_eq!(folder_cycles(&files, false), (1, Vec::new()));
     }
