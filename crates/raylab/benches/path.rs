@@ -1,8 +1,9 @@
 //! The path tracer, scalar (`PathScalar`, one path at a time) against the wavefront
 //! (`Path`, a tile's paths stage by stage with batched queries): one pass at a quarter
 //! of the scene's size, one thread, the scenes' own depth limits, on `scenes/`'s Mitsuba box and
-//! showcase and on the two Mitsuba comparison scenes of `tests/data` (the materials and the
-//! instanced glTF boxes, at a quarter of the 256×256 they are compared at).
+//! showcase and on the three Mitsuba comparison scenes of `tests/data` (the materials, the
+//! instanced glTF boxes and the environment-lit spheres, at a quarter of the 256×256 they are
+//! compared at).
 //!
 //! `cargo bench -p raylab --bench path`; it first prints the wavefront's time per sample by
 //! stage (`Path::with_stage_times`, 16 passes in one group, one thread), then times
@@ -17,7 +18,7 @@ use raylab::scene::{Instancing, LoadOptions};
 use raylab::session::{CameraOptions, RenderOptions, ResolvedSettings};
 use raylab::{Accumulator, Camera, SamplerKind, Scene, SceneBvh};
 
-/// A scene file of `scenes/` (or `materials`, `gltf-boxes` of `tests/data`; `gltf-boxes-kept`
+/// A scene file of `scenes/` (or `materials`, `gltf-boxes`, `envmap` of `tests/data`; `gltf-boxes-kept`
 /// the boxes kept instanced, under a two-level BVH, where by default they are copied) with its
 /// BVH, settings and its camera at a quarter of its size (128×128 for the Cornell box, 160×120
 /// for the showcase, 64×64 for the comparison scenes): the same view as a full render.
@@ -26,6 +27,7 @@ fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
     let file = match name {
         "materials" => root.join("tests/data/mitsuba-materials/materials.toml"),
         "gltf-boxes" | "gltf-boxes-kept" => root.join("tests/data/mitsuba-gltf/boxes.toml"),
+        "envmap" => root.join("tests/data/mitsuba-envmap/envmap.toml"),
         _ => root.join(format!("../../scenes/{name}.toml")),
     };
     let instancing = if name == "gltf-boxes-kept" { Instancing::Keep } else { Instancing::Auto };
@@ -36,13 +38,17 @@ fn load(name: &str) -> (Scene, SceneBvh, ResolvedSettings, Camera) {
     let settings = ResolvedSettings::resolve(&scene, &RenderOptions::default());
     // The Mitsuba comparison scenes are timed at 256×256 (BENCHMARKS.md).
     let (width, height) = match name {
-        "materials" | "gltf-boxes" | "gltf-boxes-kept" => (256, 256),
+        "materials" | "gltf-boxes" | "gltf-boxes-kept" | "envmap" => (256, 256),
         _ => scene.settings.size.expect("the scene file's size"),
     };
     let cameras = CameraOptions { size: Some((width / 4, height / 4)), ..CameraOptions::default() };
     let camera = cameras.camera(scene.camera, &scene, false, &accel).expect("a camera");
     (scene, accel, settings, camera)
 }
+
+/// The scenes timed.
+const SCENES: [&str; 6] =
+    ["cornell-mitsuba", "showcase", "materials", "gltf-boxes", "gltf-boxes-kept", "envmap"];
 
 /// One pass of `integrator` over the camera's pixels, on the current thread pool.
 fn pass(camera: &Camera, settings: &ResolvedSettings, integrator: &dyn Integrator) -> Accumulator {
@@ -89,7 +95,7 @@ fn stage_table(_: &mut Criterion) {
         "fill",
         "vertices"
     );
-    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes", "gltf-boxes-kept"] {
+    for name in SCENES {
         let (scene, accel, settings, camera) = load(name);
         let scalar = PathScalar::new(&scene, &accel, settings.path_settings());
         let wavefront = Path::new(&scene, &accel, settings.path_settings()).with_stage_times();
@@ -183,7 +189,7 @@ fn path(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread");
     let mut group = c.benchmark_group("path_quarter_size_1spp_1_thread");
     group.sample_size(20);
-    for name in ["cornell-mitsuba", "showcase", "materials", "gltf-boxes", "gltf-boxes-kept"] {
+    for name in SCENES {
         let (scene, accel, settings, camera) = load(name);
         let scalar = PathScalar::new(&scene, &accel, settings.path_settings());
         let wavefront = Path::new(&scene, &accel, settings.path_settings());
