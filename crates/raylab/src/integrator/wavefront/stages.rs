@@ -219,20 +219,19 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
         // The lanes the scalar steps decide in part or whole (for the stage table).
         debug_assert!(paths.len() <= vertices::LANES, "a chunk at a time");
         let mut scalar = 0u32;
-        for (lane, &i) in paths.iter().enumerate() {
+        for lane in 0..paths.len() {
             let drawn = chunk.numbers.drawn[lane];
             let light = path.lights().pick_for_lanes(drawn.point);
-            if light.role() == LaneRole::Other {
-                scalar |= 1 << lane;
-                let vertex = lanes.vertex::<B>(lane);
-                chunk
-                    .shadows
-                    .add(i, chunk.numbers.sample_light(path, &chunk.states[i], &vertex, lane));
-            }
+            // A light the lanes do not sample: the scalar code samples it, the lanes take the
+            // sample from there (a BSDF of delta lobes alone samples no light).
+            let given = (B::SMOOTH && light.role() == LaneRole::Other)
+                .then(|| path.lights().sample(&lanes.surface_point(lane), drawn.point))
+                .flatten();
             lanes.set_draws(
                 lane,
                 &LaneDraws {
                     light,
+                    given,
                     u_point: drawn.point,
                     u_lobe: drawn.lobe,
                     u_direction: drawn.direction,

@@ -47,6 +47,7 @@ use super::super::light_sampler::LanePick;
 use super::super::path::{Frame, Vertex, facing};
 use super::surface::LaneSurface;
 use crate::cpu::Isa;
+use crate::light::LightSample;
 use crate::light::lanes::{LaneRole, LaneSample, sample_environment, sample_triangle};
 use crate::material::lanes::{LaneBsdf, PARAMS};
 use crate::ray::{Ray, SurfacePoint, offset_ray_origin_finite};
@@ -117,6 +118,18 @@ struct Input {
     selection: Row,
     /// Where the light's share of the first number starts.
     start: Row,
+    /// Whether the lane's light sample is given (a light the lanes do not sample themselves,
+    /// sampled by the scalar code before the chunk is shaded: `LaneDraws::given`), and then
+    /// whether there is one, its direction, density (the pick's probability included), whether
+    /// it is a delta light's, and its shadow ray; its radiance is in `radiance`.
+    given: [bool; LANES],
+    given_found: [bool; LANES],
+    given_direction: Rows3,
+    given_pdf: Row,
+    given_delta: [bool; LANES],
+    given_origin: Rows3,
+    given_shadow: Rows3,
+    given_t_max: Row,
     /// The numbers: the light's point, the BSDF's lobe and direction, the roulette's.
     u_point: [Row; 2],
     u_lobe: Row,
@@ -167,14 +180,19 @@ fn vertex_of<B: LaneBsdf>(input: &Input, k: usize) -> (Frame, bool, Vec3, B) {
 /// One lane's shading: light sampling, BSDF sampling and roulette, as the scalar path does them
 /// (see the module documentation).
 #[inline(always)]
-fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, k: usize) {
+fn shade_lane<B: LaneBsdf, const SKY: bool, const GIVEN: bool>(
+    input: &Input,
+    output: &mut Output,
+    k: usize,
+) {
     let point =
         SurfacePoint { p: input.p.get(k), error: input.error.get(k), normal: input.normal.get(k) };
     let (frame, flip, wi, bsdf) = vertex_of::<B>(input, k);
     let throughput = input.throughput.get(k);
 
     // The light's sample (`light::lanes`): a triangle by area, or where the chunk has lanes
-    // that sample it (`SKY`) the constant environment.
+    // that sample it (`SKY`) the constant environment, or where it has lanes whose sample is
+    // given (`GIVEN`) that sample.
     let u_x = rescaled(input.u_point[0][k], input.start[k], input.selection[k]);
     let u = Vec2::new(u_x, input.u_point[1][k]);
     let corners = [input.v0.get(k), input.v1.get(k), input.v2.get(k)];
@@ -191,6 +209,18 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
         finite: shadow_finite,
     } = if SKY && input.environment[k] { sky } else { triangle };
     let light_pdf = input.selection[k] * light_pdf;
+    // (The given sample's rows are read whatever the lane, then chosen: loads under a
+    // condition kept the loop from becoming vector code.)
+    let given = GIVEN && input.given[k];
+    let given_light = (input.given_direction.get(k), input.given_pdf[k], input.given_found[k]);
+    let given_shadow = (input.given_origin.get(k), input.given_shadow.get(k), input.given_t_max[k]);
+    let given_delta = input.given_delta[k];
+    let (direction, light_pdf, faces) =
+        if given { given_light } else { (direction, light_pdf, faces) };
+    let (shadow_origin, shadow_direction, shadow_t_max, shadow_finite) = match given {
+        true => (given_shadow.0, given_shadow.1, given_shadow.2, true),
+        false => (shadow_origin, shadow_direction, shadow_t_max, shadow_finite),
+    };
     // PathScalar::sample_light_with (which a BSDF of delta lobes alone skips).
     let mut wo = frame.to_local(direction);
     if flip {
@@ -198,6 +228,8 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
     }
     let f = bsdf.eval(wi, wo);
     let weight = power_heuristic(light_pdf, bsdf.pdf(wi, wo));
+    // A delta light's sample has weight 1 (only light sampling finds it).
+    let weight = if given & given_delta { 1.0 } else { weight };
     let contribution = throughput * f * input.radiance.get(k) * (weight / light_pdf);
     let shadowed = B::SMOOTH && input.has_light[k] && faces && f != Vec3::ZERO;
 
@@ -246,9 +278,12 @@ fn shade_lane<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output, 
 /// cannot change the loads: then the loop becomes vector code (with the two in one struct it
 /// stayed scalar, "too many memory checks needed").
 #[inline(always)]
-fn shade_chunk<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output) {
+fn shade_chunk<B: LaneBsdf, const SKY: bool, const GIVEN: bool>(
+    input: &Input,
+    output: &mut Output,
+) {
     for k in 0..LANES {
-        shade_lane::<B, SKY>(input, output, k);
+        shade_lane::<B, SKY, GIVEN>(input, output, k);
     }
 }
 
@@ -260,8 +295,11 @@ fn shade_chunk<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output)
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,avx512f,avx512vl")]
 #[inline(never)]
-unsafe fn shade_chunk_avx512<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output) {
-    shade_chunk::<B, SKY>(input, output);
+unsafe fn shade_chunk_avx512<B: LaneBsdf, const SKY: bool, const GIVEN: bool>(
+    input: &Input,
+    output: &mut Output,
+) {
+    shade_chunk::<B, SKY, GIVEN>(input, output);
 }
 
 /// [`shade_chunk`] compiled for AVX2: eight lanes per instruction.
@@ -271,15 +309,21 @@ unsafe fn shade_chunk_avx512<B: LaneBsdf, const SKY: bool>(input: &Input, output
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline(never)]
-unsafe fn shade_chunk_avx2<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output) {
-    shade_chunk::<B, SKY>(input, output);
+unsafe fn shade_chunk_avx2<B: LaneBsdf, const SKY: bool, const GIVEN: bool>(
+    input: &Input,
+    output: &mut Output,
+) {
+    shade_chunk::<B, SKY, GIVEN>(input, output);
 }
 
 /// The baseline build of [`shade_chunk`]: the scalar twin (SSE2 on x86-64, four lanes where
 /// the compiler finds it pays).
 #[inline(never)]
-fn shade_chunk_baseline<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mut Output) {
-    shade_chunk::<B, SKY>(input, output);
+fn shade_chunk_baseline<B: LaneBsdf, const SKY: bool, const GIVEN: bool>(
+    input: &Input,
+    output: &mut Output,
+) {
+    shade_chunk::<B, SKY, GIVEN>(input, output);
 }
 
 /// [`shade_chunk`] compiled for `isa`.
@@ -287,7 +331,7 @@ fn shade_chunk_baseline<B: LaneBsdf, const SKY: bool>(input: &Input, output: &mu
 /// # Safety
 /// The CPU must support `isa`.
 #[inline(always)]
-unsafe fn shade_chunk_on<B: LaneBsdf, const SKY: bool>(
+unsafe fn shade_chunk_on<B: LaneBsdf, const SKY: bool, const GIVEN: bool>(
     isa: Isa,
     input: &Input,
     output: &mut Output,
@@ -295,11 +339,11 @@ unsafe fn shade_chunk_on<B: LaneBsdf, const SKY: bool>(
     match isa {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the caller's guarantee.
-        Isa::Avx512 => unsafe { shade_chunk_avx512::<B, SKY>(input, output) },
+        Isa::Avx512 => unsafe { shade_chunk_avx512::<B, SKY, GIVEN>(input, output) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above.
-        Isa::Avx2 => unsafe { shade_chunk_avx2::<B, SKY>(input, output) },
-        _ => shade_chunk_baseline::<B, SKY>(input, output),
+        Isa::Avx2 => unsafe { shade_chunk_avx2::<B, SKY, GIVEN>(input, output) },
+        _ => shade_chunk_baseline::<B, SKY, GIVEN>(input, output),
     }
 }
 
@@ -325,6 +369,10 @@ pub(super) struct LaneVertex {
 /// A lane's light and numbers, as [`VertexLanes::set_draws`] takes them.
 pub(super) struct LaneDraws<'a> {
     pub light: LanePick<'a>,
+    /// For a light the lanes leave to the scalar code ([`LaneRole::Other`]), its sample as
+    /// `LightSet::sample` made it from the same numbers (`None`: it gave none, or the lane's
+    /// BSDF has delta lobes alone, which sample no light); the lanes take it from there.
+    pub given: Option<LightSample>,
     /// The light's numbers as drawn (the lanes rescale the first within the light's share).
     pub u_point: Vec2,
     pub u_lobe: f32,
@@ -352,7 +400,8 @@ pub(super) struct LaneResult {
     pub next: Option<Next>,
     /// False where the scalar code must decide the lane instead.
     pub exact: bool,
-    /// Whether the lanes sampled the lane's light (a triangle or the environment).
+    /// Whether the lanes made the lane's light sample's contribution (any light: the scalar
+    /// code samples the lights the lanes do not, and the lanes take the sample from there).
     pub light_in_lanes: bool,
 }
 
@@ -412,10 +461,19 @@ impl VertexLanes {
         input.radiance.set(k, light.radiance);
         input.selection[k] = selection;
         input.start[k] = start;
-        let has_light = matches!(light.role, LaneRole::Triangle | LaneRole::Environment);
-        let environment = light.role == LaneRole::Environment;
-        input.has_light[k] = has_light;
-        input.environment[k] = environment;
+        input.has_light[k] = light.role != LaneRole::Nothing;
+        input.environment[k] = light.role == LaneRole::Environment;
+        input.given[k] = light.role == LaneRole::Other;
+        input.given_found[k] = draws.given.is_some();
+        if let Some(sample) = &draws.given {
+            input.radiance.set(k, sample.radiance);
+            input.given_direction.set(k, sample.direction);
+            input.given_pdf[k] = sample.pdf;
+            input.given_delta[k] = sample.delta;
+            input.given_origin.set(k, sample.shadow_ray.origin);
+            input.given_shadow.set(k, sample.shadow_ray.direction);
+            input.given_t_max[k] = sample.shadow_ray.t_max;
+        }
         input.u_point[0][k] = draws.u_point.x;
         input.u_point[1][k] = draws.u_point.y;
         input.u_lobe[k] = draws.u_lobe;
@@ -442,6 +500,13 @@ impl VertexLanes {
         }
     }
 
+    /// Lane `i`'s surface point.
+    #[inline]
+    pub(super) fn surface_point(&self, i: usize) -> SurfacePoint {
+        let (input, k) = (&self.inputs[i / LANES], i % LANES);
+        SurfacePoint { p: input.p.get(k), error: input.error.get(k), normal: input.normal.get(k) }
+    }
+
     /// Lane `i`'s point.
     #[inline]
     pub(super) fn point(&self, i: usize) -> Vec3 {
@@ -457,11 +522,17 @@ impl VertexLanes {
         {
             // The environment's code only where a lane in use samples it.
             let used = (self.len - c * LANES).min(LANES);
-            match input.environment[..used].contains(&true) {
+            let sky = input.environment[..used].contains(&true);
+            let given = input.given[..used].contains(&true);
+            match (sky, given) {
                 // SAFETY: the CPU supports the instruction set (asserted above).
-                true => unsafe { shade_chunk_on::<B, true>(isa, input, output) },
+                (false, false) => unsafe { shade_chunk_on::<B, false, false>(isa, input, output) },
                 // SAFETY: as above.
-                false => unsafe { shade_chunk_on::<B, false>(isa, input, output) },
+                (true, false) => unsafe { shade_chunk_on::<B, true, false>(isa, input, output) },
+                // SAFETY: as above.
+                (false, true) => unsafe { shade_chunk_on::<B, false, true>(isa, input, output) },
+                // SAFETY: as above.
+                (true, true) => unsafe { shade_chunk_on::<B, true, true>(isa, input, output) },
             }
         }
     }
