@@ -82,13 +82,21 @@ impl MapLight {
                 }
             }
         };
-        Some(LightSample {
+        Some(MapLight::seen_from(point, DirectionSample { direction, radiance, pdf }))
+    }
+
+    /// A direction toward the map picked as [`sample`](Self::sample) picks it, seen from
+    /// `point`.
+    #[inline]
+    pub fn seen_from(point: &SurfacePoint, sample: DirectionSample) -> LightSample {
+        let DirectionSample { direction, radiance, pdf } = sample;
+        LightSample {
             direction,
             radiance,
             pdf,
             delta: false,
             shadow_ray: point.spawn_ray(direction),
-        })
+        }
     }
 
     /// The map's mean radiance (the mean of its channels), by which several environments share

@@ -294,6 +294,32 @@ impl EnvironmentMap {
     #[inline]
     pub fn sample(&self, u: Vec2) -> Option<DirectionSample> {
         let ((column, row), probability, rest) = self.patches.sample_bin(u);
+        self.sample_in_patch((column, row), probability, rest)
+    }
+
+    /// [`sample`](Self::sample) for each of `us` (at most
+    /// [`SEARCH_LANES`](crate::sampling::SEARCH_LANES)), to the bit: the patches picked with
+    /// the lanes' searches taken in step, so that their loads overlap.
+    ///
+    /// # Panics
+    /// If the slices differ in length or hold more than `SEARCH_LANES`.
+    pub fn sample_each(&self, us: &[Vec2], out: &mut [Option<DirectionSample>]) {
+        let mut bins = [((0, 0), 0.0, Vec2::ZERO); crate::sampling::SEARCH_LANES];
+        self.patches.sample_bin_each(us, &mut bins[..us.len()]);
+        for (slot, &(patch, probability, rest)) in out.iter_mut().zip(&bins) {
+            *slot = self.sample_in_patch(patch, probability, rest);
+        }
+    }
+
+    /// The rest of [`sample`](Self::sample) once the patch `(column, row)` of probability
+    /// `probability` is picked, `rest` the numbers rescaled within it.
+    #[inline]
+    fn sample_in_patch(
+        &self,
+        (column, row): (usize, usize),
+        probability: f32,
+        rest: Vec2,
+    ) -> Option<DirectionSample> {
         let (columns, rows) = (self.width, self.height - 1);
         let f = self.corners(column, row);
         let within = sample_bilinear(rest, f);

@@ -551,9 +551,75 @@ impl DiscreteDistribution {
     /// ([`rescaled`]).
     #[inline]
     pub fn pick(&self, u: f32) -> (usize, f32, f32) {
+        self.pick_at(self.below_or_at(u))
+    }
+
+    /// [`pick`](Self::pick) given how many entries of the CDF are at most `u`.
+    #[inline(always)]
+    fn pick_at(&self, below_or_at: usize) -> (usize, f32, f32) {
         // The last i with cdf[i] <= u, skipping items of probability zero.
-        let i = (self.below_or_at(u).max(1) - 1).min(self.len() - 1);
+        let i = (below_or_at.max(1) - 1).min(self.len() - 1);
         (i, self.pmf(i), self.cdf[i])
+    }
+
+    /// The CDF: `len() + 1` ascending entries from 0 to 1.
+    #[inline]
+    pub(crate) fn cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
+    /// [`sample`](Self::sample) for each of `us`, of several distributions of the same length
+    /// (`distributions[l]` for `us[l]`): the same items, probabilities and rescaled numbers, the
+    /// binary searches taken in step ([`below_or_at_each`]) so that their loads overlap.
+    ///
+    /// # Panics
+    /// If the slices differ in length, hold more than [`SEARCH_LANES`], or the distributions
+    /// differ in length.
+    pub fn sample_each(
+        distributions: &[&DiscreteDistribution],
+        us: &[f32],
+        out: &mut [(usize, f32, f32)],
+    ) {
+        let mut counts = [0usize; SEARCH_LANES];
+        let cdfs: Vec<&[f32]> = distributions.iter().map(|d| d.cdf()).collect();
+        below_or_at_each(&cdfs, us, &mut counts[..us.len()]);
+        for (l, slot) in out.iter_mut().enumerate() {
+            let (i, pmf, start) = distributions[l].pick_at(counts[l]);
+            *slot = (i, pmf, rescaled(us[l], start, pmf));
+        }
+    }
+}
+
+/// The most searches [`below_or_at_each`] takes in step.
+pub const SEARCH_LANES: usize = 16;
+
+/// For each `l`, how many entries of `cdfs[l]` are at most `us[l]` (each ascending, all of one
+/// length): what `partition_point(|c| c <= u)` counts, by a binary search without branches
+/// whose steps the lanes take together, so that their loads, which depend on the last step's,
+/// overlap one another rather than each waiting for its own.
+///
+/// # Panics
+/// If the slices differ in length, hold more than [`SEARCH_LANES`] or no entry, or the tables
+/// differ in length.
+#[inline]
+pub fn below_or_at_each(cdfs: &[&[f32]], us: &[f32], out: &mut [usize]) {
+    let lanes = us.len();
+    assert!(lanes <= SEARCH_LANES && cdfs.len() == lanes && out.len() == lanes);
+    let Some(n) = cdfs.first().map(|c| c.len()) else { return };
+    assert!(n > 0 && cdfs.iter().all(|c| c.len() == n), "tables of one length");
+    let mut base = [0usize; SEARCH_LANES];
+    // Entries below `base[l]` are at most `us[l]`; those from `base[l] + size` on are above.
+    let mut size = n;
+    while size > 1 {
+        let half = size / 2;
+        for l in 0..lanes {
+            let at = base[l] + half;
+            base[l] = if cdfs[l][at] <= us[l] { at } else { base[l] };
+        }
+        size -= half;
+    }
+    for l in 0..lanes {
+        out[l] = base[l] + usize::from(cdfs[l][base[l]] <= us[l]);
     }
 }
 

@@ -155,6 +155,30 @@ impl PiecewiseConstant2D {
         ((column, row), p_row * p_column, Vec2::new(x, v))
     }
 
+    /// [`sample_bin`](Self::sample_bin) for each of `us` (at most
+    /// [`SEARCH_LANES`](super::SEARCH_LANES)): the same bins, probabilities and rescaled
+    /// numbers, the lanes' searches taken in step (`DiscreteDistribution::sample_each`).
+    ///
+    /// # Panics
+    /// If the slices differ in length or hold more than `SEARCH_LANES`.
+    pub fn sample_bin_each(&self, us: &[Vec2], out: &mut [((usize, usize), f32, Vec2)]) {
+        let lanes = us.len();
+        assert!(lanes <= super::SEARCH_LANES && out.len() == lanes, "a bin per number");
+        let mut rows = [(0usize, 0.0f32, 0.0f32); super::SEARCH_LANES];
+        let v: Vec<f32> = us.iter().map(|u| u.y).collect();
+        let marginal = vec![&self.marginal.bins; lanes];
+        DiscreteDistribution::sample_each(&marginal, &v, &mut rows[..lanes]);
+        let mut columns = [(0usize, 0.0f32, 0.0f32); super::SEARCH_LANES];
+        let x: Vec<f32> = us.iter().map(|u| u.x).collect();
+        let conditional: Vec<&DiscreteDistribution> =
+            rows[..lanes].iter().map(|&(row, ..)| &self.rows[row].bins).collect();
+        DiscreteDistribution::sample_each(&conditional, &x, &mut columns[..lanes]);
+        for (l, slot) in out.iter_mut().enumerate() {
+            let ((row, p_row, v), (column, p_column, x)) = (rows[l], columns[l]);
+            *slot = ((column, row), p_row * p_column, Vec2::new(x, v));
+        }
+    }
+
     /// The probability of bin `(column, row)`.
     #[inline]
     pub fn probability(&self, column: usize, row: usize) -> f32 {

@@ -519,3 +519,44 @@ fn atan2_polynomial_is_accurate() {
     assert!(atan2_polynomial(f32::NAN, 1.0).is_nan());
     eprintln!("atan2_polynomial: worst error {worst:.2e}");
 }
+
+/// The searches in step count what `partition_point` counts, on ascending tables with runs of
+/// equal entries (items of probability zero), at the entries themselves, between them, below
+/// the first and from the last on, for tables of 1 to 40 entries.
+#[test]
+fn searches_in_step_count_as_partition_point() {
+    let mut rng = Pcg32::new(48, 2);
+    for n in 1..=40usize {
+        for _ in 0..20 {
+            let tables: Vec<Vec<f32>> = (0..SEARCH_LANES)
+                .map(|_| {
+                    let mut sum = 0.0f32;
+                    (0..n)
+                        .map(|_| {
+                            // A third of the steps are zero: equal entries.
+                            if !rng.next_u32().is_multiple_of(3) {
+                                sum += rng.next_f32();
+                            }
+                            sum
+                        })
+                        .collect()
+                })
+                .collect();
+            let us: Vec<f32> = tables
+                .iter()
+                .map(|t| match rng.next_u32() % 4 {
+                    0 => t[rng.next_u32() as usize % n],
+                    1 => -1.0,
+                    2 => t[n - 1] + 1.0,
+                    _ => rng.next_f32() * (t[n - 1] + 0.5),
+                })
+                .collect();
+            let cdfs: Vec<&[f32]> = tables.iter().map(Vec::as_slice).collect();
+            let mut counts = [0usize; SEARCH_LANES];
+            below_or_at_each(&cdfs, &us, &mut counts);
+            for l in 0..SEARCH_LANES {
+                assert_eq!(counts[l], tables[l].partition_point(|&c| c <= us[l]), "{n} {l}");
+            }
+        }
+    }
+}

@@ -25,7 +25,7 @@ use crate::light::{
 };
 pub use crate::light::{EnvironmentSampling, LightSample, TriangleSampling};
 use crate::ray::SurfacePoint;
-use crate::sampling::DiscreteDistribution;
+use crate::sampling::{DiscreteDistribution, SEARCH_LANES};
 use crate::scene::Scene;
 
 /// Every light of a scene, ready to be sampled: point lights, the emissive triangles (area
@@ -236,6 +236,72 @@ impl LightSet {
         let mut sample = self.lights[index].sample(point, u)?;
         sample.pdf *= selection;
         Some(sample)
+    }
+
+    /// [`sample`](Self::sample) for each point and pair of numbers (at most
+    /// [`SEARCH_LANES`]), to the bit: the environment maps sampled by importance have their
+    /// picks made together ([`EnvironmentMap::sample_each`](crate::light::EnvironmentMap)), so
+    /// that their searches' loads overlap.
+    ///
+    /// # Panics
+    /// If the slices differ in length or hold more than `SEARCH_LANES`.
+    pub fn sample_each(
+        &self,
+        points: &[SurfacePoint],
+        us: &[Vec2],
+        out: &mut [Option<LightSample>],
+    ) {
+        let lanes = us.len();
+        assert!(lanes <= SEARCH_LANES && points.len() == lanes && out.len() == lanes);
+        // The lanes that picked a map by importance: (lane, light, selection, numbers).
+        let mut maps = [(0usize, 0usize, 0.0f32, Vec2::ZERO); SEARCH_LANES];
+        let mut count = 0;
+        for (l, slot) in out.iter_mut().enumerate() {
+            *slot = None;
+            let Some((index, selection, u)) = self.pick(us[l]) else { continue };
+            match &self.lights[index] {
+                Emitter::EnvironmentMap(map) if map.sampling == EnvironmentSampling::Importance => {
+                    maps[count] = (l, index, selection, u);
+                    count += 1;
+                }
+                light => {
+                    *slot = light.sample(&points[l], u).map(|mut sample| {
+                        sample.pdf *= selection;
+                        sample
+                    })
+                }
+            }
+        }
+        // One map at a time (a scene has one, as a rule).
+        let mut done = [false; SEARCH_LANES];
+        for first in 0..count {
+            if done[first] {
+                continue;
+            }
+            let index = maps[first].1;
+            let Emitter::EnvironmentMap(light) = &self.lights[index] else {
+                unreachable!("maps holds environment maps");
+            };
+            let (mut these, mut numbers) = ([0usize; SEARCH_LANES], [Vec2::ZERO; SEARCH_LANES]);
+            let mut n = 0;
+            for (j, &(_, i, _, u)) in maps[..count].iter().enumerate() {
+                if i == index {
+                    (these[n], numbers[n]) = (j, u);
+                    done[j] = true;
+                    n += 1;
+                }
+            }
+            let mut samples = [None; SEARCH_LANES];
+            light.map.sample_each(&numbers[..n], &mut samples[..n]);
+            for (&j, sample) in these[..n].iter().zip(samples) {
+                let (l, _, selection, _) = maps[j];
+                out[l] = sample.map(|sample| {
+                    let mut sample = MapLight::seen_from(&points[l], sample);
+                    sample.pdf *= selection;
+                    sample
+                });
+            }
+        }
     }
 
     /// The light that `u.x` picks ([`pick`](Self::pick)), as the wavefront's lanes take it

@@ -69,3 +69,69 @@ fn the_environment_takes_half_the_picks_and_each_light_keeps_its_points_stratifi
     let lights = LightSet::new(&scene);
     assert_eq!(escaped(&lights, Vec3::Z).1, 1.0 / (4.0 * PI));
 }
+
+/// `sample_each` (the maps' picks made together) gives `sample`'s samples to the bit, for a
+/// scene with two environment maps, one sampled in step, a point light, a sun and its area
+/// lights, from points all around, in groups of every size up to sixteen.
+#[test]
+fn sampling_together_is_sampling_one_by_one() {
+    use crate::film::Film;
+    use crate::light::{EnvironmentMap, SunLight};
+    use crate::sampling::{Pcg32, SEARCH_LANES};
+    let map = |w: u32, h: u32, bright: u32| {
+        let pixels = (0..w * h)
+            .map(|i| if i % bright == 0 { Vec3::splat(40.0) } else { Vec3::new(0.2, 0.3, 0.4) })
+            .collect();
+        let film = Film::from_pixels(w, h, pixels);
+        Arc::new(EnvironmentMap::new("m", film, 1.0, glam::Mat3::IDENTITY).unwrap())
+    };
+    let mut scene = Scene::built_in("cornell").unwrap();
+    let mut lamp = crate::material::Material::diffuse("lamp", Vec3::ZERO);
+    lamp.emission = Vec3::splat(5.0);
+    scene.materials[0] = lamp;
+    scene.lights.push(Light::EnvironmentMap(map(32, 17, 7)));
+    scene.lights.push(Light::EnvironmentMap(map(8, 5, 3)));
+    scene
+        .lights
+        .push(Light::Sun(SunLight::new(Vec3::new(0.2, 1.0, 0.1), 0.01, Vec3::ONE).unwrap()));
+    let lights = LightSet::new(&scene);
+    let mut rng = Pcg32::new(48, 3);
+    let mut kinds = [0usize; 2];
+    for size in 1..=SEARCH_LANES {
+        for _ in 0..60 {
+            let points: Vec<SurfacePoint> = (0..size)
+                .map(|_| SurfacePoint {
+                    p: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0,
+                    error: Vec3::splat(1e-6),
+                    normal: Vec3::Y,
+                })
+                .collect();
+            let us: Vec<Vec2> =
+                (0..size).map(|_| Vec2::new(rng.next_f32(), rng.next_f32())).collect();
+            let mut each = vec![None; size];
+            lights.sample_each(&points, &us, &mut each);
+            for ((point, u), got) in points.iter().zip(&us).zip(&each) {
+                let want = lights.sample(point, *u);
+                let bits = |s: &Option<LightSample>| {
+                    s.map(|s| {
+                        let v = |v: Vec3| v.to_array().map(f32::to_bits);
+                        let r = s.shadow_ray;
+                        (
+                            v(s.direction),
+                            v(s.radiance),
+                            s.pdf.to_bits(),
+                            s.delta,
+                            v(r.origin),
+                            v(r.direction),
+                            r.t_max.to_bits(),
+                        )
+                    })
+                };
+                assert_eq!(bits(got), bits(&want), "{u} from {point:?}");
+                kinds[usize::from(want.is_some_and(|s| s.shadow_ray.t_max == f32::INFINITY))] += 1;
+            }
+        }
+    }
+    // Both kinds were compared: lights at a finite distance and lights infinitely far away.
+    assert!(kinds[0] > 500 && kinds[1] > 500, "{kinds:?}");
+}

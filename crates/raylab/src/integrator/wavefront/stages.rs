@@ -4,7 +4,7 @@
 
 use std::sync::atomic::Ordering;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::clock::{Lap, StageClock};
 use super::vertices::{self, LaneDraws, LaneVertex, VertexLanes};
@@ -15,7 +15,7 @@ use crate::integrator::{closest_opaque_hit, occluded_opaque};
 use crate::light::lanes::LaneRole;
 use crate::material::BsdfKind;
 use crate::material::lanes::LaneBsdf;
-use crate::ray::Ray;
+use crate::ray::{Ray, SurfacePoint};
 use crate::sampling::{Sampler, VertexNumbers};
 use crate::scene::Scene;
 
@@ -219,18 +219,39 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
         // The lanes the scalar steps decide in part or whole (for the stage table).
         debug_assert!(paths.len() <= vertices::LANES, "a chunk at a time");
         let mut scalar = 0u32;
-        for lane in 0..paths.len() {
+        // The lights the lanes do not sample themselves: the scalar code samples them, for the
+        // chunk's lanes together (`LightSet::sample_each`), and the lanes take the samples from
+        // there (a BSDF of delta lobes alone samples no light).
+        let mut picks = [None; vertices::LANES];
+        let nowhere = SurfacePoint { p: Vec3::ZERO, error: Vec3::ZERO, normal: Vec3::ZERO };
+        let mut others = [0usize; vertices::LANES];
+        let (mut points, mut us) = ([nowhere; vertices::LANES], [Vec2::ZERO; vertices::LANES]);
+        let mut n = 0;
+        for (lane, pick) in picks[..paths.len()].iter_mut().enumerate() {
             let drawn = chunk.numbers.drawn[lane];
             let light = path.lights().pick_for_lanes(drawn.point);
-            // A light the lanes do not sample: the scalar code samples it, the lanes take the
-            // sample from there (a BSDF of delta lobes alone samples no light).
-            let given = (B::SMOOTH && light.role() == LaneRole::Other)
-                .then(|| path.lights().sample(&lanes.surface_point(lane), drawn.point))
-                .flatten();
+            if B::SMOOTH && light.role() == LaneRole::Other {
+                (others[n], points[n], us[n]) = (lane, lanes.surface_point(lane), drawn.point);
+                n += 1;
+            }
+            *pick = Some(light);
+        }
+        let mut given = [None; vertices::LANES];
+        path.lights().sample_each(&points[..n], &us[..n], &mut given[..n]);
+        let mut next = 0;
+        for (lane, pick) in picks[..paths.len()].iter().enumerate() {
+            let drawn = chunk.numbers.drawn[lane];
+            let given = match others[..n].get(next) {
+                Some(&other) if other == lane => {
+                    next += 1;
+                    given[next - 1]
+                }
+                _ => None,
+            };
             lanes.set_draws(
                 lane,
                 &LaneDraws {
-                    light,
+                    light: pick.expect("picked above"),
                     given,
                     u_point: drawn.point,
                     u_lobe: drawn.lobe,

@@ -244,3 +244,45 @@ fn debug_names_the_content_not_the_file() {
     assert_ne!(a, debug("a.hdr", 1.0, Mat3::from_rotation_y(0.5)));
     assert!(a.len() < 200, "{a}");
 }
+
+/// The lanes' picks (`sample_each`, their searches in step) are `sample`'s to the bit, for
+/// numbers at 0, just below 1 and at random, on maps with black rows and columns, a bright
+/// texel at the seam and the poles, and a single texel; in groups of every size up to sixteen.
+#[test]
+fn sampling_in_step_is_sampling_one_by_one() {
+    let below_one = 1.0 - f32::EPSILON / 2.0;
+    let maps = [
+        map(16, 9, |x, y| if x == 15 && y == 4 { Vec3::splat(500.0) } else { Vec3::splat(0.1) }),
+        map(12, 7, |_, y| if y == 0 || y == 6 { Vec3::new(9.0, 1.0, 0.0) } else { Vec3::ZERO }),
+        map(64, 33, |x, y| if x % 5 == 0 || y % 7 == 0 { Vec3::ZERO } else { Vec3::ONE }),
+        map(1, 1, |_, _| Vec3::ONE),
+    ];
+    let mut rng = Pcg32::new(48, 1);
+    let mut compared = 0;
+    for m in &maps {
+        for size in 1..=crate::sampling::SEARCH_LANES {
+            for _ in 0..40 {
+                let number = |rng: &mut Pcg32| match rng.next_u32() % 6 {
+                    0 => 0.0,
+                    1 => below_one,
+                    _ => rng.next_f32(),
+                };
+                let us: Vec<Vec2> =
+                    (0..size).map(|_| Vec2::new(number(&mut rng), number(&mut rng))).collect();
+                let mut each = vec![None; size];
+                m.sample_each(&us, &mut each);
+                for (u, got) in us.iter().zip(&each) {
+                    let want = m.sample(*u);
+                    let bits = |s: &Option<DirectionSample>| {
+                        s.map(|s| (s.direction.to_array(), s.radiance.to_array(), s.pdf)).map(
+                            |(d, r, p)| (d.map(f32::to_bits), r.map(f32::to_bits), p.to_bits()),
+                        )
+                    };
+                    assert_eq!(bits(got), bits(&want), "{u}");
+                    compared += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(compared, maps.len() * 40 * (1..=16).sum::<usize>());
+}
