@@ -338,6 +338,30 @@ impl<'a, A: Accelerator + ?Sized> PathScalar<'a, A> {
         Some(interaction)
     }
 
+    /// [`arrive`](Self::arrive) for the paths `paths` of `states` that left the scene, to the
+    /// bit: the light they find, their infinite lights' lookups made together
+    /// ([`LightSet::escaped_each`]). `scratch` has room for an emission per path.
+    #[inline]
+    pub(super) fn escape_each(
+        &self,
+        states: &mut [PathState],
+        paths: &[usize],
+        directions: &mut Vec<Vec3>,
+        scratch: &mut Vec<crate::light::Emission>,
+    ) {
+        directions.clear();
+        directions.extend(paths.iter().map(|&i| states[i].ray.direction.normalize()));
+        scratch.clear();
+        scratch.resize(paths.len(), crate::light::Emission::NONE);
+        self.lights.escaped_each(directions, scratch, |lane, light| {
+            let state = &mut states[paths[lane]];
+            let unweighted = state.depth == 0 || state.previous_delta;
+            let weight =
+                if unweighted { 1.0 } else { power_heuristic(state.previous_pdf, light.pdf) };
+            state.radiance += state.throughput * light.radiance * weight;
+        });
+    }
+
     /// The vertex at `interaction`, reached along `ray`: its material's BSDF in its shading
     /// frame.
     #[inline]

@@ -64,6 +64,23 @@ impl Emitter {
         }
     }
 
+    /// [`escaped`](Self::escaped) for each of `directions`, to the bit (an environment map's
+    /// lookups in one loop).
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    #[inline]
+    pub fn escaped_each(&self, directions: &[Vec3], out: &mut [Emission]) {
+        match self {
+            Emitter::EnvironmentMap(light) => light.eval_pdf_each(directions, out),
+            _ => {
+                for (direction, slot) in directions.iter().zip(out) {
+                    *slot = self.escaped(*direction);
+                }
+            }
+        }
+    }
+
     /// Its power, for choosing among lights; a light from infinitely far away sends its
     /// power through a disk of area `through_scene` (PBR 4th ed. §12.5). The environments have
     /// none here: a light sampler gives them their share ([`environment_power`]).

@@ -99,6 +99,22 @@ impl MapLight {
         }
     }
 
+    /// [`eval_pdf`](Self::eval_pdf) for each of `directions`, to the bit.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    #[inline]
+    pub fn eval_pdf_each(&self, directions: &[Vec3], out: &mut [Emission]) {
+        match self.sampling {
+            EnvironmentSampling::Importance => self.map.eval_pdf_each(directions, out),
+            EnvironmentSampling::Uniform => {
+                for (direction, slot) in directions.iter().zip(out) {
+                    *slot = self.eval_pdf(*direction);
+                }
+            }
+        }
+    }
+
     /// The map's mean radiance (the mean of its channels), by which several environments share
     /// their picks.
     pub fn mean_radiance(&self) -> f32 {

@@ -359,6 +359,19 @@ impl EnvironmentMap {
         Emission { radiance, pdf: self.pdf_at(uv, sin_theta) }
     }
 
+    /// [`eval_pdf`](Self::eval_pdf) for each of `directions`, to the bit: one loop over them,
+    /// whose lookups do not wait on one another.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    #[inline]
+    pub fn eval_pdf_each(&self, directions: &[Vec3], out: &mut [Emission]) {
+        assert_eq!(directions.len(), out.len(), "an emission per direction");
+        for (direction, slot) in directions.iter().zip(out) {
+            *slot = self.eval_pdf(*direction);
+        }
+    }
+
     /// The density per unit solid angle at `uv`, where `sin θ` is `sin_theta` (not zero).
     #[inline]
     fn pdf_at(&self, uv: Vec2, sin_theta: f32) -> f32 {

@@ -336,6 +336,34 @@ impl LightSet {
         Emission { radiance: emission.radiance, pdf: selection * emission.pdf }
     }
 
+    /// [`escaped`](Self::escaped) for each of `directions` (unit): `found(lane, emission)` for
+    /// each infinite light, in the set's order, that sends some along `directions[lane]`; each
+    /// lane's finds come in the order `escaped` gives them. `scratch` holds a lane's emission
+    /// (its length is the lanes').
+    ///
+    /// # Panics
+    /// If `scratch` and `directions` differ in length.
+    #[inline]
+    pub fn escaped_each(
+        &self,
+        directions: &[Vec3],
+        scratch: &mut [Emission],
+        mut found: impl FnMut(usize, Emission),
+    ) {
+        for &index in &self.infinite {
+            self.lights[index as usize].escaped_each(directions, scratch);
+            let selection = self.distribution.as_ref().map_or(0.0, |d| d.pmf(index as usize));
+            for (lane, emission) in scratch.iter().enumerate() {
+                if emission.radiance != Vec3::ZERO {
+                    found(
+                        lane,
+                        Emission { radiance: emission.radiance, pdf: selection * emission.pdf },
+                    );
+                }
+            }
+        }
+    }
+
     /// Whether triangle `i` is (part of) a light: the only triangles [`emitted`](Self::emitted)
     /// finds light on.
     #[inline]

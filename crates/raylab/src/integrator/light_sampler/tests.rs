@@ -135,3 +135,53 @@ fn sampling_together_is_sampling_one_by_one() {
     // Both kinds were compared: lights at a finite distance and lights infinitely far away.
     assert!(kinds[0] > 500 && kinds[1] > 500, "{kinds:?}");
 }
+
+/// `escaped_each` finds, lane by lane and in the same order, what `escaped` finds: two maps
+/// (one sampled uniformly), a sun of 0.5° (directions on it and off it) and the constant
+/// environment, along directions at the poles, the seam and all around.
+#[test]
+fn escaping_together_is_escaping_one_by_one() {
+    use crate::film::Film;
+    use crate::light::{EnvironmentMap, SunLight};
+    use crate::sampling::Pcg32;
+    let map = |w: u32, h: u32| {
+        let pixels = (0..w * h).map(|i| Vec3::new((i % 7) as f32, 0.5, (i % 3) as f32)).collect();
+        let film = Film::from_pixels(w, h, pixels);
+        Arc::new(EnvironmentMap::new("m", film, 1.0, glam::Mat3::IDENTITY).unwrap())
+    };
+    let sun_direction = Vec3::new(0.2, 1.0, 0.1).normalize();
+    let mut scene = Scene::built_in("cornell").unwrap();
+    scene.lights.push(Light::EnvironmentMap(map(32, 17)));
+    scene
+        .lights
+        .push(Light::Sun(SunLight::new(sun_direction, 0.5f32.to_radians(), Vec3::ONE).unwrap()));
+    scene.lights.push(Light::Environment { radiance: Vec3::splat(0.25) });
+    scene.lights.push(Light::EnvironmentMap(map(8, 5)));
+    for sampling in [EnvironmentSampling::Importance, EnvironmentSampling::Uniform] {
+        let lights = LightSet::new(&scene).with_environment_sampling(sampling);
+        let mut rng = Pcg32::new(48, 4);
+        let mut directions: Vec<Vec3> = (0..200)
+            .map(|_| {
+                let v = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+                v.normalize()
+            })
+            .collect();
+        directions.extend([Vec3::Y, -Vec3::Y, -Vec3::Z, Vec3::Z, -sun_direction, -sun_direction]);
+        let mut found = vec![Vec::new(); directions.len()];
+        let mut scratch = vec![Emission::NONE; directions.len()];
+        lights.escaped_each(&directions, &mut scratch, |lane, e| found[lane].push(e));
+        let mut suns = 0;
+        for (direction, got) in directions.iter().zip(&found) {
+            let mut want = Vec::new();
+            lights.escaped(*direction, |e| want.push(e));
+            let bits = |es: &Vec<Emission>| {
+                es.iter()
+                    .map(|e| (e.radiance.to_array().map(f32::to_bits), e.pdf.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(got), bits(&want), "{direction}");
+            suns += usize::from(want.len() == 4);
+        }
+        assert!(suns >= 2, "the sun was seen: {suns}");
+    }
+}

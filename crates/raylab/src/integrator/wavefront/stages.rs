@@ -12,6 +12,7 @@ use crate::accel::{Accelerator, Hit};
 use crate::cpu::Isa;
 use crate::integrator::path::{PathScalar, PathState, Vertex};
 use crate::integrator::{closest_opaque_hit, occluded_opaque};
+use crate::light::Emission;
 use crate::light::lanes::LaneRole;
 use crate::material::BsdfKind;
 use crate::material::lanes::LaneBsdf;
@@ -43,6 +44,10 @@ struct Tile {
     sets: [(VertexLanes, Vec<usize>); BsdfKind::ALL.len()],
     /// The paths that go on after this bounce.
     bounced: Vec<usize>,
+    /// The paths that left the scene at this bounce, their directions and what they find.
+    escaped: Vec<usize>,
+    directions: Vec<Vec3>,
+    emissions: Vec<Emission>,
 }
 
 impl Tile {
@@ -57,6 +62,9 @@ impl Tile {
             numbers: Numbers::with_capacity(n),
             sets: std::array::from_fn(|_| (VertexLanes::default(), Vec::new())),
             bounced: Vec::with_capacity(n),
+            escaped: Vec::with_capacity(n),
+            directions: Vec::with_capacity(n),
+            emissions: Vec::with_capacity(n),
         }
     }
 }
@@ -128,11 +136,29 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
         let path = self.path;
         let max_depth = path.settings().max_depth.unwrap_or(u32::MAX);
         let rr_depth = path.settings().rr_depth;
-        let Tile { states, alive, hits, shadows, numbers, sets, bounced, .. } = tile;
+        let Tile {
+            states,
+            alive,
+            hits,
+            shadows,
+            numbers,
+            sets,
+            bounced,
+            escaped,
+            directions,
+            emissions,
+            ..
+        } = tile;
         shadows.clear();
         bounced.clear();
+        escaped.clear();
         let mut chunk = Chunk { states, samplers, numbers, shadows, bounced, lap };
         for (&i, hit) in alive.iter().zip(hits.iter()) {
+            if hit.is_none() {
+                // It left the scene: what it finds there, with the others' (below).
+                escaped.push(i);
+                continue;
+            }
             let state = &mut chunk.states[i];
             let last = state.depth + 1 >= max_depth;
             // The commonest hits, an unplaced triangle of a material without a normal map, by
@@ -169,6 +195,7 @@ impl<A: Accelerator + ?Sized> Stages<'_, '_, A> {
                 paths.clear();
             }
         }
+        path.escape_each(chunk.states, escaped, directions, emissions);
         chunk.lap.end(|t| &t.surfaces);
         for (kind, (set, paths)) in BsdfKind::ALL.into_iter().zip(sets.iter_mut()) {
             if set.len() > 0 {
