@@ -5,7 +5,8 @@
 //! Each is its scalar twin's arithmetic ([`TriangleLight::sample`],
 //! [`ConstantEnvironment::sample`]) operation for operation, so a lane's sample is the scalar
 //! one to the bit; where an offset point is not finite the lane says so and the scalar code
-//! decides. Every other light a lane leaves to the scalar code ([`LaneRole::Other`]).
+//! decides. Every other light ([`LaneRole::Other`]) the scalar code samples for the lanes,
+//! which take its sample from there.
 //!
 //! [`TriangleLight::sample`]: super::TriangleLight::sample
 //! [`ConstantEnvironment::sample`]: super::ConstantEnvironment::sample
@@ -28,7 +29,7 @@ pub(crate) enum LaneRole {
     Triangle,
     /// The constant environment, which the lanes sample by [`square_to_uniform_sphere`].
     Environment,
-    /// A light the lanes leave to the scalar code.
+    /// A light the scalar code samples for the lanes (`LightSet::sample_each`).
     Other,
 }
 

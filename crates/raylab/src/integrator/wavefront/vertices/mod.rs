@@ -1,8 +1,9 @@
 //! The wavefront's vertices, sixteen lanes per instruction, grouped by BSDF: the shading frame
 //! and the direction toward the viewer (from the shading normal, the tangent where the BSDF is
 //! anisotropic, and the arriving ray), light sampling (a triangle light's point or a direction
-//! toward the constant environment, the shadow ray, the BSDF's value and the MIS weight), BSDF
-//! sampling (the direction and the next ray) and Russian roulette.
+//! toward the constant environment, or any other light's sample as the scalar code made it;
+//! the shadow ray, the BSDF's value and the MIS weight), BSDF sampling (the direction and the
+//! next ray) and Russian roulette.
 //!
 //! ## Vertices in lanes
 //! The vertices of one BSDF kind are gathered sixteen to a chunk (`Input`): every quantity a
@@ -30,10 +31,13 @@
 //! whole renders; `tests.rs` compares lanes of every kind on hostile inputs on every
 //! instruction set).
 //!
-//! What the lanes cannot do they leave to the scalar code, lane by lane: a light other than a
-//! triangle sampled by area with a constant radiance or the constant environment
-//! ([`LaneRole::Other`]: point lights, textured emitters, solid-angle sampling), and the rare point
-//! whose offset is not finite (`exact` is false: the scalar offset's fallback decides it).
+//! The lights the lanes do not sample themselves ([`LaneRole::Other`]: point, spot and
+//! directional lights, suns, environment maps, textured emitters, solid-angle sampling) are
+//! sampled by the scalar code for the chunk's lanes together before it is shaded
+//! (`LightSet::sample_each`, the same numbers), and the lanes take the sample from there
+//! (`GIVEN`): the direction, radiance, density, whether it is a delta light's, and the shadow
+//! ray. What the lanes leave to the scalar code, lane by lane, is the rare point whose offset
+//! is not finite (`exact` is false: the scalar offset's fallback decides it).
 //!
 //! [`PathScalar::sample_light_with`]: super::super::PathScalar
 //! [`PathScalar::bounce`]: super::super::PathScalar
