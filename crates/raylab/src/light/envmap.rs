@@ -349,42 +349,89 @@ impl EnvironmentMap {
     /// found once: what a ray that leaves the scene needs.
     #[inline]
     pub fn eval_pdf(&self, direction: Vec3) -> Emission {
+        self.eval_pdf_inline(direction)
+    }
+
+    /// [`eval_pdf`](Self::eval_pdf), written so that a loop over many directions becomes
+    /// vector code (`envmap/lanes.rs`): no branch but selects, no call, and loads at indices
+    /// clamped into the tables, so without bounds checks. Its numbers are those of the plain
+    /// reading (`lookup`, then the density at `uv`), which the tests keep as a twin: `uv`
+    /// comes from [`direction_to_uv`], so `u ∈ [0, 1]` (or NaN), and there the remainders of
+    /// the wrap-around are the selects written here.
+    #[inline(always)]
+    pub(crate) fn eval_pdf_inline(&self, direction: Vec3) -> Emission {
         let local = self.to_local * direction;
         let uv = direction_to_uv(local);
-        let radiance = self.lookup(uv);
+        let radiance = self.lookup_wrapped(uv);
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
-        if sin_theta <= 0.0 {
-            return Emission { radiance, pdf: 0.0 };
-        }
-        Emission { radiance, pdf: self.pdf_at(uv, sin_theta) }
+        let pdf = self.pdf_at(uv, sin_theta);
+        Emission { radiance, pdf: if sin_theta <= 0.0 { 0.0 } else { pdf } }
     }
 
-    /// [`eval_pdf`](Self::eval_pdf) for each of `directions`, to the bit: one loop over them,
-    /// whose lookups do not wait on one another.
+    /// [`lookup`](Self::lookup) for `u ∈ [0, 1]` (or NaN), as [`eval_pdf_inline`] reads it:
+    /// there `x = u·w − ½` has `⌊x⌋ ∈ [−1, w − 1]`, whose remainder modulo `w` is itself or,
+    /// for −1, `w − 1` (NaN converts to 0 in both); the row is clamped as `lookup` clamps it.
     ///
-    /// # Panics
-    /// If the slices differ in length.
-    #[inline]
-    pub fn eval_pdf_each(&self, directions: &[Vec3], out: &mut [Emission]) {
-        assert_eq!(directions.len(), out.len(), "an emission per direction");
-        for (direction, slot) in directions.iter().zip(out) {
-            *slot = self.eval_pdf(*direction);
-        }
+    /// [`eval_pdf_inline`]: Self::eval_pdf_inline
+    #[inline(always)]
+    fn lookup_wrapped(&self, uv: Vec2) -> Vec3 {
+        let (w, h) = (self.width, self.height);
+        let x = uv.x * w as f32 - 0.5;
+        let x_floor = x.floor();
+        let fx = x - x_floor;
+        let xi = x_floor as i32;
+        let x0 = (if xi < 0 { xi + w as i32 } else { xi }).clamp(0, w as i32 - 1) as usize;
+        let x1 = if x0 + 1 == w { 0 } else { x0 + 1 };
+        let y = (uv.y * (h - 1) as f32).clamp(0.0, (h - 1) as f32);
+        let y0 = ((y as i32).max(0) as usize).min(h - 2);
+        let fy = y - y0 as f32;
+        // SAFETY: `x0, x1 < w` and `y0 ≤ h − 2` (clamped above), and `texels` holds `w × h`.
+        let texel = |i: usize| unsafe { *self.texels.get_unchecked(i) };
+        let (row0, row1) = (y0 * w, (y0 + 1) * w);
+        let top = texel(row0 + x0) * (1.0 - fx) + texel(row0 + x1) * fx;
+        let bottom = texel(row1 + x0) * (1.0 - fx) + texel(row1 + x1) * fx;
+        top * (1.0 - fy) + bottom * fy
     }
 
-    /// The density per unit solid angle at `uv`, where `sin θ` is `sin_theta` (not zero).
-    #[inline]
+    /// The density per unit solid angle at `uv` (`u ∈ [0, 1]` or NaN), where `sin θ` is
+    /// `sin_theta` (not zero). Written for vector code, as [`lookup_wrapped`]: there
+    /// `x = u·w − ½ ∈ [−½, w − ½]`, whose `rem_euclid(w)` is `x`, or `x + w` below zero.
+    ///
+    /// [`lookup_wrapped`]: Self::lookup_wrapped
+    #[inline(always)]
     fn pdf_at(&self, uv: Vec2, sin_theta: f32) -> f32 {
         let (columns, rows) = (self.width, self.height - 1);
-        let x = (uv.x * columns as f32 - 0.5).rem_euclid(columns as f32);
+        let x = uv.x * columns as f32 - 0.5;
+        let x = if x < 0.0 { x + columns as f32 } else { x };
         let y = uv.y * rows as f32;
-        let (column, row) = ((x as usize).min(columns - 1), (y as usize).min(rows - 1));
+        let column = ((x as i32).max(0) as usize).min(columns - 1);
+        let row = ((y as i32).max(0) as usize).min(rows - 1);
         let within = Vec2::new(x - column as f32, y - row as f32).clamp(Vec2::ZERO, Vec2::ONE);
-        let f = self.corners(column, row);
-        let pdf_uv = self.patches.probability(column, row)
-            * (columns * rows) as f32
-            * bilinear_pdf(within, f);
+        let f = self.corners_unchecked(column, row);
+        // SAFETY: `column < w` and `row < h − 1`, the table's size (clamped above).
+        let probability = unsafe { self.patches.probability_unchecked(column, row) };
+        let pdf_uv = probability * (columns * rows) as f32 * bilinear_pdf(within, f);
         pdf_uv / (2.0 * PI * PI * sin_theta)
+    }
+
+    /// [`corners`](Self::corners) without bounds checks: `column < w`, `row < h − 1`.
+    #[inline(always)]
+    fn corners_unchecked(&self, column: usize, row: usize) -> [f32; 4] {
+        let w = self.width;
+        let next = if column + 1 == w { 0 } else { column + 1 };
+        let (top, bottom) = (row * w, (row + 1) * w);
+        // SAFETY: the callers' `column < w` and `row < h − 1`: every index read below is under
+        // `w × h`, the texels' count.
+        let texel = |i: usize| unsafe { *self.texels.get_unchecked(i) };
+        // SAFETY: as above, `row + 1 < h`, the rows' count.
+        let sin = |r: usize| unsafe { *self.row_sin.get_unchecked(r) };
+        let (sin_top, sin_bottom) = (sin(row), sin(row + 1));
+        [
+            luminance(texel(top + column)) * sin_top,
+            luminance(texel(top + next)) * sin_top,
+            luminance(texel(bottom + column)) * sin_bottom,
+            luminance(texel(bottom + next)) * sin_bottom,
+        ]
     }
 }
 
@@ -443,5 +490,6 @@ fn mean_radiance(texels: &[Vec3], width: usize, height: usize) -> Vec3 {
     Vec3::from_array(total.map(|t| (t * (2.0 * PI / width as f64) / (4.0 * PI)) as f32))
 }
 
+mod lanes;
 #[cfg(test)]
 mod tests;

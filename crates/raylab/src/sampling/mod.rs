@@ -538,6 +538,16 @@ impl DiscreteDistribution {
         self.cdf[i + 1] - self.cdf[i]
     }
 
+    /// [`pmf`](Self::pmf) without bounds checks.
+    ///
+    /// # Safety
+    /// `i` must be below [`len`](Self::len).
+    #[inline(always)]
+    pub(crate) unsafe fn pmf_unchecked(&self, i: usize) -> f32 {
+        // SAFETY: the caller's `i < len()`: the CDF holds `len() + 1` entries.
+        unsafe { *self.cdf.get_unchecked(i + 1) - *self.cdf.get_unchecked(i) }
+    }
+
     /// The item that `u ∈ [0, 1)` picks, its probability, and `u` rescaled to `[0, 1)` within the
     /// item's interval (so it can be used again).
     #[inline]

@@ -185,6 +185,19 @@ impl PiecewiseConstant2D {
         self.marginal.probability(row) * self.rows[row].probability(column)
     }
 
+    /// [`probability`](Self::probability) without bounds checks.
+    ///
+    /// # Safety
+    /// `column` must be below the table's width and `row` below its height.
+    #[inline(always)]
+    pub(crate) unsafe fn probability_unchecked(&self, column: usize, row: usize) -> f32 {
+        // SAFETY: the caller's bounds: the marginal has a bin per row, each row a bin per column.
+        unsafe {
+            self.marginal.bins.pmf_unchecked(row)
+                * self.rows.get_unchecked(row).bins.pmf_unchecked(column)
+        }
+    }
+
     /// The density at `p ∈ [0, 1)²`.
     #[inline]
     pub fn pdf(&self, p: Vec2) -> f32 {
