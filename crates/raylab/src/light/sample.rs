@@ -14,7 +14,7 @@ pub struct LightSample {
     /// The radiance arriving from it (unoccluded).
     pub radiance: Vec3,
     /// The density per unit solid angle of this direction; for a delta light (point, spot,
-    /// directional), 1. From a light set ([`LightSet`](crate::integrator::LightSet)), times
+    /// directional), 1. From a light set (the path tracer's `LightSet`), times
     /// the probability of having picked the light.
     pub pdf: f32,
     /// A delta light: no other strategy can find it.
