@@ -82,21 +82,7 @@ impl MapLight {
                 }
             }
         };
-        Some(MapLight::seen_from(point, DirectionSample { direction, radiance, pdf }))
-    }
-
-    /// A direction toward the map picked as [`sample`](Self::sample) picks it, seen from
-    /// `point`.
-    #[inline]
-    pub fn seen_from(point: &SurfacePoint, sample: DirectionSample) -> LightSample {
-        let DirectionSample { direction, radiance, pdf } = sample;
-        LightSample {
-            direction,
-            radiance,
-            pdf,
-            delta: false,
-            shadow_ray: point.spawn_ray(direction),
-        }
+        Some(DirectionSample { direction, radiance, pdf }.seen_from(point))
     }
 
     /// [`eval_pdf`](Self::eval_pdf) for each of `directions`, to the bit.

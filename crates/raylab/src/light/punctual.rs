@@ -68,13 +68,9 @@ impl PointLight {
     /// density 1); `None` at the light itself.
     #[inline]
     pub fn sample(&self, point: &SurfacePoint) -> Option<LightSample> {
-        let to_light = self.position - point.p;
-        let distance_squared = to_light.length_squared();
-        if distance_squared == 0.0 {
-            return None;
-        }
+        let (direction, distance_squared) = toward(self.position, point)?;
         Some(LightSample {
-            direction: to_light / distance_squared.sqrt(),
+            direction,
             radiance: self.intensity() / distance_squared,
             pdf: 1.0,
             delta: true,
@@ -86,6 +82,18 @@ impl PointLight {
     pub fn mean_power(&self) -> f32 {
         4.0 * PI * (self.intensity().element_sum() / 3.0)
     }
+}
+
+/// The unit direction from `point` toward a light at `position`, and the distance squared;
+/// `None` at the light itself.
+#[inline]
+fn toward(position: Vec3, point: &SurfacePoint) -> Option<(Vec3, f32)> {
+    let to_light = position - point.p;
+    let distance_squared = to_light.length_squared();
+    if distance_squared == 0.0 {
+        return None;
+    }
+    Some((to_light / distance_squared.sqrt(), distance_squared))
 }
 
 /// Parallel light from infinitely far away, as Mitsuba 3's `directional`.
@@ -236,12 +244,7 @@ impl SpotLight {
     /// of density 1); `None` at the light itself and outside its cone.
     #[inline]
     pub fn sample(&self, point: &SurfacePoint) -> Option<LightSample> {
-        let to_light = self.position - point.p;
-        let distance_squared = to_light.length_squared();
-        if distance_squared == 0.0 {
-            return None;
-        }
-        let direction = to_light / distance_squared.sqrt();
+        let (direction, distance_squared) = toward(self.position, point)?;
         let intensity = self.intensity_toward(-direction);
         if intensity == Vec3::ZERO {
             return None;
@@ -337,14 +340,7 @@ impl SunLight {
     /// [`sample_direction`](Self::sample_direction), seen from `point`.
     #[inline]
     pub fn sample(&self, point: &SurfacePoint, u: Vec2) -> LightSample {
-        let DirectionSample { direction, radiance, pdf } = self.sample_direction(u);
-        LightSample {
-            direction,
-            radiance,
-            pdf,
-            delta: false,
-            shadow_ray: point.spawn_ray(direction),
-        }
+        self.sample_direction(u).seen_from(point)
     }
 
     /// Its power, the mean of its channels, for choosing among lights: its irradiance through

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use crate::ray::Ray;
+use crate::ray::{Ray, SurfacePoint};
 
 /// A point sampled on a light, seen from a shading point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,6 +33,22 @@ pub struct DirectionSample {
     pub radiance: Vec3,
     /// The density per unit solid angle with which it was picked.
     pub pdf: f32,
+}
+
+impl DirectionSample {
+    /// The sample seen from `point`: its shadow ray leaves the surface toward the light and
+    /// has no end (an infinite light is not a delta light).
+    #[inline]
+    pub fn seen_from(self, point: &SurfacePoint) -> LightSample {
+        let DirectionSample { direction, radiance, pdf } = self;
+        LightSample {
+            direction,
+            radiance,
+            pdf,
+            delta: false,
+            shadow_ray: point.spawn_ray(direction),
+        }
+    }
 }
 
 /// What a ray that finds a light sees: the radiance, and the density per unit solid angle

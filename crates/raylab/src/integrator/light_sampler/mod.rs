@@ -296,7 +296,7 @@ impl LightSet {
             for (&j, sample) in these[..n].iter().zip(samples) {
                 let (l, _, selection, _) = maps[j];
                 out[l] = sample.map(|sample| {
-                    let mut sample = MapLight::seen_from(&points[l], sample);
+                    let mut sample = sample.seen_from(&points[l]);
                     sample.pdf *= selection;
                     sample
                 });
