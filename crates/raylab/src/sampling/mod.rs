@@ -590,9 +590,13 @@ impl DiscreteDistribution {
         us: &[f32],
         out: &mut [(usize, f32, f32)],
     ) {
-        let mut counts = [0usize; SEARCH_LANES];
-        let cdfs: Vec<&[f32]> = distributions.iter().map(|d| d.cdf()).collect();
-        below_or_at_each(&cdfs, us, &mut counts[..us.len()]);
+        let lanes = us.len();
+        assert!(lanes <= SEARCH_LANES && distributions.len() == lanes, "a table per number");
+        let (mut counts, mut cdfs) = ([0usize; SEARCH_LANES], [&[][..]; SEARCH_LANES]);
+        for (cdf, distribution) in cdfs.iter_mut().zip(distributions) {
+            *cdf = distribution.cdf();
+        }
+        below_or_at_each(&cdfs[..lanes], us, &mut counts[..lanes]);
         for (l, slot) in out.iter_mut().enumerate() {
             let (i, pmf, start) = distributions[l].pick_at(counts[l]);
             *slot = (i, pmf, rescaled(us[l], start, pmf));

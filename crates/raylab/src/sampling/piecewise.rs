@@ -164,15 +164,25 @@ impl PiecewiseConstant2D {
     pub fn sample_bin_each(&self, us: &[Vec2], out: &mut [((usize, usize), f32, Vec2)]) {
         let lanes = us.len();
         assert!(lanes <= super::SEARCH_LANES && out.len() == lanes, "a bin per number");
-        let mut rows = [(0usize, 0.0f32, 0.0f32); super::SEARCH_LANES];
-        let v: Vec<f32> = us.iter().map(|u| u.y).collect();
-        let marginal = vec![&self.marginal.bins; lanes];
-        DiscreteDistribution::sample_each(&marginal, &v, &mut rows[..lanes]);
-        let mut columns = [(0usize, 0.0f32, 0.0f32); super::SEARCH_LANES];
-        let x: Vec<f32> = us.iter().map(|u| u.x).collect();
-        let conditional: Vec<&DiscreteDistribution> =
-            rows[..lanes].iter().map(|&(row, ..)| &self.rows[row].bins).collect();
-        DiscreteDistribution::sample_each(&conditional, &x, &mut columns[..lanes]);
+        // (Arrays, not vectors: this runs for every chunk of lanes.)
+        const N: usize = super::SEARCH_LANES;
+        let (mut v, mut x) = ([0.0f32; N], [0.0f32; N]);
+        for ((v, x), u) in v.iter_mut().zip(&mut x).zip(us) {
+            (*v, *x) = (u.y, u.x);
+        }
+        let mut rows = [(0usize, 0.0f32, 0.0f32); N];
+        let marginal = [&self.marginal.bins; N];
+        DiscreteDistribution::sample_each(&marginal[..lanes], &v[..lanes], &mut rows[..lanes]);
+        let mut conditional = [&self.marginal.bins; N];
+        for (table, &(row, ..)) in conditional.iter_mut().zip(&rows[..lanes]) {
+            *table = &self.rows[row].bins;
+        }
+        let mut columns = [(0usize, 0.0f32, 0.0f32); N];
+        DiscreteDistribution::sample_each(
+            &conditional[..lanes],
+            &x[..lanes],
+            &mut columns[..lanes],
+        );
         for (l, slot) in out.iter_mut().enumerate() {
             let ((row, p_row, v), (column, p_column, x)) = (rows[l], columns[l]);
             *slot = ((column, row), p_row * p_column, Vec2::new(x, v));
